@@ -1,0 +1,216 @@
+//! The perspective camera: where it is, where it looks, and how view space maps to clip space.
+//!
+//! Degenerate orientations are resolved, never propagated as NaN:
+//! * `target == position` (no view direction): the camera looks down world −Z.
+//! * `up` parallel to the view direction (e.g. looking straight down with `up = +Y`), zero or
+//!   non-finite: the fallback up vector is the first of world +Y, +Z, +X (in that order of
+//!   preference) that is least aligned with the view direction — so looking straight down/up along Y
+//!   uses +Z as "up" on screen.
+
+use glam::{DMat3, DVec3, Mat3, Mat4, Vec2, Vec3};
+
+/// A perspective camera with wgpu's 0..1 clip depth. Fields are plain data; see
+/// `myriad-scene` for validation of values read from files.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position in world space.
+    pub position: Vec3,
+    /// A point the camera looks at.
+    pub target: Vec3,
+    /// Approximate up direction (need not be orthogonal to the view direction).
+    pub up: Vec3,
+    /// Vertical field of view in radians, in (0, π).
+    pub fov_y: f32,
+    /// Render target width in pixels (≥ 1).
+    pub width: u32,
+    /// Render target height in pixels (≥ 1).
+    pub height: u32,
+    /// Near plane view depth (> 0).
+    pub near: f32,
+    /// Far plane view depth (> near).
+    pub far: f32,
+}
+
+impl Camera {
+    /// A camera with a vertical field of view given in degrees.
+    #[allow(clippy::too_many_arguments)] // Mirrors the scene file's camera record field for field.
+    pub fn new(
+        position: Vec3,
+        target: Vec3,
+        up: Vec3,
+        fov_y_deg: f32,
+        width: u32,
+        height: u32,
+        near: f32,
+        far: f32,
+    ) -> Self {
+        Self {
+            position,
+            target,
+            up,
+            fov_y: fov_y_deg.to_radians(),
+            width,
+            height,
+            near,
+            far,
+        }
+    }
+
+    /// Width over height.
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height as f32
+    }
+
+    /// `tan(fov/2)` horizontally and vertically: the view-space slope (x/depth, y/depth) of the
+    /// frustum's right and top planes.
+    pub fn tan_half_fov(&self) -> Vec2 {
+        let ty = (0.5 * self.fov_y).tan();
+        Vec2::new(ty * self.aspect(), ty)
+    }
+
+    /// Same as [`Self::tan_half_fov`] in f64, for the oracle.
+    pub fn tan_half_fov_f64(&self) -> (f64, f64) {
+        let ty = (0.5 * self.fov_y as f64).tan();
+        (ty * self.width as f64 / self.height as f64, ty)
+    }
+
+    /// The orthonormal view basis in world space: `(right, up, forward)`, with the documented
+    /// fallbacks for degenerate directions. Computed in f64 so the f32 and f64 paths share it.
+    pub fn basis_f64(&self) -> (DVec3, DVec3, DVec3) {
+        let mut forward = (self.target.as_dvec3() - self.position.as_dvec3()).normalize_or_zero();
+        if !forward.is_finite() || forward == DVec3::ZERO {
+            forward = DVec3::NEG_Z;
+        }
+        let up_hint = self.up.as_dvec3();
+        let mut right = forward.cross(up_hint);
+        if !right.is_finite() || right.length() <= 1e-6 * up_hint.length() || up_hint == DVec3::ZERO
+        {
+            let candidates = [DVec3::Y, DVec3::Z, DVec3::X];
+            let mut best = candidates[0];
+            for c in candidates {
+                if forward.dot(c).abs() < forward.dot(best).abs() - 1e-12 {
+                    best = c;
+                }
+            }
+            right = forward.cross(best);
+        }
+        let right = right.normalize();
+        let up = right.cross(forward).normalize();
+        (right, up, forward)
+    }
+
+    /// World-to-view rotation in f64 (rows: right, up, −forward).
+    pub fn view_rotation_f64(&self) -> DMat3 {
+        let (r, u, f) = self.basis_f64();
+        DMat3::from_cols(r, u, -f).transpose()
+    }
+
+    /// World-to-view rotation in f32.
+    pub fn view_rotation(&self) -> Mat3 {
+        self.view_rotation_f64().as_mat3()
+    }
+
+    /// `view_from_world` as a matrix. For GPU transforms of geometry near the camera; for lights
+    /// prefer [`Self::view_from_world_point`], which subtracts the camera position first.
+    pub fn view_from_world(&self) -> Mat4 {
+        Mat4::from_mat3(self.view_rotation()) * Mat4::from_translation(-self.position)
+    }
+
+    /// `clip_from_view`: right-handed perspective with depth 0 at `near` and 1 at `far`.
+    pub fn clip_from_view(&self) -> Mat4 {
+        glam::camera::rh::proj::directx::perspective(self.fov_y, self.aspect(), self.near, self.far)
+    }
+
+    /// `clip_from_world = clip_from_view * view_from_world`.
+    pub fn clip_from_world(&self) -> Mat4 {
+        self.clip_from_view() * self.view_from_world()
+    }
+
+    /// A world point in view space, camera-relative: the position is subtracted before rotating, so
+    /// a light 5 m from a camera at 10⁶ m keeps millimetre precision.
+    pub fn view_from_world_point(&self, world: Vec3) -> Vec3 {
+        self.view_rotation() * (world - self.position)
+    }
+
+    /// [`Self::view_from_world_point`] in f64: the oracle's view transform.
+    pub fn view_from_world_point_f64(&self, world: DVec3) -> DVec3 {
+        self.view_rotation_f64() * (world - self.position.as_dvec3())
+    }
+
+    /// View depth (positive distance along the view direction) of a wgpu depth-buffer value
+    /// produced by [`Self::clip_from_view`]: `depth = f·n / (f − ndc·(f − n))`.
+    pub fn view_depth_from_ndc_depth(&self, ndc_depth: f32) -> f32 {
+        let (n, f) = (self.near, self.far);
+        f * n / (f - ndc_depth * (f - n))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam(position: Vec3, target: Vec3, up: Vec3) -> Camera {
+        Camera::new(position, target, up, 60.0, 1536, 768, 0.1, 100.0)
+    }
+
+    fn assert_orthonormal(c: &Camera) {
+        let (r, u, f) = c.basis_f64();
+        for v in [r, u, f] {
+            assert!((v.length() - 1.0).abs() < 1e-12, "{v:?}");
+        }
+        assert!(r.dot(u).abs() < 1e-12 && r.dot(f).abs() < 1e-12 && u.dot(f).abs() < 1e-12);
+        assert!(c.view_from_world().is_finite());
+    }
+
+    #[test]
+    fn looks_down_negative_z_in_view_space() {
+        let c = cam(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, -7.0), Vec3::Y);
+        let v = c.view_from_world_point(Vec3::new(1.0, 2.0, -2.0));
+        assert!((v - Vec3::new(0.0, 0.0, -5.0)).length() < 1e-6, "{v:?}");
+        let m = c.view_from_world().transform_point3(Vec3::new(1.0, 2.0, -2.0));
+        assert!((m - v).length() < 1e-5);
+        // Matches glam's look_at_rh in the regular case.
+        let glam_view = glam::camera::rh::view::look_at_mat4(c.position, c.target, c.up);
+        assert!(glam_view.abs_diff_eq(c.view_from_world(), 1e-6));
+    }
+
+    #[test]
+    fn up_parallel_to_view_direction_falls_back() {
+        for (target, up) in [
+            (Vec3::new(0.0, -10.0, 0.0), Vec3::Y),
+            (Vec3::new(0.0, 10.0, 0.0), Vec3::Y),
+            (Vec3::new(0.0, 0.0, -10.0), Vec3::Z),
+            (Vec3::new(5.0, 0.0, 0.0), Vec3::NEG_X),
+            (Vec3::new(1.0, 1.0, 1.0), Vec3::ZERO),
+            (Vec3::ZERO, Vec3::Y),
+            (Vec3::new(0.0, 3.0, 0.0), Vec3::new(f32::NAN, 0.0, 0.0)),
+        ] {
+            let c = cam(Vec3::ZERO, target, up);
+            assert_orthonormal(&c);
+        }
+        // Looking straight down with up = +Y: screen-up is world +Z.
+        let c = cam(Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
+        let (_, u, _) = c.basis_f64();
+        assert!((u - DVec3::Z).length() < 1e-12, "{u:?}");
+    }
+
+    #[test]
+    fn ndc_depth_round_trips_through_projection() {
+        let c = cam(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+        for depth in [0.1f32, 0.5, 1.0, 7.3, 50.0, 100.0] {
+            let clip = c.clip_from_view() * glam::Vec4::new(0.3, -0.2, -depth, 1.0);
+            let ndc = clip.z / clip.w;
+            assert!((0.0..=1.0).contains(&ndc));
+            let back = c.view_depth_from_ndc_depth(ndc);
+            assert!((back - depth).abs() <= 1e-3 * depth, "{depth} -> {ndc} -> {back}");
+        }
+    }
+
+    #[test]
+    fn camera_relative_transform_keeps_precision_far_from_origin() {
+        let origin = Vec3::new(1.0e6, -2.0e6, 3.0e6);
+        let c = cam(origin, origin + Vec3::new(0.0, 0.0, -1.0), Vec3::Y);
+        let v = c.view_from_world_point(origin + Vec3::new(0.25, 0.5, -3.0));
+        assert!((v - Vec3::new(0.25, 0.5, -3.0)).length() < 1e-6, "{v:?}");
+    }
+}

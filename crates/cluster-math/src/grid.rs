@@ -1,0 +1,246 @@
+//! The cluster grid: how the view frustum is cut into X×Y×Z cells, and the mappings between pixels,
+//! depths and cluster ids.
+//!
+//! Two rules keep every consumer consistent:
+//! 1. **Pixel → tile is integer arithmetic.** Pixel `px` (centre at `px + 0.5`) is in tile
+//!    `⌊(2·px + 1)·X / (2·W)⌋`: exact for every resolution, whether or not X divides W.
+//! 2. **Depth → slice is checked against the edge table.** The slice edges are defined once, by
+//!    [`ClusterGrid::slice_start_depth`] (computed in f64, rounded to f32). [`ClusterGrid::slice_of_depth`]
+//!    estimates the slice with the closed-form inverse and then corrects the estimate against those
+//!    edges, so `slice_start_depth(k) <= d < slice_start_depth(k + 1)` holds exactly for every f32
+//!    depth inside the range — the GPU shader does the same with the uploaded edge table.
+//!
+//! Depths outside the grid's range clamp: below `near` (or NaN) → slice 0, at or beyond `far` →
+//! slice Z−1. The assignment only covers `[near, far]`, so a fitted (dynamic) range must contain
+//! every depth that is shaded.
+
+use glam::UVec3;
+use std::ops::Range;
+
+/// How view depth is cut into Z slices. With `n`, `f` the grid's near/far and `k` in `0..=Z`:
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DepthSlicing {
+    /// `d_k = n + (f − n)·k/Z`.
+    Linear,
+    /// `d_k = n·(f/n)^(k/Z)`.
+    Log,
+    /// Slice 0 is `[n, first_slice_depth]`; slices 1..Z are logarithmic over
+    /// `[first_slice_depth, f]`: `d_k = s·(f/s)^((k−1)/(Z−1))` for `k ≥ 1`. Avoids wasting many thin
+    /// slices right in front of the camera where little geometry lives (as bevy and filament do).
+    /// With Z = 1 it is a single slice `[n, f]`.
+    LogWithNearSlice {
+        /// View depth of the boundary between slice 0 and slice 1; `n < first_slice_depth < f`.
+        first_slice_depth: f32,
+    },
+}
+
+/// A cluster grid of `dims.x × dims.y × dims.z` cells over the view depth range `[near, far]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClusterGrid {
+    /// Tiles across (X), tiles down (Y), depth slices (Z); each ≥ 1.
+    pub dims: UVec3,
+    /// How depth is sliced.
+    pub slicing: DepthSlicing,
+    near: f32,
+    far: f32,
+}
+
+impl ClusterGrid {
+    /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range.
+    pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
+        assert!(dims.min_element() >= 1, "cluster grid dimensions must be >= 1: {dims}");
+        assert!(
+            near.is_finite() && far.is_finite() && near > 0.0 && near < far,
+            "cluster grid depth range must satisfy 0 < near < far: [{near}, {far}]"
+        );
+        if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing {
+            assert!(
+                dims.z == 1 || (first_slice_depth > near && first_slice_depth < far),
+                "first_slice_depth {first_slice_depth} must lie inside ({near}, {far})"
+            );
+        }
+        // Cluster ids are u32 in the output lists.
+        assert!(
+            (dims.x as u64) * (dims.y as u64) * (dims.z as u64) <= u32::MAX as u64,
+            "cluster grid {dims} has more clusters than fit in a u32 id"
+        );
+        Self {
+            dims,
+            slicing,
+            near,
+            far,
+        }
+    }
+
+    /// The same grid over a different depth range (a fitted, dynamic near/far).
+    pub fn with_depth_range(self, near: f32, far: f32) -> Self {
+        Self::new(self.dims, self.slicing, near, far)
+    }
+
+    /// Near edge of slice 0.
+    pub fn near(&self) -> f32 {
+        self.near
+    }
+
+    /// Far edge of slice Z−1.
+    pub fn far(&self) -> f32 {
+        self.far
+    }
+
+    /// X·Y·Z.
+    pub fn cluster_count(&self) -> usize {
+        self.dims.x as usize * self.dims.y as usize * self.dims.z as usize
+    }
+
+    /// Cluster id of tile `(i, j)` in slice `k`: `i + X·(j + Y·k)`.
+    #[inline]
+    pub fn cluster_id(&self, i: u32, j: u32, k: u32) -> u32 {
+        debug_assert!(i < self.dims.x && j < self.dims.y && k < self.dims.z);
+        i + self.dims.x * (j + self.dims.y * k)
+    }
+
+    /// Inverse of [`Self::cluster_id`].
+    pub fn cluster_coords(&self, id: u32) -> UVec3 {
+        let (x, y) = (self.dims.x, self.dims.y);
+        UVec3::new(id % x, (id / x) % y, id / (x * y))
+    }
+
+    /// NDC x of the left edge of tile `i` (`i` in `0..=X`): `−1 + 2i/X`.
+    pub fn x_edge_ndc(&self, i: u32) -> f32 {
+        ndc_edge_from_left(i, self.dims.x)
+    }
+
+    /// NDC y of the top edge of tile row `j` (`j` in `0..=Y`, counted from the top): `1 − 2j/Y`.
+    pub fn y_edge_ndc(&self, j: u32) -> f32 {
+        -ndc_edge_from_left(j, self.dims.y)
+    }
+
+    /// View depth where slice `k` starts (`k` in `0..=Z`; `k = Z` gives `far`).
+    pub fn slice_start_depth(&self, k: u32) -> f32 {
+        let z = self.dims.z;
+        assert!(k <= z, "slice edge {k} out of range 0..={z}");
+        if k == 0 {
+            return self.near;
+        }
+        if k == z {
+            return self.far;
+        }
+        let (n, f) = (self.near as f64, self.far as f64);
+        let t = k as f64 / z as f64;
+        let d = match self.slicing {
+            DepthSlicing::Linear => n + (f - n) * t,
+            DepthSlicing::Log => n * (f / n).powf(t),
+            DepthSlicing::LogWithNearSlice { first_slice_depth } => {
+                let s = first_slice_depth as f64;
+                s * (f / s).powf((k - 1) as f64 / (z - 1) as f64)
+            }
+        };
+        d as f32
+    }
+
+    /// Depth range `[start, end)` of slice `k`.
+    pub fn slice_depth_range(&self, k: u32) -> (f32, f32) {
+        (self.slice_start_depth(k), self.slice_start_depth(k + 1))
+    }
+
+    /// Writes the Z+1 slice edges (near → far) into `out`, reusing its storage.
+    pub fn fill_slice_edges(&self, out: &mut Vec<f32>) {
+        out.clear();
+        out.extend((0..=self.dims.z).map(|k| self.slice_start_depth(k)));
+    }
+
+    /// The slice holding view depth `depth`, clamped to `0..Z` (NaN → 0).
+    pub fn slice_of_depth(&self, depth: f32) -> u32 {
+        let z = self.dims.z;
+        // `!(a >= b)` also catches NaN.
+        if z == 1 || !(depth >= self.slice_start_depth(1)) {
+            return 0;
+        }
+        if depth >= self.slice_start_depth(z - 1) {
+            return z - 1;
+        }
+        let mut k = self.slice_estimate(depth).min(z - 1);
+        while depth < self.slice_start_depth(k) {
+            k -= 1;
+        }
+        while depth >= self.slice_start_depth(k + 1) {
+            k += 1;
+        }
+        k
+    }
+
+    /// Closed-form inverse of the slicing, possibly off by one at edges.
+    fn slice_estimate(&self, depth: f32) -> u32 {
+        let (d, n, f, z) = (
+            depth as f64,
+            self.near as f64,
+            self.far as f64,
+            self.dims.z as f64,
+        );
+        let s = match self.slicing {
+            DepthSlicing::Linear => (d - n) / (f - n) * z,
+            DepthSlicing::Log => (d / n).ln() / (f / n).ln() * z,
+            DepthSlicing::LogWithNearSlice { first_slice_depth } => {
+                let s = first_slice_depth as f64;
+                1.0 + (d / s).ln() / (f / s).ln() * (z - 1.0)
+            }
+        };
+        s.max(0.0) as u32
+    }
+
+    /// Tile column of pixel column `px` for a target `width` pixels wide.
+    #[inline]
+    pub fn tile_x_of_pixel(&self, px: u32, width: u32) -> u32 {
+        tile_of_pixel(px, width, self.dims.x)
+    }
+
+    /// Tile row (from the top) of pixel row `py` for a target `height` pixels high.
+    #[inline]
+    pub fn tile_y_of_pixel(&self, py: u32, height: u32) -> u32 {
+        tile_of_pixel(py, height, self.dims.y)
+    }
+
+    /// The pixel columns whose centres lie in tile column `i` (may be empty when X > width).
+    pub fn tile_pixel_columns(&self, i: u32, width: u32) -> Range<u32> {
+        pixel_range_of_tile(i, width, self.dims.x)
+    }
+
+    /// The pixel rows whose centres lie in tile row `j`.
+    pub fn tile_pixel_rows(&self, j: u32, height: u32) -> Range<u32> {
+        pixel_range_of_tile(j, height, self.dims.y)
+    }
+
+    /// Cluster id of pixel `(px, py)` at view depth `depth` on a `width × height` target.
+    pub fn cluster_of_pixel(&self, px: u32, py: u32, depth: f32, width: u32, height: u32) -> u32 {
+        self.cluster_id(
+            self.tile_x_of_pixel(px, width),
+            self.tile_y_of_pixel(py, height),
+            self.slice_of_depth(depth),
+        )
+    }
+}
+
+/// `−1 + 2i/n`, written as one rounding of an exact integer ratio.
+fn ndc_edge_from_left(i: u32, n: u32) -> f32 {
+    assert!(i <= n, "edge {i} out of range 0..={n}");
+    ((2 * i as i64 - n as i64) as f64 / n as f64) as f32
+}
+
+/// `⌊(2p + 1)·tiles / (2·pixels)⌋`: the tile whose NDC span holds the pixel centre.
+#[inline]
+fn tile_of_pixel(p: u32, pixels: u32, tiles: u32) -> u32 {
+    debug_assert!(p < pixels, "pixel {p} outside 0..{pixels}");
+    (((2 * p as u64 + 1) * tiles as u64) / (2 * pixels as u64)) as u32
+}
+
+/// Pixels `p` with `tile_of_pixel(p) == t`: `(2p+1)·T >= 2tP` and `(2p+1)·T < 2(t+1)P`.
+fn pixel_range_of_tile(t: u32, pixels: u32, tiles: u32) -> Range<u32> {
+    let first = |t: u64| -> u64 {
+        // Smallest p with (2p + 1)·T >= 2tP, i.e. p >= (2tP − T) / 2T.
+        let num = (2 * t * pixels as u64).saturating_sub(tiles as u64);
+        num.div_ceil(2 * tiles as u64)
+    };
+    let start = first(t as u64).min(pixels as u64) as u32;
+    let end = first(t as u64 + 1).min(pixels as u64) as u32;
+    start..end
+}

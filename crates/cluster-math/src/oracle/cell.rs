@@ -1,0 +1,229 @@
+//! Exact point-to-cell distance in f64.
+
+use crate::{Camera, ClusterGrid};
+use glam::DVec3;
+
+/// A cluster cell in view space: points `p` with depth `d = −p.z` in `depths`, `p.x / d` in
+/// `x_slopes` and `p.y / d` in `y_slopes` (each `[low, high]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cell {
+    /// `[left, right]` slopes `x / depth`.
+    pub x_slopes: [f64; 2],
+    /// `[bottom, top]` slopes `y / depth`.
+    pub y_slopes: [f64; 2],
+    /// `[near, far]` view depths, `0 < near <= far`.
+    pub depths: [f64; 2],
+}
+
+impl Cell {
+    /// The cell of cluster `(i, j, k)` of `grid` seen through `camera`.
+    pub fn of_cluster(camera: &Camera, grid: &ClusterGrid, i: u32, j: u32, k: u32) -> Self {
+        let (tx, ty) = camera.tan_half_fov_f64();
+        let ndc = |e: u32, n: u32| (2.0 * e as f64 - n as f64) / n as f64;
+        let (x, y) = (grid.dims.x, grid.dims.y);
+        let (d0, d1) = grid.slice_depth_range(k);
+        Self {
+            x_slopes: [ndc(i, x) * tx, ndc(i + 1, x) * tx],
+            // Row j counts from the top: its top edge is NDC 1 − 2j/Y.
+            y_slopes: [-ndc(j + 1, y) * ty, -ndc(j, y) * ty],
+            depths: [d0 as f64, d1 as f64],
+        }
+    }
+
+    /// Corner `(a, b, c)` with each index 0 (low) or 1 (high) in x slope, y slope and depth.
+    pub fn corner(&self, a: usize, b: usize, c: usize) -> DVec3 {
+        let d = self.depths[c];
+        DVec3::new(self.x_slopes[a] * d, self.y_slopes[b] * d, -d)
+    }
+
+    /// All eight corners.
+    pub fn corners(&self) -> [DVec3; 8] {
+        std::array::from_fn(|n| self.corner(n & 1, (n >> 1) & 1, n >> 2))
+    }
+
+    /// Whether `p` is inside the closed cell.
+    pub fn contains(&self, p: DVec3) -> bool {
+        self.planes().iter().all(|(n, o)| n.dot(p) - o <= 0.0)
+    }
+
+    /// The six bounding planes as (outward unit normal, offset): inside ⇔ `n·p − offset ≤ 0`.
+    /// Order: left, right, bottom, top, near, far.
+    fn planes(&self) -> [(DVec3, f64); 6] {
+        // p.x ≥ s·d  ⇔  p.x + s·p.z ≥ 0; outward normal of the left wall is −(1, 0, s)/|…|.
+        let side = |v: DVec3| v.normalize();
+        [
+            (side(-DVec3::new(1.0, 0.0, self.x_slopes[0])), 0.0),
+            (side(DVec3::new(1.0, 0.0, self.x_slopes[1])), 0.0),
+            (side(-DVec3::new(0.0, 1.0, self.y_slopes[0])), 0.0),
+            (side(DVec3::new(0.0, 1.0, self.y_slopes[1])), 0.0),
+            (DVec3::Z, -self.depths[0]),
+            (DVec3::NEG_Z, self.depths[1]),
+        ]
+    }
+}
+
+/// Exact distance from `p` to the closed cell (0 when inside).
+pub fn distance_to_cell(p: DVec3, cell: &Cell) -> f64 {
+    let planes = cell.planes();
+    let signed: [f64; 6] = std::array::from_fn(|f| planes[f].0.dot(p) - planes[f].1);
+    if signed.iter().all(|&s| s <= 0.0) {
+        return 0.0;
+    }
+    // Each face's vertices as (x-slope index, y-slope index, depth index), in loop order.
+    const FACES: [[(usize, usize, usize); 4]; 6] = [
+        [(0, 0, 0), (0, 1, 0), (0, 1, 1), (0, 0, 1)], // left
+        [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1)], // right
+        [(0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1)], // bottom
+        [(0, 1, 0), (1, 1, 0), (1, 1, 1), (0, 1, 1)], // top
+        [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], // near
+        [(0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)], // far
+    ];
+    let mut best = f64::INFINITY;
+    for (f, face) in FACES.iter().enumerate() {
+        // Only faces whose outside p is on can hold the closest point.
+        if signed[f] <= 0.0 {
+            continue;
+        }
+        let projected = p - planes[f].0 * signed[f];
+        let inside_others = (0..6)
+            .filter(|&g| g != f)
+            .all(|g| planes[g].0.dot(projected) - planes[g].1 <= 0.0);
+        if inside_others {
+            best = best.min(signed[f]);
+        }
+        for e in 0..4 {
+            let (a, b) = (face[e], face[(e + 1) % 4]);
+            let (a, b) = (cell.corner(a.0, a.1, a.2), cell.corner(b.0, b.1, b.2));
+            best = best.min(distance_to_segment(p, a, b));
+        }
+    }
+    best
+}
+
+/// Whether the closed ball (`centre`, `radius`) touches the closed cell.
+pub fn sphere_intersects_cell(centre: DVec3, radius: f64, cell: &Cell) -> bool {
+    distance_to_cell(centre, cell) <= radius
+}
+
+fn distance_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t).distance(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    fn random_cell(rng: &mut impl Rng) -> Cell {
+        let mut pair = |lo: f64, hi: f64| {
+            let a = rng.random_range(lo..hi);
+            let b = rng.random_range(lo..hi);
+            [a.min(b), a.max(b) + 1e-3]
+        };
+        let x = pair(-2.0, 2.0);
+        let y = pair(-1.5, 1.5);
+        let d = pair(0.05, 20.0);
+        Cell {
+            x_slopes: x,
+            y_slopes: y,
+            depths: d,
+        }
+    }
+
+    /// A point of the cell from three unit parameters (x slope, y slope, depth).
+    fn cell_point(cell: &Cell, u: f64, v: f64, w: f64) -> DVec3 {
+        let d = cell.depths[0] + (cell.depths[1] - cell.depths[0]) * w;
+        let sx = cell.x_slopes[0] + (cell.x_slopes[1] - cell.x_slopes[0]) * u;
+        let sy = cell.y_slopes[0] + (cell.y_slopes[1] - cell.y_slopes[0]) * v;
+        DVec3::new(sx * d, sy * d, -d)
+    }
+
+    #[test]
+    fn distance_matches_dense_boundary_sampling() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        const N: usize = 48;
+        for _ in 0..60 {
+            let cell = random_cell(&mut rng);
+            // Dense samples on the six faces (the closest point of a convex set to an outside point
+            // is on its boundary).
+            let mut samples = Vec::new();
+            for a in 0..=N {
+                for b in 0..=N {
+                    let (u, v) = (a as f64 / N as f64, b as f64 / N as f64);
+                    for fixed in [0.0, 1.0] {
+                        samples.push(cell_point(&cell, fixed, u, v));
+                        samples.push(cell_point(&cell, u, fixed, v));
+                        samples.push(cell_point(&cell, u, v, fixed));
+                    }
+                }
+            }
+            let extent = cell.corners().iter().map(|c| c.length()).fold(0.0, f64::max);
+            for _ in 0..40 {
+                let p = DVec3::new(
+                    rng.random_range(-1.5..1.5),
+                    rng.random_range(-1.5..1.5),
+                    rng.random_range(-1.5..0.3),
+                ) * extent;
+                let exact = distance_to_cell(p, &cell);
+                let sampled = samples.iter().map(|s| s.distance(p)).fold(f64::INFINITY, f64::min);
+                if cell.contains(p) {
+                    assert_eq!(exact, 0.0);
+                    continue;
+                }
+                // Exact is a lower bound of every sampled distance, and the dense sampling gets
+                // close to it (sample spacing bounds the gap).
+                let spacing = cell.corners().iter().map(|c| c.distance(cell.corner(0, 0, 0))).fold(0.0, f64::max)
+                    / N as f64;
+                assert!(exact <= sampled + 1e-9 * extent, "exact {exact} > sampled {sampled}");
+                assert!(sampled - exact <= spacing, "exact {exact} far below sampled {sampled}");
+            }
+        }
+    }
+
+    #[test]
+    fn interior_points_have_zero_distance_and_spheres_touching_faces_intersect() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
+        for _ in 0..200 {
+            let cell = random_cell(&mut rng);
+            let p = cell_point(
+                &cell,
+                rng.random_range(0.0..1.0),
+                rng.random_range(0.0..1.0),
+                rng.random_range(0.0..1.0),
+            );
+            assert_eq!(distance_to_cell(p, &cell), 0.0);
+            // Just outside the near face by `gap`: a sphere of radius gap touches, a smaller misses.
+            let q = cell_point(&cell, 0.5, 0.5, 0.0);
+            let gap = 0.25 * cell.depths[0];
+            let outside = q + DVec3::Z * gap;
+            let dist = distance_to_cell(outside, &cell);
+            assert!((dist - gap).abs() <= 1e-12 * (1.0 + gap), "{dist} vs {gap}");
+            assert!(sphere_intersects_cell(outside, gap * (1.0 + 1e-9), &cell));
+            assert!(!sphere_intersects_cell(outside, gap * 0.999, &cell));
+        }
+    }
+
+    #[test]
+    fn cell_of_cluster_matches_grid_edges() {
+        use crate::DepthSlicing;
+        use glam::{UVec3, Vec3};
+        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 1536, 768, 0.1, 100.0);
+        let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        let c = Cell::of_cluster(&cam, &grid, 0, 0, 0);
+        let (tx, ty) = cam.tan_half_fov_f64();
+        assert_eq!(c.x_slopes[0], -tx);
+        assert_eq!(c.y_slopes[1], ty);
+        assert_eq!(c.depths[0], 0.1f32 as f64);
+        let last = Cell::of_cluster(&cam, &grid, 23, 11, 15);
+        assert_eq!(last.x_slopes[1], tx);
+        assert_eq!(last.y_slopes[0], -ty);
+        assert_eq!(last.depths[1], 100.0);
+    }
+}

@@ -1,0 +1,20 @@
+//! The exact f64 reference: does a light's volume touch a cluster cell?
+//!
+//! These functions *define* correctness for every assignment method. They are deliberately simple
+//! and slow: f64 throughout, no early-outs that could be wrong, closed sets (touching counts).
+//!
+//! * [`Cell`]: a cluster's convex cell in view space, bounded by two x-planes, two y-planes (through
+//!   the eye) and two depth planes. Its x/y walls use f64 slopes computed from the camera (the
+//!   geometric truth); its depth walls are the grid's f32 slice edges widened to f64, because those
+//!   exact values decide which pixel lands in which slice.
+//! * [`distance_to_cell`]: exact Euclidean distance from a point to the cell (0 inside), as the
+//!   minimum over the cell's faces (when the projection falls inside the face) and its 12 edges.
+//! * [`sphere_intersects_cell`]: `distance_to_cell(centre) <= radius`.
+//! * [`spot_intersects_cell`]: the spot volume (sphere ∩ cone, half-angle ≤ 90°) against a cell,
+//!   by GJK on support functions (see `spot.rs`).
+
+mod cell;
+mod spot;
+
+pub use cell::{Cell, distance_to_cell, sphere_intersects_cell};
+pub use spot::{SpotVolume, spot_intersects_cell};

@@ -1,0 +1,2 @@
+//! placeholder
+pub use myriad_cluster_math as cluster_math;
