@@ -1,0 +1,184 @@
+//! The lock-free per-cluster append: spans of clusters per light → CSR lists, in three steps.
+//!
+//! 1. **Count.** Each task owns a contiguous range of lights and a private histogram row (one
+//!    counter per cluster) in a shared table of relaxed atomics. A task only ever touches its own
+//!    row, so the counters are plain loads and stores — no contention, no read-modify-write.
+//! 2. **Prefix.** Parallel over blocks of clusters: `offsets[c]` is the exclusive prefix sum over
+//!    clusters, and inside a cluster the tasks follow in light order; each task's counter is
+//!    replaced by the position where that task starts writing into cluster `c`.
+//! 3. **Fill.** Each task walks its spans again and writes light indices at its cursors.
+//!
+//! Because tasks are contiguous light ranges merged in order, every cluster's list comes out in
+//! ascending light order whatever the number of tasks or threads — the output is deterministic.
+//!
+
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+/// A run of clusters `first .. first + len` (one row of a light's box) touched by `light`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Span {
+    pub light: u32,
+    pub first: u32,
+    pub len: u32,
+}
+
+/// Clusters per block of the parallel prefix sum.
+const PREFIX_BLOCK: usize = 4096;
+
+/// Histogram rows, `tasks × clusters`, reused across frames.
+#[derive(Default)]
+pub(crate) struct Histograms {
+    cells: Vec<AtomicU32>,
+    block_sums: Vec<u64>,
+    clusters: usize,
+    tasks: usize,
+}
+
+impl Histograms {
+    /// Sizes the table for `tasks × clusters`, growing only; rows are zeroed by their tasks.
+    pub fn prepare(&mut self, tasks: usize, clusters: usize) {
+        let needed = tasks * clusters;
+        if self.cells.len() < needed {
+            self.cells.resize_with(needed, || AtomicU32::new(0));
+        }
+        self.tasks = tasks;
+        self.clusters = clusters;
+    }
+
+    /// Task `t`'s row.
+    pub fn row(&self, t: usize) -> &[AtomicU32] {
+        &self.cells[t * self.clusters..(t + 1) * self.clusters]
+    }
+
+    /// Step 2: fills `offsets` and `counts` and turns every row into write cursors. Returns the
+    /// total number of pairs.
+    pub fn prefix(&mut self, offsets: &mut [u32], counts: &mut [u32], parallel: bool) -> usize {
+        let (tasks, clusters) = (self.tasks, self.clusters);
+        assert_eq!(offsets.len(), clusters);
+        let cells = &self.cells[..tasks * clusters];
+        let blocks = clusters.div_ceil(PREFIX_BLOCK);
+        self.block_sums.clear();
+        self.block_sums.resize(blocks, 0);
+        let sum_block = |(b, (sum, counts)): (usize, (&mut u64, &mut [u32]))| {
+            let base = b * PREFIX_BLOCK;
+            let mut total = 0u64;
+            for (i, count) in counts.iter_mut().enumerate() {
+                let c = base + i;
+                let n: u32 = (0..tasks).map(|t| cells[t * clusters + c].load(Relaxed)).sum();
+                *count = n;
+                total += n as u64;
+            }
+            *sum = total;
+        };
+        if parallel {
+            self.block_sums
+                .par_iter_mut()
+                .zip(counts.par_chunks_mut(PREFIX_BLOCK))
+                .enumerate()
+                .for_each(sum_block);
+        } else {
+            self.block_sums
+                .iter_mut()
+                .zip(counts.chunks_mut(PREFIX_BLOCK))
+                .enumerate()
+                .for_each(sum_block);
+        }
+        let mut running = 0u64;
+        for s in self.block_sums.iter_mut() {
+            let n = *s;
+            *s = running;
+            running += n;
+        }
+        assert!(
+            running <= u32::MAX as u64,
+            "{running} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
+        );
+        let scan_block = |(b, (base, offsets)): (usize, (&u64, &mut [u32]))| {
+            let mut at = *base as u32;
+            for (i, offset) in offsets.iter_mut().enumerate() {
+                let c = b * PREFIX_BLOCK + i;
+                *offset = at;
+                for t in 0..tasks {
+                    let cell = &cells[t * clusters + c];
+                    let n = cell.load(Relaxed);
+                    cell.store(at, Relaxed);
+                    at += n;
+                }
+            }
+        };
+        if parallel {
+            self.block_sums
+                .par_iter()
+                .zip(offsets.par_chunks_mut(PREFIX_BLOCK))
+                .enumerate()
+                .for_each(scan_block);
+        } else {
+            self.block_sums
+                .iter()
+                .zip(offsets.chunks_mut(PREFIX_BLOCK))
+                .enumerate()
+                .for_each(scan_block);
+        }
+        running as usize
+    }
+}
+
+/// Step 1 for one task: zero the row, then count every span's clusters.
+pub(crate) fn count(row: &[AtomicU32], spans: &[Span]) {
+    for cell in row {
+        cell.store(0, Relaxed);
+    }
+    for s in spans {
+        for cell in &row[s.first as usize..(s.first + s.len) as usize] {
+            cell.store(cell.load(Relaxed) + 1, Relaxed);
+        }
+    }
+}
+
+/// Step 3 for one task: write each span's light at the task's cursors.
+pub(crate) fn fill(row: &[AtomicU32], spans: &[Span], out: &SharedIndices<'_>) {
+    for s in spans {
+        for cell in &row[s.first as usize..(s.first + s.len) as usize] {
+            let at = cell.load(Relaxed);
+            cell.store(at + 1, Relaxed);
+            // SAFETY: after `prefix`, task t's cursor for cluster c walks the range
+            // [start(t, c), start(t, c) + count(t, c)), and these ranges are disjoint across all
+            // (t, c) and lie inside `0..pairs` = `out.len()`. Each task writes only through its own
+            // row, once per counted pair, so every index is written by exactly one task, once.
+            unsafe { out.write(at as usize, s.light) };
+        }
+    }
+}
+
+/// The output index array, writable from several tasks at disjoint positions.
+pub(crate) struct SharedIndices<'a> {
+    ptr: *mut u32,
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [u32]>,
+}
+
+// SAFETY: `SharedIndices` only hands out writes through `write`, whose contract requires that no
+// two threads write the same position; the pointer comes from a `&mut [u32]` that outlives it.
+unsafe impl Sync for SharedIndices<'_> {}
+
+impl<'a> SharedIndices<'a> {
+    pub fn new(slice: &'a mut [u32]) -> Self {
+        Self {
+            ptr: slice.as_mut_ptr(),
+            len: slice.len(),
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// Writes `value` at `at`.
+    ///
+    /// # Safety
+    /// No other thread may read or write position `at` while `self` is alive.
+    #[inline]
+    pub unsafe fn write(&self, at: usize, value: u32) {
+        assert!(at < self.len, "index {at} outside the {} pairs counted", self.len);
+        // SAFETY: in bounds (checked above); exclusive per the caller's contract.
+        unsafe { self.ptr.add(at).write(value) }
+    }
+}

@@ -1,0 +1,191 @@
+//! The frame driver: plans the tasks, runs the phases in parallel, and owns every reusable buffer.
+
+use crate::append::{self, Histograms, SharedIndices};
+use crate::jobs::{self, FrameContext, TaskOutput};
+use crate::linear::{self, LinearScratch};
+use crate::{LightInput, LightLists};
+use glam::Vec4;
+use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets};
+use rayon::prelude::*;
+
+/// Light assignment methods; all are conservative (never miss a light that touches a cluster).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Every candidate cluster tested with the exact f64 oracle: zero false positives, slow.
+    Exact,
+    /// The paper's Algorithm 1: planes stepped one by one, single-threaded, per-cluster lists.
+    Linear,
+    /// Binary search of the x-, y- and z-plane sets; the light's whole box of clusters.
+    Binary,
+    /// Binary's box tightened per slice and per row (sphere shrunk to the slab).
+    Refined,
+}
+
+impl Method {
+    /// Every method, fastest-to-build order irrelevant.
+    pub const ALL: [Method; 4] = [Method::Exact, Method::Linear, Method::Binary, Method::Refined];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Exact => "exact",
+            Method::Linear => "linear",
+            Method::Binary => "binary",
+            Method::Refined => "refined",
+        }
+    }
+
+    /// Parses [`Method::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What one assignment did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AssignStats {
+    /// Lights in the input.
+    pub lights: u32,
+    /// Lights skipped because their position or radius was not finite, or the radius not positive.
+    pub rejected: u32,
+    /// Valid lights outside the frustum (touching no cluster).
+    pub culled: u32,
+    /// Cluster–light pairs written.
+    pub pairs: u64,
+    /// Parallel tasks the lights were split into (1 = serial).
+    pub tasks: u32,
+}
+
+impl AssignStats {
+    /// Lights that reached at least the emit phase.
+    pub fn visible(&self) -> u32 {
+        self.lights - self.rejected - self.culled
+    }
+}
+
+/// Below this many lights the frame runs as one task on the calling thread: waking the pool costs
+/// more than it saves (measured in `benches/assignment.rs`).
+pub const SERIAL_LIGHTS: usize = 1024;
+/// Lights per task at least, so per-task histogram work stays small next to the lights' work.
+const LIGHTS_PER_TASK: usize = 2048;
+/// Upper bound on histogram memory (bytes) before fewer tasks are used.
+const HISTOGRAM_BUDGET: usize = 64 << 20;
+
+/// Runs light assignment and keeps all of its scratch storage between frames, so steady-state
+/// frames allocate nothing. One `Assigner` per concurrent frame; it uses the current rayon pool
+/// (install your own with `ThreadPool::install` to pick the thread count).
+#[derive(Default)]
+pub struct Assigner {
+    planes: PlaneSets,
+    tasks: Vec<TaskOutput>,
+    histograms: Histograms,
+    cluster_spheres: Vec<Vec4>,
+    spheres_key: Option<(glam::Vec2, ClusterGrid)>,
+    linear: LinearScratch,
+}
+
+impl Assigner {
+    /// An assigner with no storage yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Assigns `lights` to the clusters of `grid` seen by `camera` with `method`, refilling `out`.
+    pub fn assign(
+        &mut self,
+        method: Method,
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+        out: &mut LightLists,
+    ) -> AssignStats {
+        lights.assert_consistent();
+        let n = lights.len();
+        self.planes.update(camera, grid);
+        let view_from_world = camera.view_rotation();
+        let mut stats = AssignStats {
+            lights: n as u32,
+            ..AssignStats::default()
+        };
+        if method == Method::Linear {
+            let (rejected, culled) =
+                linear::assign_linear(&mut self.linear, lights, camera, grid, &self.planes, view_from_world, out);
+            stats.rejected = rejected;
+            stats.culled = culled;
+            stats.pairs = out.indices.len() as u64;
+            stats.tasks = 1;
+            return stats;
+        }
+        if lights.spot.is_some() && method != Method::Exact {
+            let key = (camera.tan_half_fov(), *grid);
+            if self.spheres_key != Some(key) {
+                jobs::cluster_bounding_spheres(camera, grid, &mut self.cluster_spheres);
+                self.spheres_key = Some(key);
+            }
+        }
+        let clusters = grid.cluster_count();
+        let tasks = plan_tasks(n, clusters, method);
+        if self.tasks.len() < tasks {
+            self.tasks.resize_with(tasks, TaskOutput::default);
+        }
+        self.histograms.prepare(tasks, clusters);
+        let ctx = FrameContext {
+            method,
+            lights: *lights,
+            camera,
+            grid,
+            planes: &self.planes,
+            view_from_world,
+            cluster_spheres: &self.cluster_spheres,
+        };
+        let parallel = tasks > 1;
+        let histograms = &self.histograms;
+        let gather = |(t, task): (usize, &mut TaskOutput)| {
+            let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
+            jobs::run_task(&ctx, begin, end, task);
+            append::count(histograms.row(t), &task.spans);
+        };
+        if parallel {
+            self.tasks[..tasks].par_iter_mut().enumerate().for_each(gather);
+        } else {
+            self.tasks[..tasks].iter_mut().enumerate().for_each(gather);
+        }
+        out.reset(clusters);
+        let pairs = self
+            .histograms
+            .prefix(&mut out.offsets, &mut out.counts, parallel && clusters * tasks > 1 << 16);
+        out.indices.resize(pairs, 0);
+        let shared = SharedIndices::new(&mut out.indices);
+        let histograms = &self.histograms;
+        let scatter = |(t, task): (usize, &TaskOutput)| append::fill(histograms.row(t), &task.spans, &shared);
+        if parallel {
+            self.tasks[..tasks].par_iter().enumerate().for_each(scatter);
+        } else {
+            self.tasks[..tasks].iter().enumerate().for_each(scatter);
+        }
+        for task in &self.tasks[..tasks] {
+            stats.rejected += task.rejected;
+            stats.culled += task.culled;
+        }
+        stats.pairs = pairs as u64;
+        stats.tasks = tasks as u32;
+        stats
+    }
+}
+
+/// How many contiguous light ranges to split a frame into.
+fn plan_tasks(lights: usize, clusters: usize, method: Method) -> usize {
+    if lights < SERIAL_LIGHTS && method != Method::Exact {
+        return 1;
+    }
+    let threads = rayon::current_num_threads();
+    let by_work = lights.div_ceil(LIGHTS_PER_TASK).max(1);
+    let by_memory = (HISTOGRAM_BUDGET / (4 * clusters.max(1))).max(1);
+    (4 * threads).min(by_work).min(by_memory).max(1)
+}

@@ -1,0 +1,73 @@
+//! The assignment's input: plain SoA light columns, borrowed from the caller.
+
+/// World-space light columns, one entry per light; all slices have the same length.
+///
+/// Lights whose position or radius is not finite, or whose radius is not positive, are skipped
+/// and counted in [`crate::AssignStats::rejected`]; they never reach the output.
+#[derive(Clone, Copy, Debug)]
+pub struct LightInput<'a> {
+    /// World-space x of each light's position.
+    pub x: &'a [f32],
+    /// World-space y.
+    pub y: &'a [f32],
+    /// World-space z.
+    pub z: &'a [f32],
+    /// Range: the light contributes nothing beyond this distance.
+    pub radius: &'a [f32],
+    /// Spot cones, or `None` when every light is a point light.
+    pub spot: Option<SpotInput<'a>>,
+}
+
+/// Spot-light columns, parallel to [`LightInput`]'s; point lights in a mixed scene carry an angle
+/// of `π` (see [`SpotInput::angle`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SpotInput<'a> {
+    /// World-space x of each cone's axis (need not be normalised).
+    pub dir_x: &'a [f32],
+    /// World-space y of the axis.
+    pub dir_y: &'a [f32],
+    /// World-space z of the axis.
+    pub dir_z: &'a [f32],
+    /// Outer half angle in radians. Angles above π/2 (and `π`, the convention for "point light"
+    /// in a mixed column) are assigned as point lights; a zero or non-finite axis likewise.
+    pub angle: &'a [f32],
+}
+
+impl<'a> LightInput<'a> {
+    /// Point lights from four columns.
+    pub fn points(x: &'a [f32], y: &'a [f32], z: &'a [f32], radius: &'a [f32]) -> Self {
+        Self {
+            x,
+            y,
+            z,
+            radius,
+            spot: None,
+        }
+    }
+
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there are no lights.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Panics unless all columns have the same length (a programming error, not bad data).
+    pub(crate) fn assert_consistent(&self) {
+        let n = self.x.len();
+        assert!(
+            self.y.len() == n && self.z.len() == n && self.radius.len() == n,
+            "light columns differ in length"
+        );
+        if let Some(s) = &self.spot {
+            assert!(
+                s.dir_x.len() == n && s.dir_y.len() == n && s.dir_z.len() == n && s.angle.len() == n,
+                "spot columns differ in length from the light columns"
+            );
+        }
+        assert!(n <= u32::MAX as usize, "more lights than fit in a u32 index");
+    }
+}

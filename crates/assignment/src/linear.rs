@@ -1,0 +1,150 @@
+//! The paper's Algorithm 1 (Örtegren, "Implicit Clustered Deferred Shading"), single-threaded: the
+//! baseline every other method is measured against.
+//!
+//! Per light: if the sphere is inside the outer frustum, step through the x-planes from the left
+//! until the sphere reaches left of a plane (that gives the first tile), keep stepping until the
+//! sphere lies entirely left of a plane (the last tile); the same for y and z. The light is then
+//! pushed onto each covered cluster's own temporary list (the paper's "clusters store their own
+//! light indices temporarily"), and the lists are concatenated into CSR at the end.
+//!
+//! The sphere-plane distance `n·c ≥ −r` is exact and monotone along a plane set only for spheres
+//! entirely in front of the eye; a sphere reaching the eye plane gets the full x and y range (the
+//! paper's algorithm is silent on this case, and conservative is the only correct choice).
+
+use crate::geometry::{self, ZRange};
+use crate::{LightInput, LightLists};
+use glam::{Mat3, Vec3};
+use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets, SpotCone, spot_bounding_sphere};
+
+/// Per-cluster temporary lists, reused across frames.
+#[derive(Default)]
+pub(crate) struct LinearScratch {
+    lists: Vec<Vec<u32>>,
+    x_normals: Vec<Vec3>,
+    y_normals: Vec<Vec3>,
+}
+
+/// Counts of one run: (rejected, culled).
+pub(crate) fn assign_linear(
+    scratch: &mut LinearScratch,
+    lights: &LightInput<'_>,
+    camera: &Camera,
+    grid: &ClusterGrid,
+    planes: &PlaneSets,
+    view_from_world: Mat3,
+    out: &mut LightLists,
+) -> (u32, u32) {
+    let clusters = grid.cluster_count();
+    scratch.lists.resize_with(clusters, Vec::new);
+    for list in &mut scratch.lists[..clusters] {
+        list.clear();
+    }
+    scratch.x_normals.clear();
+    scratch
+        .x_normals
+        .extend((0..planes.x_slopes.len()).map(|i| planes.x_plane_normal(i)));
+    scratch.y_normals.clear();
+    scratch
+        .y_normals
+        .extend((0..planes.y_slopes.len()).map(|j| planes.y_plane_normal(j)));
+    let (xn, yn) = (&scratch.x_normals, &scratch.y_normals);
+    let (nx, ny) = (grid.dims.x, grid.dims.y);
+    let (mut rejected, mut culled) = (0, 0);
+    for g in 0..lights.len() {
+        let p = Vec3::new(lights.x[g], lights.y[g], lights.z[g]);
+        let r = lights.radius[g];
+        if !(p.is_finite() && r.is_finite() && r > 0.0) {
+            rejected += 1;
+            continue;
+        }
+        let mut c = view_from_world * (p - camera.position);
+        let mut radius = r;
+        if let Some(s) = &lights.spot {
+            let axis = (view_from_world * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g])).normalize_or_zero();
+            let angle = s.angle[g];
+            if angle.is_finite() && angle > 0.0 && axis != Vec3::ZERO {
+                (c, radius) = spot_bounding_sphere(c, r, SpotCone { direction: axis, angle });
+            }
+        }
+        let dc = -c.z;
+        let r = geometry::pad_radius(c.x, c.y, dc, radius);
+        // Outer frustum: all six planes.
+        let outside = xn[0].dot(c) < -r
+            || xn[nx as usize].dot(c) > r
+            || yn[0].dot(c) > r
+            || yn[ny as usize].dot(c) < -r;
+        let Some(z) = linear_z(dc, r, &planes.z_depths).filter(|_| !outside) else {
+            culled += 1;
+            continue;
+        };
+        let (i0, i1, j0, j1) = if dc - r > 0.0 {
+            // x: first tile whose right plane the sphere reaches left of, then step on.
+            let (i0, i1) = step_planes(nx, |i| xn[i].dot(c) <= r, |i| xn[i].dot(c) >= -r);
+            // y rows run top → bottom; the normals point up, so "below plane" is n·c ≤ r.
+            let (j0, j1) = step_planes(ny, |j| yn[j].dot(c) >= -r, |j| yn[j].dot(c) <= r);
+            (i0, i1, j0, j1)
+        } else {
+            (0, nx - 1, 0, ny - 1)
+        };
+        if i0 > i1 || j0 > j1 {
+            culled += 1;
+            continue;
+        }
+        for k in z.k0..=z.k1 {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    scratch.lists[grid.cluster_id(i, j, k) as usize].push(g as u32);
+                }
+            }
+        }
+    }
+    out.reset(clusters);
+    let mut at = 0u32;
+    for (c, list) in scratch.lists[..clusters].iter().enumerate() {
+        out.offsets[c] = at;
+        out.counts[c] = list.len() as u32;
+        at += list.len() as u32;
+        out.indices.extend_from_slice(list);
+    }
+    (rejected, culled)
+}
+
+/// Steps through planes 1..=n for the first tile `t` whose far plane `t + 1` satisfies
+/// `reaches_before(t + 1)`, then on while the sphere still reaches past plane `t + 1`
+/// (`reaches_after`). Returns `(first, last)`; `first > last` when nothing is covered.
+fn step_planes(n: u32, reaches_before: impl Fn(usize) -> bool, reaches_after: impl Fn(usize) -> bool) -> (u32, u32) {
+    let mut first = n;
+    for t in 0..n {
+        if reaches_before(t as usize + 1) {
+            first = t;
+            break;
+        }
+    }
+    let mut last = first;
+    while last + 1 < n && reaches_after(last as usize + 1) {
+        last += 1;
+    }
+    if first < n && !reaches_after(first as usize) {
+        return (1, 0);
+    }
+    (first, last)
+}
+
+/// z planes stepped from the near plane, as in the paper.
+fn linear_z(dc: f32, r: f32, z: &[f32]) -> Option<ZRange> {
+    let slices = z.len() as u32 - 1;
+    let da = (dc - r).max(z[0]);
+    let db = (dc + r).min(z[slices as usize]);
+    if !(da <= db) {
+        return None;
+    }
+    let mut k0 = 0;
+    while k0 + 1 < slices && z[k0 as usize + 1] <= da {
+        k0 += 1;
+    }
+    let mut k1 = k0;
+    while k1 + 1 < slices && z[k1 as usize + 1] <= db {
+        k1 += 1;
+    }
+    Some(ZRange { da, db, k0, k1 })
+}

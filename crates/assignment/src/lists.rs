@@ -1,0 +1,66 @@
+//! The output: per-cluster light lists in CSR form (the paper's Figure 3).
+
+/// Light lists for every cluster: cluster `c`'s lights are
+/// `indices[offsets[c] .. offsets[c] + counts[c]]`, ascending, as indices into the input columns.
+///
+/// Reuse one value across frames: the assignment refills it and only grows its vectors.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LightLists {
+    /// Exclusive prefix sum of `counts`, one per cluster.
+    pub offsets: Vec<u32>,
+    /// Number of lights in each cluster.
+    pub counts: Vec<u32>,
+    /// Concatenated light indices, cluster after cluster.
+    pub indices: Vec<u32>,
+}
+
+impl LightLists {
+    /// An empty value (no storage yet).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of clusters described.
+    pub fn cluster_count(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// Total cluster–light pairs.
+    pub fn pair_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// The lights of cluster `c`.
+    pub fn lights_of(&self, c: usize) -> &[u32] {
+        let start = self.offsets[c] as usize;
+        &self.indices[start..start + self.counts[c] as usize]
+    }
+
+    /// Bytes of the three arrays as uploaded to the GPU.
+    pub fn byte_size(&self) -> usize {
+        4 * (self.offsets.len() + self.counts.len() + self.indices.len())
+    }
+
+    /// Resets to `clusters` empty lists, keeping the storage.
+    pub(crate) fn reset(&mut self, clusters: usize) {
+        self.offsets.clear();
+        self.offsets.resize(clusters, 0);
+        self.counts.clear();
+        self.counts.resize(clusters, 0);
+        self.indices.clear();
+    }
+
+    /// Checks the CSR invariants; used by tests and debug builds.
+    pub fn assert_well_formed(&self, light_count: usize) {
+        assert_eq!(self.offsets.len(), self.counts.len());
+        let mut running = 0u64;
+        for c in 0..self.counts.len() {
+            assert_eq!(self.offsets[c] as u64, running, "offset of cluster {c}");
+            running += self.counts[c] as u64;
+            let lights = self.lights_of(c);
+            assert!(lights.windows(2).all(|w| w[0] < w[1]), "cluster {c} not ascending");
+            assert!(lights.iter().all(|&l| (l as usize) < light_count));
+        }
+        assert_eq!(running as usize, self.indices.len());
+    }
+}

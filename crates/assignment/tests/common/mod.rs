@@ -1,0 +1,220 @@
+//! Scene generation and the brute-force oracle shared by the assignment tests.
+#![allow(dead_code)] // Each test binary uses a different part of this module.
+
+use glam::{DVec3, UVec3, Vec3};
+use myriad_assignment::{LightInput, LightLists, SpotInput};
+use myriad_cluster_math::oracle::{self, Cell, SpotVolume};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use rand::{Rng, SeedableRng};
+
+/// Owned SoA light columns for tests.
+#[derive(Clone, Debug, Default)]
+pub struct Columns {
+    pub x: Vec<f32>,
+    pub y: Vec<f32>,
+    pub z: Vec<f32>,
+    pub radius: Vec<f32>,
+    pub dir_x: Vec<f32>,
+    pub dir_y: Vec<f32>,
+    pub dir_z: Vec<f32>,
+    pub angle: Vec<f32>,
+}
+
+impl Columns {
+    pub fn push(&mut self, p: Vec3, r: f32) {
+        self.push_spot(p, r, Vec3::Z, std::f32::consts::PI);
+    }
+
+    pub fn push_spot(&mut self, p: Vec3, r: f32, dir: Vec3, angle: f32) {
+        self.x.push(p.x);
+        self.y.push(p.y);
+        self.z.push(p.z);
+        self.radius.push(r);
+        self.dir_x.push(dir.x);
+        self.dir_y.push(dir.y);
+        self.dir_z.push(dir.z);
+        self.angle.push(angle);
+    }
+
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn input(&self, with_spots: bool) -> LightInput<'_> {
+        LightInput {
+            x: &self.x,
+            y: &self.y,
+            z: &self.z,
+            radius: &self.radius,
+            spot: with_spots.then(|| SpotInput {
+                dir_x: &self.dir_x,
+                dir_y: &self.dir_y,
+                dir_z: &self.dir_z,
+                angle: &self.angle,
+            }),
+        }
+    }
+}
+
+/// For every cluster, the lights the f64 oracle says touch it, by testing every (light, cluster).
+pub fn brute_force(lights: &Columns, spots: bool, camera: &Camera, grid: &ClusterGrid) -> Vec<Vec<u32>> {
+    let d = grid.dims;
+    let cells: Vec<Cell> = (0..grid.cluster_count() as u32)
+        .map(|c| {
+            let v = grid.cluster_coords(c);
+            Cell::of_cluster(camera, grid, v.x, v.y, v.z)
+        })
+        .collect();
+    let mut out = vec![Vec::new(); (d.x * d.y * d.z) as usize];
+    let rot = camera.view_rotation_f64();
+    for l in 0..lights.len() {
+        let p = DVec3::new(lights.x[l] as f64, lights.y[l] as f64, lights.z[l] as f64);
+        let r = lights.radius[l] as f64;
+        if !(p.is_finite() && r.is_finite() && r > 0.0) {
+            continue;
+        }
+        let centre = camera.view_from_world_point_f64(p);
+        let spot = spots
+            .then(|| {
+                let angle = lights.angle[l] as f64;
+                let axis = (rot * DVec3::new(lights.dir_x[l] as f64, lights.dir_y[l] as f64, lights.dir_z[l] as f64))
+                    .normalize_or_zero();
+                (angle > 0.0 && angle <= std::f64::consts::FRAC_PI_2 && axis != DVec3::ZERO).then_some(SpotVolume {
+                    apex: centre,
+                    direction: axis,
+                    range: r,
+                    angle,
+                })
+            })
+            .flatten();
+        for (c, cell) in cells.iter().enumerate() {
+            let hit = match &spot {
+                Some(s) => oracle::spot_intersects_cell(s, cell),
+                None => oracle::sphere_intersects_cell(centre, r, cell),
+            };
+            if hit {
+                out[c].push(l as u32);
+            }
+        }
+    }
+    out
+}
+
+/// Checks `lists ⊇ truth`; returns (exact pairs, false-positive pairs).
+pub fn assert_conservative(name: &str, lists: &LightLists, truth: &[Vec<u32>], context: &str) -> (usize, usize) {
+    lists.assert_well_formed(usize::MAX);
+    let mut exact = 0;
+    let mut extra = 0;
+    for (c, want) in truth.iter().enumerate() {
+        let got = lists.lights_of(c);
+        for l in want {
+            assert!(
+                got.binary_search(l).is_ok(),
+                "{name}: light {l} missing from cluster {c} ({context}); got {got:?}, want {want:?}"
+            );
+        }
+        exact += want.len();
+        extra += got.len() - want.len();
+    }
+    (exact, extra)
+}
+
+/// A random camera + grid + lights scene with adversarial placements, from a seed.
+pub struct Scene {
+    pub camera: Camera,
+    pub grid: ClusterGrid,
+    pub lights: Columns,
+}
+
+pub fn random_dir(rng: &mut impl Rng) -> Vec3 {
+    loop {
+        let v = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        if v.length_squared() > 1e-3 && v.length_squared() <= 1.0 {
+            return v.normalize();
+        }
+    }
+}
+
+pub struct SceneParams {
+    pub seed: u64,
+    pub fov_deg: f32,
+    pub aspect: f32,
+    pub near: f32,
+    pub far_ratio: f32,
+    pub eye_scale: f32,
+    pub dims: UVec3,
+    pub slicing: u8,
+    pub lights: usize,
+    pub spots: bool,
+}
+
+pub fn make_scene(p: &SceneParams) -> Scene {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(p.seed);
+    let eye = random_dir(&mut rng) * p.eye_scale * rng.random_range(0.0f32..1.0);
+    // Any orientation, including straight up and down.
+    let forward = match rng.random_range(0..6) {
+        0 => Vec3::Y,
+        1 => Vec3::NEG_Y,
+        _ => random_dir(&mut rng),
+    };
+    let height = 64u32;
+    let width = ((height as f32 * p.aspect).round() as u32).max(1);
+    let far = p.near * p.far_ratio;
+    let camera = Camera::new(eye, eye + forward, Vec3::Y, p.fov_deg, width, height, p.near, far);
+    let slicing = match p.slicing % 3 {
+        0 => DepthSlicing::Linear,
+        1 => DepthSlicing::Log,
+        _ => DepthSlicing::LogWithNearSlice {
+            first_slice_depth: p.near * p.far_ratio.powf(0.1),
+        },
+    };
+    let grid = ClusterGrid::new(p.dims, slicing, p.near, far);
+    let (right, up, fwd) = {
+        let (r, u, f) = camera.basis_f64();
+        (r.as_vec3(), u.as_vec3(), f.as_vec3())
+    };
+    let t = camera.tan_half_fov();
+    let mut lights = Columns::default();
+    for _ in 0..p.lights {
+        // Depth: log-uniform over [near/10, far*2], sometimes behind the camera.
+        let depth = if rng.random_bool(0.1) {
+            -rng.random_range(0.0..far)
+        } else {
+            (p.near * 0.1) * (20.0 * p.far_ratio).powf(rng.random_range(0.0f32..1.0))
+        };
+        let mut sx = rng.random_range(-1.3f32..1.3);
+        let mut sy = rng.random_range(-1.3f32..1.3);
+        // Straddle tile planes exactly.
+        if rng.random_bool(0.3) {
+            sx = -1.0 + 2.0 * rng.random_range(0..=p.dims.x) as f32 / p.dims.x as f32;
+        }
+        if rng.random_bool(0.3) {
+            sy = -1.0 + 2.0 * rng.random_range(0..=p.dims.y) as f32 / p.dims.y as f32;
+        }
+        let mut view = Vec3::new(sx * t.x * depth.abs(), sy * t.y * depth.abs(), -depth);
+        // Sit on a slice edge.
+        if rng.random_bool(0.2) {
+            let k = rng.random_range(0..=p.dims.z);
+            view.z = -grid.slice_start_depth(k);
+        }
+        let scale = view.length().max(p.near);
+        let radius = match rng.random_range(0..4) {
+            // Radii from tiny to huge relative to the distance.
+            0 => scale * 10f32.powf(rng.random_range(-4.0..-1.0)),
+            1 => scale * 10f32.powf(rng.random_range(-1.0..0.5)),
+            // Containing the camera.
+            2 => view.length() * rng.random_range(1.0f32..3.0),
+            // Absolute 1e-4 .. 1e3.
+            _ => 10f32.powf(rng.random_range(-4.0..3.0)),
+        };
+        let world = eye + right * view.x + up * view.y - fwd * view.z;
+        let dir = random_dir(&mut rng);
+        let angle = if p.spots && rng.random_bool(0.7) {
+            rng.random_range(0.01f32..1.6)
+        } else {
+            std::f32::consts::PI
+        };
+        lights.push_spot(world, radius, dir, angle);
+    }
+    Scene { camera, grid, lights }
+}

@@ -1,0 +1,145 @@
+//! Every method is a superset of the exact f64 oracle (brute force over all clusters), and `exact`
+//! equals it, on proptest-generated hostile scenes and on hand-made regression cases.
+
+mod common;
+
+use common::*;
+use glam::{UVec3, Vec3};
+use myriad_assignment::{Assigner, LightLists, Method};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use proptest::prelude::*;
+
+fn check_scene(scene: &Scene, spots: bool, context: &str) {
+    let truth = brute_force(&scene.lights, spots, &scene.camera, &scene.grid);
+    let mut assigner = Assigner::new();
+    let mut lists = LightLists::new();
+    for method in Method::ALL {
+        let stats = assigner.assign(method, &scene.lights.input(spots), &scene.camera, &scene.grid, &mut lists);
+        let (_, extra) = assert_conservative(method.name(), &lists, &truth, context);
+        assert_eq!(stats.pairs as usize, lists.indices.len());
+        if method == Method::Exact {
+            assert_eq!(extra, 0, "exact has {extra} false positives ({context})");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    #[test]
+    fn every_method_covers_the_oracle(
+        seed in any::<u64>(),
+        fov_deg in 0.5f32..179.0,
+        aspect in 0.1f32..10.0,
+        near in 1e-4f32..10.0,
+        far_ratio in 1.5f32..1e5,
+        eye_scale in prop_oneof![Just(0.0f32), 1.0f32..100.0, Just(1.0e6)],
+        dx in 1u32..9, dy in 1u32..7, dz in 1u32..9,
+        slicing in 0u8..3,
+        spots in any::<bool>(),
+    ) {
+        let params = SceneParams {
+            seed, fov_deg, aspect, near, far_ratio, eye_scale,
+            dims: UVec3::new(dx, dy, dz), slicing, lights: 40, spots,
+        };
+        let scene = make_scene(&params);
+        check_scene(&scene, spots, &format!("seed {seed} fov {fov_deg} aspect {aspect} near {near} far x{far_ratio} eye {eye_scale}"));
+    }
+}
+
+fn camera(fov: f32, near: f32, far: f32) -> Camera {
+    Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, fov, 160, 90, near, far)
+}
+
+fn scene_of(camera: Camera, dims: UVec3, lights: &[(Vec3, f32)]) -> Scene {
+    let grid = ClusterGrid::new(dims, DepthSlicing::Log, camera.near, camera.far);
+    let mut columns = Columns::default();
+    for &(p, r) in lights {
+        columns.push(p, r);
+    }
+    Scene { camera, grid, lights: columns }
+}
+
+#[test]
+fn lights_on_planes_behind_and_around_the_camera() {
+    let cam = camera(60.0, 0.1, 100.0);
+    let t = cam.tan_half_fov();
+    let dims = UVec3::new(8, 6, 8);
+    let mut lights = vec![
+        (Vec3::ZERO, 1.0),                      // camera inside the light
+        (Vec3::new(0.0, 0.0, 0.5), 0.7),        // behind the camera, reaching past the near plane
+        (Vec3::new(0.0, 0.0, 5.0), 4.0),        // behind, not reaching
+        (Vec3::new(0.0, 0.0, -0.1), 0.05),      // centred on the near plane
+        (Vec3::new(0.0, 0.0, -100.0), 1.0),     // centred on the far plane
+        (Vec3::new(3.0, 0.0, 0.0), 3.05),       // beside the eye, grazing the frustum
+        (Vec3::new(0.0, 0.0, -50.0), 1000.0),   // covering everything
+    ];
+    // Centred exactly on every x and y tile plane at a few depths.
+    for d in [0.2f32, 1.0, 7.5, 60.0] {
+        for i in 0..=dims.x {
+            let s = (-1.0 + 2.0 * i as f32 / dims.x as f32) * t.x;
+            lights.push((Vec3::new(s * d, 0.1 * d, -d), 0.01 * d));
+        }
+        for j in 0..=dims.y {
+            let s = (1.0 - 2.0 * j as f32 / dims.y as f32) * t.y;
+            lights.push((Vec3::new(0.05 * d, s * d, -d), 0.01 * d));
+        }
+    }
+    check_scene(&scene_of(cam, dims, &lights), false, "planes");
+}
+
+#[test]
+fn extreme_fields_of_view_and_depth_ranges() {
+    for (fov, near, far) in [(0.5f32, 1.0f32, 1e4f32), (179.0, 0.01, 100.0), (90.0, 1e-4, 1e7), (60.0, 9.0, 9.5)] {
+        let cam = camera(fov, near, far);
+        let t = cam.tan_half_fov();
+        let mut lights = Vec::new();
+        for step in 0..60 {
+            let f = step as f32 / 59.0;
+            let d = near * (far / near).powf(f);
+            lights.push((Vec3::new(t.x * d * (f - 0.5), t.y * d * 0.3, -d), d * 0.05));
+            lights.push((Vec3::new(t.x * d * 1.01, 0.0, -d), d * 0.02));
+        }
+        check_scene(&scene_of(cam, UVec3::new(6, 4, 7), &lights), false, &format!("fov {fov} near {near} far {far}"));
+    }
+}
+
+#[test]
+fn huge_world_coordinates() {
+    let eye = Vec3::new(1.0e6, -3.0e5, 2.0e6);
+    let cam = Camera::new(eye, eye + Vec3::new(0.3, -0.1, -1.0), Vec3::Y, 70.0, 128, 72, 0.1, 200.0);
+    let mut lights = Vec::new();
+    for i in 0..100 {
+        let f = i as f32;
+        lights.push((eye + Vec3::new((f * 0.37).sin() * 20.0, (f * 0.11).cos() * 8.0, -f * 1.5), 0.5 + (f * 0.05).sin().abs()));
+    }
+    check_scene(&scene_of(cam, UVec3::new(8, 5, 10), &lights), false, "huge coordinates");
+}
+
+#[test]
+fn invalid_lights_are_rejected_and_counted() {
+    let cam = camera(60.0, 0.1, 100.0);
+    let scene = scene_of(
+        cam,
+        UVec3::new(4, 4, 4),
+        &[
+            (Vec3::new(0.0, 0.0, -5.0), 1.0),
+            (Vec3::new(f32::NAN, 0.0, -5.0), 1.0),
+            (Vec3::new(0.0, f32::INFINITY, -5.0), 1.0),
+            (Vec3::new(0.0, 0.0, -5.0), -1.0),
+            (Vec3::new(0.0, 0.0, -5.0), 0.0),
+            (Vec3::new(0.0, 0.0, -5.0), f32::NAN),
+            (Vec3::new(0.0, 0.0, -5.0), f32::INFINITY),
+            (Vec3::new(0.0, 0.0, 50.0), 1.0), // valid but culled
+        ],
+    );
+    let mut lists = LightLists::new();
+    for method in Method::ALL {
+        let stats = Assigner::new().assign(method, &scene.lights.input(false), &scene.camera, &scene.grid, &mut lists);
+        assert_eq!(stats.rejected, 6, "{method}");
+        assert_eq!(stats.culled, 1, "{method}");
+        assert_eq!(stats.visible(), 1, "{method}");
+        assert!(lists.indices.iter().all(|&l| l == 0), "{method}: {:?}", lists.indices);
+        assert!(!lists.indices.is_empty());
+    }
+}
