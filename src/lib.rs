@@ -1,2 +1,43 @@
-//! placeholder
+//! # myriad — clustered shading with very many dynamic lights
+//!
+//! The facade: re-exports the four crates under short names and holds the pieces the `myriad`
+//! command-line tool shares with tests and benches (the assignment dump format, the accuracy and
+//! time-against-error measurements).
+//!
+//! | crate | re-exported as | what it is |
+//! | --- | --- | --- |
+//! | `myriad-cluster-math` | [`cluster_math`] | camera, cluster grid, mappings, plane sets, the f64 oracle |
+//! | `myriad-assignment` | [`assignment`] | light → cluster assignment into CSR lists |
+//! | `myriad-scene` | [`scene`] | scene files, (later) glTF, light fields, frame systems |
+//! | `myriad-gpu` | [`gpu`] | the wgpu renderer |
+//!
+//! Glue between them lives here and only here: the crates never depend on each other beyond
+//! `cluster-math` (see ARCHITECTURE.md).
+#![forbid(unsafe_code)]
+
+pub use myriad_assignment as assignment;
 pub use myriad_cluster_math as cluster_math;
+pub use myriad_gpu as gpu;
+pub use myriad_scene as scene;
+
+pub mod dump;
+pub mod evaluate;
+
+use myriad_assignment::{LightInput, SpotInput};
+use myriad_scene::Lights;
+
+/// The assignment's view of a scene's light columns (spot columns only when some light is a spot).
+pub fn light_input(lights: &Lights) -> LightInput<'_> {
+    LightInput {
+        x: &lights.x,
+        y: &lights.y,
+        z: &lights.z,
+        radius: &lights.radius,
+        spot: lights.has_spots().then(|| SpotInput {
+            dir_x: &lights.spot_dir_x,
+            dir_y: &lights.spot_dir_y,
+            dir_z: &lights.spot_dir_z,
+            angle: &lights.spot_angle,
+        }),
+    }
+}

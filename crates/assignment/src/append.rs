@@ -55,84 +55,93 @@ impl Histograms {
     /// total number of pairs.
     pub fn prefix(&mut self, offsets: &mut [u32], counts: &mut [u32], parallel: bool) -> usize {
         let (tasks, clusters) = (self.tasks, self.clusters);
-        assert_eq!(offsets.len(), clusters);
+        assert!(offsets.len() == clusters && counts.len() == clusters);
         let cells = &self.cells[..tasks * clusters];
-        let blocks = clusters.div_ceil(PREFIX_BLOCK);
-        self.block_sums.clear();
-        self.block_sums.resize(blocks, 0);
-        let sum_block = |(b, (sum, counts)): (usize, (&mut u64, &mut [u32]))| {
-            let base = b * PREFIX_BLOCK;
-            let mut total = 0u64;
-            for (i, count) in counts.iter_mut().enumerate() {
+        // Turns clusters `base..base + offsets.len()` into cursors starting at `start`; returns
+        // the running total after them.
+        let scan = |base: usize, start: u64, offsets: &mut [u32], counts: &mut [u32]| -> u64 {
+            let mut at = start;
+            for (i, (offset, count)) in offsets.iter_mut().zip(counts.iter_mut()).enumerate() {
                 let c = base + i;
-                let n: u32 = (0..tasks).map(|t| cells[t * clusters + c].load(Relaxed)).sum();
-                *count = n;
-                total += n as u64;
-            }
-            *sum = total;
-        };
-        if parallel {
-            self.block_sums
-                .par_iter_mut()
-                .zip(counts.par_chunks_mut(PREFIX_BLOCK))
-                .enumerate()
-                .for_each(sum_block);
-        } else {
-            self.block_sums
-                .iter_mut()
-                .zip(counts.chunks_mut(PREFIX_BLOCK))
-                .enumerate()
-                .for_each(sum_block);
-        }
-        let mut running = 0u64;
-        for s in self.block_sums.iter_mut() {
-            let n = *s;
-            *s = running;
-            running += n;
-        }
-        assert!(
-            running <= u32::MAX as u64,
-            "{running} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
-        );
-        let scan_block = |(b, (base, offsets)): (usize, (&u64, &mut [u32]))| {
-            let mut at = *base as u32;
-            for (i, offset) in offsets.iter_mut().enumerate() {
-                let c = b * PREFIX_BLOCK + i;
-                *offset = at;
+                *offset = at as u32;
                 for t in 0..tasks {
                     let cell = &cells[t * clusters + c];
                     let n = cell.load(Relaxed);
-                    cell.store(at, Relaxed);
-                    at += n;
+                    cell.store(at as u32, Relaxed);
+                    at += n as u64;
                 }
+                *count = (at - *offset as u64) as u32;
             }
+            at
         };
-        if parallel {
-            self.block_sums
-                .par_iter()
-                .zip(offsets.par_chunks_mut(PREFIX_BLOCK))
-                .enumerate()
-                .for_each(scan_block);
+        let total = if !parallel {
+            scan(0, 0, offsets, counts)
         } else {
+            // Pass 1: each block's total; pass 2: scan the blocks from their exclusive bases.
+            let blocks = clusters.div_ceil(PREFIX_BLOCK);
+            self.block_sums.clear();
+            self.block_sums.resize(blocks, 0);
             self.block_sums
-                .iter()
-                .zip(offsets.chunks_mut(PREFIX_BLOCK))
+                .par_iter_mut()
                 .enumerate()
-                .for_each(scan_block);
-        }
-        running as usize
+                .for_each(|(b, sum)| {
+                    let range = b * PREFIX_BLOCK..((b + 1) * PREFIX_BLOCK).min(clusters);
+                    *sum = (0..tasks)
+                        .map(|t| {
+                            cells[t * clusters..][range.clone()]
+                                .iter()
+                                .map(|n| n.load(Relaxed) as u64)
+                                .sum::<u64>()
+                        })
+                        .sum();
+                });
+            let mut running = 0u64;
+            for s in self.block_sums.iter_mut() {
+                (*s, running) = (running, running + *s);
+            }
+            if running <= u32::MAX as u64 {
+                self.block_sums
+                    .par_iter()
+                    .zip(
+                        offsets
+                            .par_chunks_mut(PREFIX_BLOCK)
+                            .zip(counts.par_chunks_mut(PREFIX_BLOCK)),
+                    )
+                    .enumerate()
+                    .for_each(|(b, (&start, (offsets, counts)))| {
+                        scan(b * PREFIX_BLOCK, start, offsets, counts);
+                    });
+            }
+            running
+        };
+        assert!(
+            total <= u32::MAX as u64,
+            "{total} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
+        );
+        total as usize
     }
 }
 
-/// Step 1 for one task: zero the row, then count every span's clusters.
+/// Step 1 for one task: count every span's clusters into the task's row. Spans are runs of
+/// consecutive clusters, so the row first collects a difference array (+1 at a span's start, −1
+/// just past its end: O(spans) instead of O(pairs)) and one running sum turns it into counts.
 pub(crate) fn count(row: &[AtomicU32], spans: &[Span]) {
     for cell in row {
         cell.store(0, Relaxed);
     }
-    for s in spans {
-        for cell in &row[s.first as usize..(s.first + s.len) as usize] {
-            cell.store(cell.load(Relaxed) + 1, Relaxed);
+    let bump = |at: usize, delta: u32| {
+        if let Some(cell) = row.get(at) {
+            cell.store(cell.load(Relaxed).wrapping_add(delta), Relaxed);
         }
+    };
+    for s in spans {
+        bump(s.first as usize, 1);
+        bump((s.first + s.len) as usize, u32::MAX); // −1 in wrapping arithmetic
+    }
+    let mut running = 0u32;
+    for cell in row {
+        running = running.wrapping_add(cell.load(Relaxed));
+        cell.store(running, Relaxed);
     }
 }
 
@@ -177,7 +186,11 @@ impl<'a> SharedIndices<'a> {
     /// No other thread may read or write position `at` while `self` is alive.
     #[inline]
     pub unsafe fn write(&self, at: usize, value: u32) {
-        assert!(at < self.len, "index {at} outside the {} pairs counted", self.len);
+        assert!(
+            at < self.len,
+            "index {at} outside the {} pairs counted",
+            self.len
+        );
         // SAFETY: in bounds (checked above); exclusive per the caller's contract.
         unsafe { self.ptr.add(at).write(value) }
     }

@@ -3,6 +3,7 @@
 use crate::append::{self, Histograms, SharedIndices};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
+use crate::search::FramePlanes;
 use crate::{LightInput, LightLists};
 use glam::Vec4;
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets};
@@ -23,7 +24,12 @@ pub enum Method {
 
 impl Method {
     /// Every method, fastest-to-build order irrelevant.
-    pub const ALL: [Method; 4] = [Method::Exact, Method::Linear, Method::Binary, Method::Refined];
+    pub const ALL: [Method; 4] = [
+        Method::Exact,
+        Method::Linear,
+        Method::Binary,
+        Method::Refined,
+    ];
 
     /// The name used on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -71,9 +77,9 @@ impl AssignStats {
 
 /// Below this many lights the frame runs as one task on the calling thread: waking the pool costs
 /// more than it saves (measured in `benches/assignment.rs`).
-pub const SERIAL_LIGHTS: usize = 1024;
+pub const SERIAL_LIGHTS: usize = 256;
 /// Lights per task at least, so per-task histogram work stays small next to the lights' work.
-const LIGHTS_PER_TASK: usize = 2048;
+const LIGHTS_PER_TASK: usize = 256;
 /// Upper bound on histogram memory (bytes) before fewer tasks are used.
 const HISTOGRAM_BUDGET: usize = 64 << 20;
 
@@ -114,8 +120,15 @@ impl Assigner {
             ..AssignStats::default()
         };
         if method == Method::Linear {
-            let (rejected, culled) =
-                linear::assign_linear(&mut self.linear, lights, camera, grid, &self.planes, view_from_world, out);
+            let (rejected, culled) = linear::assign_linear(
+                &mut self.linear,
+                lights,
+                camera,
+                grid,
+                &self.planes,
+                view_from_world,
+                out,
+            );
             stats.rejected = rejected;
             stats.culled = culled;
             stats.pairs = out.indices.len() as u64;
@@ -140,9 +153,15 @@ impl Assigner {
             lights: *lights,
             camera,
             grid,
-            planes: &self.planes,
+            planes: FramePlanes::new(&self.planes, grid),
             view_from_world,
             cluster_spheres: &self.cluster_spheres,
+            side_normals: [
+                self.planes.x_plane_normal(0),
+                self.planes.x_plane_normal(grid.dims.x as usize),
+                self.planes.y_plane_normal(0),
+                self.planes.y_plane_normal(grid.dims.y as usize),
+            ],
         };
         let parallel = tasks > 1;
         let histograms = &self.histograms;
@@ -152,18 +171,24 @@ impl Assigner {
             append::count(histograms.row(t), &task.spans);
         };
         if parallel {
-            self.tasks[..tasks].par_iter_mut().enumerate().for_each(gather);
+            self.tasks[..tasks]
+                .par_iter_mut()
+                .enumerate()
+                .for_each(gather);
         } else {
             self.tasks[..tasks].iter_mut().enumerate().for_each(gather);
         }
         out.reset(clusters);
-        let pairs = self
-            .histograms
-            .prefix(&mut out.offsets, &mut out.counts, parallel && clusters * tasks > 1 << 16);
+        let pairs = self.histograms.prefix(
+            &mut out.offsets,
+            &mut out.counts,
+            parallel && clusters * tasks > 1 << 16,
+        );
         out.indices.resize(pairs, 0);
         let shared = SharedIndices::new(&mut out.indices);
         let histograms = &self.histograms;
-        let scatter = |(t, task): (usize, &TaskOutput)| append::fill(histograms.row(t), &task.spans, &shared);
+        let scatter =
+            |(t, task): (usize, &TaskOutput)| append::fill(histograms.row(t), &task.spans, &shared);
         if parallel {
             self.tasks[..tasks].par_iter().enumerate().for_each(scatter);
         } else {

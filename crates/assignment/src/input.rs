@@ -64,10 +64,16 @@ impl<'a> LightInput<'a> {
         );
         if let Some(s) = &self.spot {
             assert!(
-                s.dir_x.len() == n && s.dir_y.len() == n && s.dir_z.len() == n && s.angle.len() == n,
+                s.dir_x.len() == n
+                    && s.dir_y.len() == n
+                    && s.dir_z.len() == n
+                    && s.angle.len() == n,
                 "spot columns differ in length from the light columns"
             );
         }
-        assert!(n <= u32::MAX as usize, "more lights than fit in a u32 index");
+        assert!(
+            n <= u32::MAX as usize,
+            "more lights than fit in a u32 index"
+        );
     }
 }

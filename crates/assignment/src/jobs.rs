@@ -11,13 +11,12 @@
 
 use crate::append::Span;
 use crate::geometry::{self, ClusterBox};
+use crate::phases::{BLOCK, Block};
+use crate::search::FramePlanes;
 use crate::{LightInput, Method};
 use glam::{DVec3, Mat3, Vec3, Vec4};
 use myriad_cluster_math::oracle::{self, Cell, SpotVolume};
-use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets, SpotCone, spot_bounding_sphere};
-
-/// Lights per SoA block inside a task.
-pub(crate) const BLOCK: usize = 256;
+use myriad_cluster_math::{Camera, ClusterGrid, SpotCone, spot_bounding_sphere};
 
 /// What the tasks of one frame share, read-only.
 pub(crate) struct FrameContext<'a> {
@@ -25,10 +24,29 @@ pub(crate) struct FrameContext<'a> {
     pub lights: LightInput<'a>,
     pub camera: &'a Camera,
     pub grid: &'a ClusterGrid,
-    pub planes: &'a PlaneSets,
+    pub planes: FramePlanes<'a>,
     pub view_from_world: Mat3,
     /// View-space bounding spheres of the clusters (for spot cone tests); empty without spots.
     pub cluster_spheres: &'a [Vec4],
+    /// Unit normals of the frustum's left, right, top and bottom planes (x-plane 0 and X, y-plane
+    /// 0 and Y), each pointing right or up, for the cheap early cull.
+    pub side_normals: [Vec3; 4],
+}
+
+impl FrameContext<'_> {
+    /// Whether the padded sphere may touch the frustum: the six plane tests of the paper's
+    /// "light is inside outer frustum", which are necessary conditions for any sphere.
+    #[inline]
+    fn may_touch_frustum(&self, cx: f32, cy: f32, depth: f32, r: f32) -> bool {
+        let [left, right, top, bottom] = self.side_normals;
+        let c = Vec3::new(cx, cy, -depth);
+        (left.dot(c) >= -r)
+            & (right.dot(c) <= r)
+            & (top.dot(c) <= r)
+            & (bottom.dot(c) >= -r)
+            & (depth + r >= self.planes.sets.z_depths[0])
+            & (depth - r <= self.planes.sets.z_depths[self.planes.sets.z_depths.len() - 1])
+    }
 }
 
 /// One task's private output.
@@ -49,84 +67,125 @@ struct SpotView {
     active: bool,
 }
 
-/// Whether a light's input values can be assigned at all.
-#[inline]
-fn is_valid(p: Vec3, r: f32) -> bool {
-    p.is_finite() && r.is_finite() && r > 0.0
-}
-
 /// Runs lights `begin..end` through all phases into `out` (cleared first).
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     out.spans.clear();
     out.rejected = 0;
     out.culled = 0;
     let eye = ctx.camera.position;
-    let mut cx = [0f32; BLOCK];
-    let mut cy = [0f32; BLOCK];
-    let mut dc = [0f32; BLOCK];
-    let mut rad = [0f32; BLOCK];
-    let mut live = [false; BLOCK];
+    let mut block = Block::new();
+    // Pre-cull columns of the current block, indexed by position in the block.
+    let (mut vx, mut vy, mut vd, mut vr) =
+        ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
+    let (mut valid, mut inside) = ([false; BLOCK], [false; BLOCK]);
     let mut spots = [SpotView::default(); BLOCK];
-    let mut boxes = [None::<ClusterBox>; BLOCK];
     let l = &ctx.lights;
+    let m = ctx.view_from_world;
     let mut block_start = begin;
     while block_start < end {
         let n = (end - block_start).min(BLOCK);
-        // Phase 0: view transform (camera-relative) and validity.
+        // Phase 0a: camera-relative view transform, validity and padding, branch-free over the
+        // block's columns so that it vectorises.
+        let (xs, ys, zs) = (
+            &l.x[block_start..][..n],
+            &l.y[block_start..][..n],
+            &l.z[block_start..][..n],
+        );
+        let rs = &l.radius[block_start..][..n];
         for b in 0..n {
-            let g = block_start + b;
-            let p = Vec3::new(l.x[g], l.y[g], l.z[g]);
-            let r = l.radius[g];
-            live[b] = is_valid(p, r);
-            let v = ctx.view_from_world * (p - eye);
-            let (mut centre, mut radius) = (v, r);
-            spots[b].active = false;
-            if let Some(s) = &l.spot {
-                let axis = ctx.view_from_world * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g]);
+            let (px, py, pz, r) = (xs[b] - eye.x, ys[b] - eye.y, zs[b] - eye.z, rs[b]);
+            let x = m.x_axis.x * px + m.y_axis.x * py + m.z_axis.x * pz;
+            let y = m.x_axis.y * px + m.y_axis.y * py + m.z_axis.y * pz;
+            let z = m.x_axis.z * px + m.y_axis.z * py + m.z_axis.z * pz;
+            valid[b] = xs[b].is_finite()
+                & ys[b].is_finite()
+                & zs[b].is_finite()
+                & r.is_finite()
+                & (r > 0.0);
+            vx[b] = x;
+            vy[b] = y;
+            vd[b] = -z;
+            vr[b] = geometry::pad_radius(x, y, -z, r);
+        }
+        // Phase 0b: spot lights trade their range sphere for the spot volume's bounding sphere.
+        if let Some(s) = &l.spot {
+            for b in 0..n {
+                let g = block_start + b;
                 let angle = s.angle[g];
-                let axis = axis.normalize_or_zero();
-                if angle.is_finite() && angle > 0.0 && angle <= std::f32::consts::FRAC_PI_2 && axis != Vec3::ZERO {
-                    let (c, rr) = spot_bounding_sphere(v, r, SpotCone { direction: axis, angle });
-                    centre = c;
-                    radius = rr;
+                let axis = (m * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g])).normalize_or_zero();
+                spots[b].active = false;
+                if angle > 0.0 && angle <= std::f32::consts::FRAC_PI_2 && axis != Vec3::ZERO {
+                    let apex = Vec3::new(vx[b], vy[b], -vd[b]);
+                    let range = l.radius[g];
+                    let (c, r) = spot_bounding_sphere(
+                        apex,
+                        range,
+                        SpotCone {
+                            direction: axis,
+                            angle,
+                        },
+                    );
+                    (vx[b], vy[b], vd[b]) = (c.x, c.y, -c.z);
+                    vr[b] = geometry::pad_radius(c.x, c.y, -c.z, r);
                     spots[b] = SpotView {
-                        apex: v,
+                        apex,
                         axis,
                         cos_sin: (angle.cos(), angle.sin()),
-                        range: r,
+                        range,
                         active: true,
                     };
                 }
             }
-            cx[b] = centre.x;
-            cy[b] = centre.y;
-            dc[b] = -centre.z;
-            rad[b] = geometry::pad_radius(centre.x, centre.y, -centre.z, radius);
-            if ctx.method == Method::Exact {
-                // Candidates only: the oracle decides, so a generous margin costs nothing in accuracy.
-                rad[b] = rad[b] * 1.001 + 1e-3 * (centre.abs().max_element() + radius);
+        }
+        // Phase 0c: the early frustum cull, then compaction of the survivors into the block's
+        // columns (branch-free: every light is written, only survivors advance the cursor).
+        for b in 0..n {
+            inside[b] = valid[b] & ctx.may_touch_frustum(vx[b], vy[b], vd[b], vr[b]);
+        }
+        let mut alive = 0;
+        for b in 0..n {
+            block.cx[alive] = vx[b];
+            block.cy[alive] = vy[b];
+            block.dc[alive] = vd[b];
+            block.rad[alive] = vr[b];
+            block.alive[alive] = true;
+            block.source[alive] = b as u32;
+            alive += inside[b] as usize;
+        }
+        let rejected = valid[..n].iter().filter(|&&v| !v).count();
+        out.rejected += rejected as u32;
+        out.culled += (n - rejected - alive) as u32;
+        if ctx.method == Method::Exact {
+            // Candidates only: the oracle decides, so a wider box costs nothing in accuracy.
+            for b in 0..alive {
+                let extent =
+                    block.cx[b].abs() + block.cy[b].abs() + block.dc[b].abs() + block.rad[b];
+                block.rad[b] = block.rad[b] * 1.001 + 1e-3 * extent;
             }
         }
         // Phases 1–3: z, then x and y (which use the z phase's depth band).
-        for b in 0..n {
-            boxes[b] = if live[b] {
-                geometry::cluster_box(cx[b], cy[b], dc[b], rad[b], ctx.planes)
-            } else {
-                None
-            };
-        }
+        block.run_phases(alive, &ctx.planes);
         // Phase 4: emit spans.
-        for b in 0..n {
-            if !live[b] {
-                out.rejected += 1;
-                continue;
-            }
-            let Some(bx) = boxes[b] else {
+        for b in 0..alive {
+            if !block.alive[b] {
                 out.culled += 1;
                 continue;
-            };
-            let light = (block_start + b) as u32;
-            emit(ctx, light, cx[b], cy[b], dc[b], rad[b], &bx, &spots[b], &mut out.spans);
+            }
+            let bx = block.cluster_box(b);
+            let source = block.source[b] as usize;
+            let light = (block_start + source) as u32;
+            let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
+            emit(
+                ctx,
+                light,
+                cx,
+                cy,
+                dc,
+                r,
+                &bx,
+                &spots[source],
+                &mut out.spans,
+            );
         }
         block_start += n;
     }
@@ -151,7 +210,14 @@ fn emit(
         if spot.active {
             push_filtered(spans, light, first, i1 - i0 + 1, |c| {
                 let s = ctx.cluster_spheres[c as usize];
-                geometry::cone_may_touch_sphere(spot.apex, spot.axis, spot.cos_sin, spot.range, s.truncate(), s.w)
+                geometry::cone_may_touch_sphere(
+                    spot.apex,
+                    spot.axis,
+                    spot.cos_sin,
+                    spot.range,
+                    s.truncate(),
+                    s.w,
+                )
             });
         } else {
             spans.push(Span {
@@ -171,7 +237,9 @@ fn emit(
         }
         Method::Refined => {
             for k in bx.z.k0..=bx.z.k1 {
-                geometry::refine_slice(cx, cy, dc, r, bx, k, ctx.planes, |j, i0, i1| push_row(j, k, i0, i1));
+                geometry::refine_slice(cx, cy, dc, r, bx, k, &ctx.planes, |j, i0, i1| {
+                    push_row(j, k, i0, i1)
+                });
             }
         }
         Method::Exact => emit_exact(ctx, light, bx, spans),
@@ -181,13 +249,23 @@ fn emit(
 
 /// Pushes the maximal runs of `first .. first + len` whose clusters pass `keep`.
 #[inline]
-fn push_filtered(spans: &mut Vec<Span>, light: u32, first: u32, len: u32, mut keep: impl FnMut(u32) -> bool) {
+fn push_filtered(
+    spans: &mut Vec<Span>,
+    light: u32,
+    first: u32,
+    len: u32,
+    mut keep: impl FnMut(u32) -> bool,
+) {
     let mut run_start = None;
     for c in first..first + len {
         match (keep(c), run_start) {
             (true, None) => run_start = Some(c),
             (false, Some(s)) => {
-                spans.push(Span { light, first: s, len: c - s });
+                spans.push(Span {
+                    light,
+                    first: s,
+                    len: c - s,
+                });
                 run_start = None;
             }
             _ => {}
@@ -214,14 +292,16 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, spans: &mut V
         let axis = ctx.camera.view_rotation_f64()
             * DVec3::new(s.dir_x[g] as f64, s.dir_y[g] as f64, s.dir_z[g] as f64);
         let axis = axis.normalize_or_zero();
-        (angle.is_finite() && angle > 0.0 && angle <= std::f64::consts::FRAC_PI_2 && axis != DVec3::ZERO).then_some(
-            SpotVolume {
+        (angle.is_finite()
+            && angle > 0.0
+            && angle <= std::f64::consts::FRAC_PI_2
+            && axis != DVec3::ZERO)
+            .then_some(SpotVolume {
                 apex: centre,
                 direction: axis,
                 range,
                 angle,
-            },
-        )
+            })
     });
     let grid = ctx.grid;
     let camera = ctx.camera;
@@ -250,7 +330,10 @@ pub(crate) fn cluster_bounding_spheres(camera: &Camera, grid: &ClusterGrid, out:
                 let cell = Cell::of_cluster(camera, grid, i, j, k);
                 let corners = cell.corners();
                 let centre = corners.iter().fold(DVec3::ZERO, |a, &c| a + c) / 8.0;
-                let radius = corners.iter().map(|c| c.distance(centre)).fold(0.0, f64::max);
+                let radius = corners
+                    .iter()
+                    .map(|c| c.distance(centre))
+                    .fold(0.0, f64::max);
                 let c = centre.as_vec3();
                 let r = geometry::pad_radius(c.x, c.y, -c.z, radius as f32);
                 out.push(c.extend(r));

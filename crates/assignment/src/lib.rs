@@ -40,6 +40,8 @@ mod input;
 mod jobs;
 mod linear;
 mod lists;
+mod phases;
+mod search;
 
 pub use assigner::{AssignStats, Assigner, Method, SERIAL_LIGHTS};
 pub use input::{LightInput, SpotInput};

@@ -60,10 +60,18 @@ pub(crate) fn assign_linear(
         let mut c = view_from_world * (p - camera.position);
         let mut radius = r;
         if let Some(s) = &lights.spot {
-            let axis = (view_from_world * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g])).normalize_or_zero();
+            let axis = (view_from_world * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g]))
+                .normalize_or_zero();
             let angle = s.angle[g];
             if angle.is_finite() && angle > 0.0 && axis != Vec3::ZERO {
-                (c, radius) = spot_bounding_sphere(c, r, SpotCone { direction: axis, angle });
+                (c, radius) = spot_bounding_sphere(
+                    c,
+                    r,
+                    SpotCone {
+                        direction: axis,
+                        angle,
+                    },
+                );
             }
         }
         let dc = -c.z;
@@ -112,7 +120,11 @@ pub(crate) fn assign_linear(
 /// Steps through planes 1..=n for the first tile `t` whose far plane `t + 1` satisfies
 /// `reaches_before(t + 1)`, then on while the sphere still reaches past plane `t + 1`
 /// (`reaches_after`). Returns `(first, last)`; `first > last` when nothing is covered.
-fn step_planes(n: u32, reaches_before: impl Fn(usize) -> bool, reaches_after: impl Fn(usize) -> bool) -> (u32, u32) {
+fn step_planes(
+    n: u32,
+    reaches_before: impl Fn(usize) -> bool,
+    reaches_after: impl Fn(usize) -> bool,
+) -> (u32, u32) {
     let mut first = n;
     for t in 0..n {
         if reaches_before(t as usize + 1) {

@@ -58,7 +58,10 @@ impl LightLists {
             assert_eq!(self.offsets[c] as u64, running, "offset of cluster {c}");
             running += self.counts[c] as u64;
             let lights = self.lights_of(c);
-            assert!(lights.windows(2).all(|w| w[0] < w[1]), "cluster {c} not ascending");
+            assert!(
+                lights.windows(2).all(|w| w[0] < w[1]),
+                "cluster {c} not ascending"
+            );
             assert!(lights.iter().all(|&l| (l as usize) < light_count));
         }
         assert_eq!(running as usize, self.indices.len());

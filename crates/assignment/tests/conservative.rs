@@ -14,7 +14,13 @@ fn check_scene(scene: &Scene, spots: bool, context: &str) {
     let mut assigner = Assigner::new();
     let mut lists = LightLists::new();
     for method in Method::ALL {
-        let stats = assigner.assign(method, &scene.lights.input(spots), &scene.camera, &scene.grid, &mut lists);
+        let stats = assigner.assign(
+            method,
+            &scene.lights.input(spots),
+            &scene.camera,
+            &scene.grid,
+            &mut lists,
+        );
         let (_, extra) = assert_conservative(method.name(), &lists, &truth, context);
         assert_eq!(stats.pairs as usize, lists.indices.len());
         if method == Method::Exact {
@@ -57,7 +63,11 @@ fn scene_of(camera: Camera, dims: UVec3, lights: &[(Vec3, f32)]) -> Scene {
     for &(p, r) in lights {
         columns.push(p, r);
     }
-    Scene { camera, grid, lights: columns }
+    Scene {
+        camera,
+        grid,
+        lights: columns,
+    }
 }
 
 #[test]
@@ -66,13 +76,13 @@ fn lights_on_planes_behind_and_around_the_camera() {
     let t = cam.tan_half_fov();
     let dims = UVec3::new(8, 6, 8);
     let mut lights = vec![
-        (Vec3::ZERO, 1.0),                      // camera inside the light
-        (Vec3::new(0.0, 0.0, 0.5), 0.7),        // behind the camera, reaching past the near plane
-        (Vec3::new(0.0, 0.0, 5.0), 4.0),        // behind, not reaching
-        (Vec3::new(0.0, 0.0, -0.1), 0.05),      // centred on the near plane
-        (Vec3::new(0.0, 0.0, -100.0), 1.0),     // centred on the far plane
-        (Vec3::new(3.0, 0.0, 0.0), 3.05),       // beside the eye, grazing the frustum
-        (Vec3::new(0.0, 0.0, -50.0), 1000.0),   // covering everything
+        (Vec3::ZERO, 1.0),                    // camera inside the light
+        (Vec3::new(0.0, 0.0, 0.5), 0.7),      // behind the camera, reaching past the near plane
+        (Vec3::new(0.0, 0.0, 5.0), 4.0),      // behind, not reaching
+        (Vec3::new(0.0, 0.0, -0.1), 0.05),    // centred on the near plane
+        (Vec3::new(0.0, 0.0, -100.0), 1.0),   // centred on the far plane
+        (Vec3::new(3.0, 0.0, 0.0), 3.05),     // beside the eye, grazing the frustum
+        (Vec3::new(0.0, 0.0, -50.0), 1000.0), // covering everything
     ];
     // Centred exactly on every x and y tile plane at a few depths.
     for d in [0.2f32, 1.0, 7.5, 60.0] {
@@ -90,7 +100,12 @@ fn lights_on_planes_behind_and_around_the_camera() {
 
 #[test]
 fn extreme_fields_of_view_and_depth_ranges() {
-    for (fov, near, far) in [(0.5f32, 1.0f32, 1e4f32), (179.0, 0.01, 100.0), (90.0, 1e-4, 1e7), (60.0, 9.0, 9.5)] {
+    for (fov, near, far) in [
+        (0.5f32, 1.0f32, 1e4f32),
+        (179.0, 0.01, 100.0),
+        (90.0, 1e-4, 1e7),
+        (60.0, 9.0, 9.5),
+    ] {
         let cam = camera(fov, near, far);
         let t = cam.tan_half_fov();
         let mut lights = Vec::new();
@@ -100,20 +115,40 @@ fn extreme_fields_of_view_and_depth_ranges() {
             lights.push((Vec3::new(t.x * d * (f - 0.5), t.y * d * 0.3, -d), d * 0.05));
             lights.push((Vec3::new(t.x * d * 1.01, 0.0, -d), d * 0.02));
         }
-        check_scene(&scene_of(cam, UVec3::new(6, 4, 7), &lights), false, &format!("fov {fov} near {near} far {far}"));
+        check_scene(
+            &scene_of(cam, UVec3::new(6, 4, 7), &lights),
+            false,
+            &format!("fov {fov} near {near} far {far}"),
+        );
     }
 }
 
 #[test]
 fn huge_world_coordinates() {
     let eye = Vec3::new(1.0e6, -3.0e5, 2.0e6);
-    let cam = Camera::new(eye, eye + Vec3::new(0.3, -0.1, -1.0), Vec3::Y, 70.0, 128, 72, 0.1, 200.0);
+    let cam = Camera::new(
+        eye,
+        eye + Vec3::new(0.3, -0.1, -1.0),
+        Vec3::Y,
+        70.0,
+        128,
+        72,
+        0.1,
+        200.0,
+    );
     let mut lights = Vec::new();
     for i in 0..100 {
         let f = i as f32;
-        lights.push((eye + Vec3::new((f * 0.37).sin() * 20.0, (f * 0.11).cos() * 8.0, -f * 1.5), 0.5 + (f * 0.05).sin().abs()));
+        lights.push((
+            eye + Vec3::new((f * 0.37).sin() * 20.0, (f * 0.11).cos() * 8.0, -f * 1.5),
+            0.5 + (f * 0.05).sin().abs(),
+        ));
     }
-    check_scene(&scene_of(cam, UVec3::new(8, 5, 10), &lights), false, "huge coordinates");
+    check_scene(
+        &scene_of(cam, UVec3::new(8, 5, 10), &lights),
+        false,
+        "huge coordinates",
+    );
 }
 
 #[test]
@@ -135,11 +170,21 @@ fn invalid_lights_are_rejected_and_counted() {
     );
     let mut lists = LightLists::new();
     for method in Method::ALL {
-        let stats = Assigner::new().assign(method, &scene.lights.input(false), &scene.camera, &scene.grid, &mut lists);
+        let stats = Assigner::new().assign(
+            method,
+            &scene.lights.input(false),
+            &scene.camera,
+            &scene.grid,
+            &mut lists,
+        );
         assert_eq!(stats.rejected, 6, "{method}");
         assert_eq!(stats.culled, 1, "{method}");
         assert_eq!(stats.visible(), 1, "{method}");
-        assert!(lists.indices.iter().all(|&l| l == 0), "{method}: {:?}", lists.indices);
+        assert!(
+            lists.indices.iter().all(|&l| l == 0),
+            "{method}: {:?}",
+            lists.indices
+        );
         assert!(!lists.indices.is_empty());
     }
 }

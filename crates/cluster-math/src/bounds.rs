@@ -41,7 +41,11 @@ mod tests {
     fn bounding_sphere_contains_sampled_spot_volume() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
         for _ in 0..200 {
-            let apex = Vec3::new(rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0), 0.0);
+            let apex = Vec3::new(
+                rng.random_range(-5.0..5.0),
+                rng.random_range(-5.0..5.0),
+                0.0,
+            );
             let direction = Vec3::new(
                 rng.random_range(-1.0..1.0),
                 rng.random_range(-1.0..1.0),
@@ -64,7 +68,10 @@ mod tests {
                 let inside = v.length() <= range
                     && (v.length() == 0.0 || v.normalize().dot(direction) >= angle.cos());
                 if inside {
-                    assert!((p - c).length() <= r * 1.0001 + 1e-5, "{p:?} outside ({c:?}, {r})");
+                    assert!(
+                        (p - c).length() <= r * 1.0001 + 1e-5,
+                        "{p:?} outside ({c:?}, {r})"
+                    );
                 }
             }
         }

@@ -167,7 +167,9 @@ mod tests {
         let c = cam(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, -7.0), Vec3::Y);
         let v = c.view_from_world_point(Vec3::new(1.0, 2.0, -2.0));
         assert!((v - Vec3::new(0.0, 0.0, -5.0)).length() < 1e-6, "{v:?}");
-        let m = c.view_from_world().transform_point3(Vec3::new(1.0, 2.0, -2.0));
+        let m = c
+            .view_from_world()
+            .transform_point3(Vec3::new(1.0, 2.0, -2.0));
         assert!((m - v).length() < 1e-5);
         // Matches glam's look_at_rh in the regular case.
         let glam_view = glam::camera::rh::view::look_at_mat4(c.position, c.target, c.up);
@@ -202,7 +204,10 @@ mod tests {
             let ndc = clip.z / clip.w;
             assert!((0.0..=1.0).contains(&ndc));
             let back = c.view_depth_from_ndc_depth(ndc);
-            assert!((back - depth).abs() <= 1e-3 * depth, "{depth} -> {ndc} -> {back}");
+            assert!(
+                (back - depth).abs() <= 1e-3 * depth,
+                "{depth} -> {ndc} -> {back}"
+            );
         }
     }
 

@@ -48,7 +48,10 @@ pub struct ClusterGrid {
 impl ClusterGrid {
     /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range.
     pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
-        assert!(dims.min_element() >= 1, "cluster grid dimensions must be >= 1: {dims}");
+        assert!(
+            dims.min_element() >= 1,
+            "cluster grid dimensions must be >= 1: {dims}"
+        );
         assert!(
             near.is_finite() && far.is_finite() && near > 0.0 && near < far,
             "cluster grid depth range must satisfy 0 < near < far: [{near}, {far}]"

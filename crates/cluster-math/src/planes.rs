@@ -62,7 +62,16 @@ mod tests {
 
     #[test]
     fn normals_agree_with_slopes() {
-        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1920, 1080, 0.1, 50.0);
+        let cam = Camera::new(
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            70.0,
+            1920,
+            1080,
+            0.1,
+            50.0,
+        );
         let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 50.0);
         let sets = PlaneSets::new(&cam, &grid);
         assert_eq!(sets.x_slopes.len(), 17);

@@ -2,8 +2,8 @@
 //! (pixel, depth) → cluster id, over every slice edge (±1 and ±2 ulp), every pixel of every
 //! resolution 1..=64 × 1..=64, and a few large resolutions.
 
-use myriad_cluster_math::{ClusterGrid, DepthSlicing};
 use glam::UVec3;
+use myriad_cluster_math::{ClusterGrid, DepthSlicing};
 
 fn grids() -> Vec<ClusterGrid> {
     let mut out = Vec::new();
@@ -17,10 +17,10 @@ fn grids() -> Vec<ClusterGrid> {
                     first_slice_depth: first,
                 },
             ] {
-                if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing {
-                    if !(first_slice_depth > near && first_slice_depth < far) {
-                        continue;
-                    }
+                if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing
+                    && !(first_slice_depth > near && first_slice_depth < far)
+                {
+                    continue;
                 }
                 out.push(ClusterGrid::new(UVec3::new(24, 12, z), slicing, near, far));
             }
@@ -48,7 +48,11 @@ fn check_depth(grid: &ClusterGrid, d: f32) {
     } else if !(d >= grid.near()) {
         assert_eq!(s, 0, "{grid:?}: depth {d} below near must clamp to 0");
     } else {
-        assert_eq!(s, z - 1, "{grid:?}: depth {d} at/after far must clamp to Z-1");
+        assert_eq!(
+            s,
+            z - 1,
+            "{grid:?}: depth {d} at/after far must clamp to Z-1"
+        );
     }
 }
 
@@ -61,7 +65,10 @@ fn every_slice_edge_and_its_neighbours_map_consistently() {
         assert_eq!(edges.len() as u32, z + 1);
         assert_eq!(edges[0], grid.near());
         assert_eq!(edges[z as usize], grid.far());
-        assert!(edges.windows(2).all(|w| w[0] <= w[1]), "{grid:?}: {edges:?}");
+        assert!(
+            edges.windows(2).all(|w| w[0] <= w[1]),
+            "{grid:?}: {edges:?}"
+        );
         for k in 0..=z {
             let e = grid.slice_start_depth(k);
             let mut d = e;
@@ -124,11 +131,20 @@ fn dense_depth_sweep_is_monotone_and_consistent() {
 }
 
 /// The pixel centre's NDC position is inside its tile's NDC span (exact rational arithmetic).
-fn check_axis(pixels: u32, tiles: u32, tile_of: impl Fn(u32) -> u32, range_of: impl Fn(u32) -> std::ops::Range<u32>) {
+fn check_axis(
+    pixels: u32,
+    tiles: u32,
+    tile_of: impl Fn(u32) -> u32,
+    range_of: impl Fn(u32) -> std::ops::Range<u32>,
+) {
     let mut covered = 0u32;
     for t in 0..tiles {
         let r = range_of(t);
-        assert_eq!(r.start, covered, "pixels {pixels} tiles {tiles}: tile {t} starts at {}", r.start);
+        assert_eq!(
+            r.start, covered,
+            "pixels {pixels} tiles {tiles}: tile {t} starts at {}",
+            r.start
+        );
         for p in r.clone() {
             assert_eq!(tile_of(p), t);
         }
@@ -149,9 +165,20 @@ fn every_pixel_of_small_resolutions_maps_into_its_tile() {
     let tile_counts = [1u32, 2, 3, 5, 7, 8, 12, 16, 24, 32, 33, 64, 100];
     for pixels in 1..=64u32 {
         for &tiles in &tile_counts {
-            let grid = ClusterGrid::new(UVec3::new(tiles, tiles, 1), DepthSlicing::Linear, 0.1, 1.0);
-            check_axis(pixels, tiles, |p| grid.tile_x_of_pixel(p, pixels), |t| grid.tile_pixel_columns(t, pixels));
-            check_axis(pixels, tiles, |p| grid.tile_y_of_pixel(p, pixels), |t| grid.tile_pixel_rows(t, pixels));
+            let grid =
+                ClusterGrid::new(UVec3::new(tiles, tiles, 1), DepthSlicing::Linear, 0.1, 1.0);
+            check_axis(
+                pixels,
+                tiles,
+                |p| grid.tile_x_of_pixel(p, pixels),
+                |t| grid.tile_pixel_columns(t, pixels),
+            );
+            check_axis(
+                pixels,
+                tiles,
+                |p| grid.tile_y_of_pixel(p, pixels),
+                |t| grid.tile_pixel_rows(t, pixels),
+            );
         }
     }
 }
@@ -159,7 +186,10 @@ fn every_pixel_of_small_resolutions_maps_into_its_tile() {
 #[test]
 fn every_pixel_and_depth_of_small_resolutions_gives_the_composed_cluster_id() {
     let grid = ClusterGrid::new(UVec3::new(7, 5, 6), DepthSlicing::Log, 0.1, 50.0);
-    let depths: Vec<f32> = (0..=6).map(|k| grid.slice_start_depth(k)).chain([0.05, 60.0, 1.0]).collect();
+    let depths: Vec<f32> = (0..=6)
+        .map(|k| grid.slice_start_depth(k))
+        .chain([0.05, 60.0, 1.0])
+        .collect();
     for w in 1..=64u32 {
         for h in 1..=64u32 {
             for py in 0..h {
@@ -181,11 +211,27 @@ fn every_pixel_and_depth_of_small_resolutions_gives_the_composed_cluster_id() {
 
 #[test]
 fn large_resolutions_map_every_pixel_row_and_column() {
-    for (w, h) in [(1536u32, 768u32), (1920, 1080), (3840, 2160), (16384, 16384), (1, 16384)] {
+    for (w, h) in [
+        (1536u32, 768u32),
+        (1920, 1080),
+        (3840, 2160),
+        (16384, 16384),
+        (1, 16384),
+    ] {
         for (x, y) in [(24u32, 12u32), (32, 18), (16, 9), (128, 128)] {
             let grid = ClusterGrid::new(UVec3::new(x, y, 1), DepthSlicing::Linear, 0.1, 1.0);
-            check_axis(w, x, |p| grid.tile_x_of_pixel(p, w), |t| grid.tile_pixel_columns(t, w));
-            check_axis(h, y, |p| grid.tile_y_of_pixel(p, h), |t| grid.tile_pixel_rows(t, h));
+            check_axis(
+                w,
+                x,
+                |p| grid.tile_x_of_pixel(p, w),
+                |t| grid.tile_pixel_columns(t, w),
+            );
+            check_axis(
+                h,
+                y,
+                |p| grid.tile_y_of_pixel(p, h),
+                |t| grid.tile_pixel_rows(t, h),
+            );
         }
     }
 }
@@ -204,7 +250,10 @@ fn tile_edges_match_design_formula() {
     for k in 0..=16 {
         let expected = 0.1 * (1000.0f64).powf(k as f64 / 16.0);
         let got = grid.slice_start_depth(k) as f64;
-        assert!((got - expected).abs() <= 1e-6 * expected, "{k}: {got} vs {expected}");
+        assert!(
+            (got - expected).abs() <= 1e-6 * expected,
+            "{k}: {got} vs {expected}"
+        );
     }
     let lin = ClusterGrid::new(UVec3::new(1, 1, 10), DepthSlicing::Linear, 1.0, 11.0);
     for k in 0..=10 {
@@ -212,7 +261,9 @@ fn tile_edges_match_design_formula() {
     }
     let near_slice = ClusterGrid::new(
         UVec3::new(1, 1, 5),
-        DepthSlicing::LogWithNearSlice { first_slice_depth: 1.0 },
+        DepthSlicing::LogWithNearSlice {
+            first_slice_depth: 1.0,
+        },
         0.1,
         10_000.0,
     );

@@ -1,1 +1,107 @@
-//! placeholder
+//! # myriad-scene — scenes, and the scene file every tool agrees on
+//!
+//! A scene is a camera, a cluster grid and lights. This crate reads and writes the JSON scene file
+//! (the shared contract of the CLI, the benches and the tests, see DESIGN.md), and holds lights the
+//! way the rest of myriad consumes them: as structure-of-arrays columns ([`Lights`]). glTF loading,
+//! procedural light fields and the ECS-style frame systems (animate, cull, to-view) will live here
+//! too, as modules of their own beside the ones below.
+//!
+//! ## Modules
+//! * [`Lights`] / [`LightRecord`] (`lights.rs`): SoA light columns and their row type. Spot columns
+//!   exist only when some light is a spot; point lights then have a zero direction and angle π.
+//! * [`Scene`], [`LightPolicy`], [`SkippedLight`] (`scene_file.rs`): reading and writing files.
+//! * [`validate_file`], [`ValidationReport`] (`validate.rs`): every problem in a file at once.
+//! * [`Preset`] (`presets.rs`): the seeded standard benchmark scenes (`paper`, `uniform`,
+//!   `sphere`).
+//! * [`Error`], [`Problem`], [`Result`] (`error.rs`): one error enum for the crate.
+//! * Private: `json.rs` (a JSON tree that keeps duplicate keys and integer kinds, and typed field
+//!   readers), `read.rs` (the streaming reader), `checks.rs` (value checks shared by reader and
+//!   writer).
+//!
+//! ## Who validates what
+//! This crate is the gate between untrusted files and the rest of myriad. `myriad-cluster-math`
+//! trusts its inputs and `assert!`s ([`ClusterGrid::new`] panics on a zero dimension); the
+//! assignment crate takes plain slices and trusts them too. So every value read from a file is
+//! checked here, before any of those constructors run, and **no input makes the reader panic**:
+//! truncated or binary files, wrong types, absurd numbers all become an [`Error`] that names the
+//! file, the JSON path (`lights[3].spot.angle_deg`) and what is wrong. Scenes built in code are
+//! not checked on construction (misuse is the caller's bug), but [`Scene::problems`] applies the
+//! same checks, and [`Scene::to_json_string`] refuses to write a scene that would not read back.
+//!
+//! ## Reading, step by step
+//! 1. **Syntax.** serde_json parses the bytes (its recursion limit of 128 bounds the stack). The
+//!    `lights` array is streamed: each light is checked and appended to the columns before the
+//!    next is parsed. A syntax error, invalid UTF-8, a number beyond the f64 range (`1e999`) or a
+//!    top level that is not an object is [`Error::Json`], with line and column.
+//! 2. **Structure.** Types, array lengths (`position` must have exactly 3 numbers), required
+//!    fields, whole numbers where integers are due (`"width": 1536`, not `1536.0`), and
+//!    **unknown or duplicate fields, which are errors**: a typo such as `"raduis"`
+//!    would otherwise silently fall back to a default. `null` for an optional field means absent.
+//! 3. **Values.** Each number is read as f64 and rounded to f32 once; one that overflows f32
+//!    (`1e39`) is an error, not an infinity. Degrees are converted to radians in f64 and then
+//!    rounded once. Checks: everything finite; camera `position != target`, `up != 0`,
+//!    `fov_y_deg` in (0, 180), `width, height >= 1`, `0 < near < far` (compared after rounding to
+//!    f32); grid dimensions `>= 1` with `x·y·z <= u32::MAX` (cluster ids are u32); light
+//!    `radius > 0`, colour and `intensity >= 0`, spot direction non-zero, spot `angle_deg` in
+//!    (0, 180]. Every problem is collected, never only the first.
+//! 4. **Policy.** Problems with the root, camera or grid are always errors. Invalid lights are an
+//!    error with [`LightPolicy::Strict`], or are left out and listed in [`Scene::skipped`] with
+//!    [`LightPolicy::SkipInvalid`] — never dropped silently. Kept lights carry their index in the
+//!    file's `lights` array in [`Lights::source_index`], so outputs refer to input order.
+//!    [`validate_file`] returns all problems instead.
+//!
+//! ## The format, and this crate's extensions to it
+//! ```json
+//! { "camera": {"position": [0, 2, 10], "target": [0, 2, 0], "up": [0, 1, 0], "fov_y_deg": 60,
+//!              "width": 1536, "height": 768, "near": 0.1, "far": 100},
+//!   "grid":   {"x": 24, "y": 12, "z": 16, "depth": "log"},
+//!   "lights": [{"position": [1, 2, 3], "radius": 2, "color": [1, 0.5, 0.2], "intensity": 4},
+//!              {"position": [0, 5, 0], "radius": 8,
+//!               "spot": {"direction": [0, -1, 0], "angle_deg": 30}}] }
+//! ```
+//! * Defaults: camera `up` = `[0, 1, 0]`; light `color` = `[1, 1, 1]`, `intensity` = 1. All other
+//!   fields are required (`"lights": []` is a valid, empty list).
+//! * `depth` is `"linear"`, `"log"` or the extension **`"log_near"`** (a near slice, then log
+//!   slices; [`DepthSlicing::LogWithNearSlice`]), which requires `"first_slice_depth"`: the view
+//!   depth where slice 1 starts, strictly between the camera's `near` and `far` (also for z = 1).
+//!   `first_slice_depth` is an error with any other `depth`.
+//! * The grid always spans the camera's `[near, far]`.
+//! * Spot lights: `spot.angle_deg` is the outer half angle; stored as radians in
+//!   [`Lights::spot_angle`] (`>= π` means omnidirectional). The direction need not be unit length
+//!   in the file; it is normalized on reading (kept bit for bit when already within 1e-6 of unit).
+//!
+//! ## Writing
+//! [`Scene::to_json_string`] / [`Scene::save`] write one line per light, in `source_index` order,
+//! skipped lights omitted. f32 values are written as their shortest round-trip decimals and angles
+//! as degrees that convert back to the same radians, so write → read is **bit-exact** for camera,
+//! grid and lights. (serde_json reads numbers through f64; that every finite f32 survives its
+//! write → f64 → f32 trip was checked exhaustively over all 2³² bit patterns with serde_json
+//! 1.0.154; the tests re-check a sample.)
+//!
+//! ## What it refuses to do
+//! It does not guess: no clamping of negative colours, no default camera or grid, no repair of a
+//! degenerate camera, no dropping of lights without a record. It does not fix up a scene built in
+//! code either; it reports ([`Scene::problems`]) and refuses to write it.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod checks;
+mod error;
+mod json;
+mod lights;
+mod presets;
+mod read;
+mod scene_file;
+mod validate;
+
+pub use error::{Error, Problem, Result};
+pub use lights::{LightRecord, Lights};
+pub use presets::Preset;
+pub use scene_file::{LightPolicy, Scene, SkippedLight};
+pub use validate::{ValidationReport, validate_file, validate_json_slice, validate_json_str};
+
+/// Re-exported: the camera, grid and spot-cone types a [`Scene`] is made of.
+pub use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, SpotCone};
+
+/// Re-exported so callers use the same `glam` version as the crate's public types.
+pub use myriad_cluster_math::glam;

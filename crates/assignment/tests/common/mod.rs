@@ -57,7 +57,12 @@ impl Columns {
 }
 
 /// For every cluster, the lights the f64 oracle says touch it, by testing every (light, cluster).
-pub fn brute_force(lights: &Columns, spots: bool, camera: &Camera, grid: &ClusterGrid) -> Vec<Vec<u32>> {
+pub fn brute_force(
+    lights: &Columns,
+    spots: bool,
+    camera: &Camera,
+    grid: &ClusterGrid,
+) -> Vec<Vec<u32>> {
     let d = grid.dims;
     let cells: Vec<Cell> = (0..grid.cluster_count() as u32)
         .map(|c| {
@@ -77,14 +82,20 @@ pub fn brute_force(lights: &Columns, spots: bool, camera: &Camera, grid: &Cluste
         let spot = spots
             .then(|| {
                 let angle = lights.angle[l] as f64;
-                let axis = (rot * DVec3::new(lights.dir_x[l] as f64, lights.dir_y[l] as f64, lights.dir_z[l] as f64))
-                    .normalize_or_zero();
-                (angle > 0.0 && angle <= std::f64::consts::FRAC_PI_2 && axis != DVec3::ZERO).then_some(SpotVolume {
-                    apex: centre,
-                    direction: axis,
-                    range: r,
-                    angle,
-                })
+                let axis = (rot
+                    * DVec3::new(
+                        lights.dir_x[l] as f64,
+                        lights.dir_y[l] as f64,
+                        lights.dir_z[l] as f64,
+                    ))
+                .normalize_or_zero();
+                (angle > 0.0 && angle <= std::f64::consts::FRAC_PI_2 && axis != DVec3::ZERO)
+                    .then_some(SpotVolume {
+                        apex: centre,
+                        direction: axis,
+                        range: r,
+                        angle,
+                    })
             })
             .flatten();
         for (c, cell) in cells.iter().enumerate() {
@@ -101,7 +112,12 @@ pub fn brute_force(lights: &Columns, spots: bool, camera: &Camera, grid: &Cluste
 }
 
 /// Checks `lists ⊇ truth`; returns (exact pairs, false-positive pairs).
-pub fn assert_conservative(name: &str, lists: &LightLists, truth: &[Vec<u32>], context: &str) -> (usize, usize) {
+pub fn assert_conservative(
+    name: &str,
+    lists: &LightLists,
+    truth: &[Vec<u32>],
+    context: &str,
+) -> (usize, usize) {
     lists.assert_well_formed(usize::MAX);
     let mut exact = 0;
     let mut extra = 0;
@@ -128,7 +144,11 @@ pub struct Scene {
 
 pub fn random_dir(rng: &mut impl Rng) -> Vec3 {
     loop {
-        let v = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let v = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
         if v.length_squared() > 1e-3 && v.length_squared() <= 1.0 {
             return v.normalize();
         }
@@ -160,7 +180,16 @@ pub fn make_scene(p: &SceneParams) -> Scene {
     let height = 64u32;
     let width = ((height as f32 * p.aspect).round() as u32).max(1);
     let far = p.near * p.far_ratio;
-    let camera = Camera::new(eye, eye + forward, Vec3::Y, p.fov_deg, width, height, p.near, far);
+    let camera = Camera::new(
+        eye,
+        eye + forward,
+        Vec3::Y,
+        p.fov_deg,
+        width,
+        height,
+        p.near,
+        far,
+    );
     let slicing = match p.slicing % 3 {
         0 => DepthSlicing::Linear,
         1 => DepthSlicing::Log,
@@ -216,5 +245,9 @@ pub fn make_scene(p: &SceneParams) -> Scene {
         };
         lights.push_spot(world, radius, dir, angle);
     }
-    Scene { camera, grid, lights }
+    Scene {
+        camera,
+        grid,
+        lights,
+    }
 }

@@ -164,7 +164,11 @@ mod tests {
                     }
                 }
             }
-            let extent = cell.corners().iter().map(|c| c.length()).fold(0.0, f64::max);
+            let extent = cell
+                .corners()
+                .iter()
+                .map(|c| c.length())
+                .fold(0.0, f64::max);
             for _ in 0..40 {
                 let p = DVec3::new(
                     rng.random_range(-1.5..1.5),
@@ -172,17 +176,30 @@ mod tests {
                     rng.random_range(-1.5..0.3),
                 ) * extent;
                 let exact = distance_to_cell(p, &cell);
-                let sampled = samples.iter().map(|s| s.distance(p)).fold(f64::INFINITY, f64::min);
+                let sampled = samples
+                    .iter()
+                    .map(|s| s.distance(p))
+                    .fold(f64::INFINITY, f64::min);
                 if cell.contains(p) {
                     assert_eq!(exact, 0.0);
                     continue;
                 }
                 // Exact is a lower bound of every sampled distance, and the dense sampling gets
                 // close to it (sample spacing bounds the gap).
-                let spacing = cell.corners().iter().map(|c| c.distance(cell.corner(0, 0, 0))).fold(0.0, f64::max)
+                let spacing = cell
+                    .corners()
+                    .iter()
+                    .map(|c| c.distance(cell.corner(0, 0, 0)))
+                    .fold(0.0, f64::max)
                     / N as f64;
-                assert!(exact <= sampled + 1e-9 * extent, "exact {exact} > sampled {sampled}");
-                assert!(sampled - exact <= spacing, "exact {exact} far below sampled {sampled}");
+                assert!(
+                    exact <= sampled + 1e-9 * extent,
+                    "exact {exact} > sampled {sampled}"
+                );
+                assert!(
+                    sampled - exact <= spacing,
+                    "exact {exact} far below sampled {sampled}"
+                );
             }
         }
     }
@@ -214,7 +231,16 @@ mod tests {
     fn cell_of_cluster_matches_grid_edges() {
         use crate::DepthSlicing;
         use glam::{UVec3, Vec3};
-        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 1536, 768, 0.1, 100.0);
+        let cam = Camera::new(
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            60.0,
+            1536,
+            768,
+            0.1,
+            100.0,
+        );
         let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
         let c = Cell::of_cluster(&cam, &grid, 0, 0, 0);
         let (tx, ty) = cam.tan_half_fov_f64();

@@ -1,0 +1,205 @@
+//! The three axis phases as SoA passes over a block of lights.
+//!
+//! Each phase is split in two loops: an arithmetic pass over the block's columns with no branches
+//! (so the compiler vectorises it), then a short scalar pass that searches the plane sets
+//! (`search.rs`). The per-light function [`geometry::cluster_box`] is the slow twin: a test checks
+//! that the passes give exactly its boxes.
+
+use crate::geometry::{self, ClusterBox, ZRange};
+use crate::search::FramePlanes;
+
+/// Lights per SoA block inside a task.
+pub(crate) const BLOCK: usize = 256;
+
+/// One block's columns. `cx, cy, dc, rad` (view-space centre and padded radius) and `alive`
+/// (valid and possibly inside the frustum) are inputs; the phases fill the rest and clear `alive`
+/// for lights found outside.
+pub(crate) struct Block {
+    pub cx: [f32; BLOCK],
+    pub cy: [f32; BLOCK],
+    pub dc: [f32; BLOCK],
+    pub rad: [f32; BLOCK],
+    pub alive: [bool; BLOCK],
+    /// Position of each entry's light in the task's current block (entries are compacted).
+    pub source: [u32; BLOCK],
+    da: [f32; BLOCK],
+    db: [f32; BLOCK],
+    band_r: [f32; BLOCK],
+    smin: [f32; BLOCK],
+    smax: [f32; BLOCK],
+    k0: [u32; BLOCK],
+    k1: [u32; BLOCK],
+    i0: [u32; BLOCK],
+    i1: [u32; BLOCK],
+    j0: [u32; BLOCK],
+    j1: [u32; BLOCK],
+}
+
+impl Block {
+    pub fn new() -> Self {
+        Self {
+            cx: [0.0; BLOCK],
+            cy: [0.0; BLOCK],
+            dc: [0.0; BLOCK],
+            rad: [0.0; BLOCK],
+            alive: [false; BLOCK],
+            source: [0; BLOCK],
+            da: [0.0; BLOCK],
+            db: [0.0; BLOCK],
+            band_r: [0.0; BLOCK],
+            smin: [0.0; BLOCK],
+            smax: [0.0; BLOCK],
+            k0: [0; BLOCK],
+            k1: [0; BLOCK],
+            i0: [0; BLOCK],
+            i1: [0; BLOCK],
+            j0: [0; BLOCK],
+            j1: [0; BLOCK],
+        }
+    }
+
+    /// Runs the z, x and y phases over the first `n` lights.
+    pub fn run_phases(&mut self, n: usize, planes: &FramePlanes<'_>) {
+        self.z_phase(n, planes);
+        self.x_phase(n, planes);
+        self.y_phase(n, planes);
+    }
+
+    /// The box of light `b` (only meaningful while `alive[b]`).
+    pub fn cluster_box(&self, b: usize) -> ClusterBox {
+        ClusterBox {
+            z: ZRange {
+                da: self.da[b],
+                db: self.db[b],
+                k0: self.k0[b],
+                k1: self.k1[b],
+            },
+            i0: self.i0[b],
+            i1: self.i1[b],
+            j0: self.j0[b],
+            j1: self.j1[b],
+        }
+    }
+
+    /// Depth band, the widest cross-section inside it, then the slices.
+    fn z_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
+        let z = &planes.sets.z_depths;
+        let (near, far) = (z[0], z[z.len() - 1]);
+        for b in 0..n {
+            let (dc, r) = (self.dc[b], self.rad[b]);
+            let da = (dc - r).max(near);
+            let db = (dc + r).min(far);
+            self.alive[b] &= da <= db;
+            self.da[b] = da;
+            self.db[b] = db;
+            self.band_r[b] = geometry::band_radius(dc, r, da, db);
+        }
+        for b in 0..n {
+            if self.alive[b] {
+                self.k0[b] = planes.slice_of(self.da[b]);
+                self.k1[b] = planes.slice_of(self.db[b]);
+            }
+        }
+    }
+
+    /// Slope range across the screen's x axis, then the tile columns.
+    fn x_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
+        for b in 0..n {
+            let (lo, hi) = geometry::box_slopes(
+                self.cx[b] - self.band_r[b],
+                self.cx[b] + self.band_r[b],
+                self.da[b],
+                self.db[b],
+            );
+            let (tlo, thi) = geometry::tangent_slopes(self.cx[b], self.dc[b], self.rad[b]);
+            self.smin[b] = lo.max(tlo);
+            self.smax[b] = hi.min(thi);
+        }
+        for b in 0..n {
+            if self.alive[b] {
+                match planes.columns(self.smin[b], self.smax[b]) {
+                    Some((first, last)) => {
+                        self.i0[b] = first;
+                        self.i1[b] = last;
+                    }
+                    None => self.alive[b] = false,
+                }
+            }
+        }
+    }
+
+    /// Slope range across the screen's y axis, then the tile rows.
+    fn y_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
+        for b in 0..n {
+            let (lo, hi) = geometry::box_slopes(
+                self.cy[b] - self.band_r[b],
+                self.cy[b] + self.band_r[b],
+                self.da[b],
+                self.db[b],
+            );
+            let (tlo, thi) = geometry::tangent_slopes(self.cy[b], self.dc[b], self.rad[b]);
+            self.smin[b] = lo.max(tlo);
+            self.smax[b] = hi.min(thi);
+        }
+        for b in 0..n {
+            if self.alive[b] {
+                match planes.rows(self.smin[b], self.smax[b]) {
+                    Some((first, last)) => {
+                        self.j0[b] = first;
+                        self.j1[b] = last;
+                    }
+                    None => self.alive[b] = false,
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{UVec3, Vec3};
+    use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, PlaneSets};
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn block_passes_equal_the_per_light_function() {
+        let cam = Camera::new(
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            70.0,
+            1920,
+            1080,
+            0.1,
+            100.0,
+        );
+        let grid = ClusterGrid::new(UVec3::new(32, 18, 48), DepthSlicing::Log, 0.1, 100.0);
+        let sets = PlaneSets::new(&cam, &grid);
+        let planes = FramePlanes::new(&sets, &grid);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
+        let mut block = Block::new();
+        for _ in 0..20 {
+            for b in 0..BLOCK {
+                block.cx[b] = rng.random_range(-150.0..150.0);
+                block.cy[b] = rng.random_range(-100.0..100.0);
+                block.dc[b] = rng.random_range(-20.0..120.0);
+                block.rad[b] = 10f32.powf(rng.random_range(-3.0..2.5));
+                block.alive[b] = true;
+            }
+            let input = (block.cx, block.cy, block.dc, block.rad);
+            block.run_phases(BLOCK, &planes);
+            let mut seen = 0;
+            for b in 0..BLOCK {
+                let expect =
+                    geometry::cluster_box(input.0[b], input.1[b], input.2[b], input.3[b], &planes);
+                assert_eq!(block.alive[b], expect.is_some(), "light {b}");
+                if let Some(e) = expect {
+                    assert_eq!(block.cluster_box(b), e);
+                    seen += 1;
+                }
+            }
+            assert!(seen > 10);
+        }
+    }
+}

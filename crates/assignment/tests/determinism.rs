@@ -1,0 +1,110 @@
+//! The output is identical for any number of threads, and equals the serial (one-task) result.
+
+mod common;
+
+use common::*;
+use glam::UVec3;
+use myriad_assignment::{Assigner, LightLists, Method};
+
+#[test]
+fn identical_lists_for_1_2_3_and_8_threads() {
+    let scene = make_scene(&SceneParams {
+        seed: 42,
+        fov_deg: 70.0,
+        aspect: 16.0 / 9.0,
+        near: 0.1,
+        far_ratio: 1000.0,
+        eye_scale: 10.0,
+        dims: UVec3::new(16, 9, 24),
+        slicing: 1,
+        lights: 20_000,
+        spots: true,
+    });
+    for spots in [false, true] {
+        for method in [Method::Binary, Method::Refined] {
+            let mut reference: Option<LightLists> = None;
+            for threads in [1, 2, 3, 8] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut lists = LightLists::new();
+                let stats = pool.install(|| {
+                    Assigner::new().assign(
+                        method,
+                        &scene.lights.input(spots),
+                        &scene.camera,
+                        &scene.grid,
+                        &mut lists,
+                    )
+                });
+                assert!(
+                    stats.tasks > 1,
+                    "{threads} threads should split 20k lights into tasks"
+                );
+                assert!(stats.pairs > 0);
+                match &reference {
+                    None => reference = Some(lists),
+                    Some(r) => assert!(
+                        r == &lists,
+                        "{method} with {threads} threads differs from 1 thread"
+                    ),
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn parallel_tasks_agree_with_a_single_serial_task() {
+    // 200 lights run as one serial task; the same lights repeated to 20 000 run as many tasks.
+    // Each light's clusters must be the same in both.
+    let scene = make_scene(&SceneParams {
+        seed: 7,
+        fov_deg: 60.0,
+        aspect: 2.0,
+        near: 0.5,
+        far_ratio: 200.0,
+        eye_scale: 0.0,
+        dims: UVec3::new(24, 12, 16),
+        slicing: 0,
+        lights: 200,
+        spots: false,
+    });
+    let mut big = Columns::default();
+    for _ in 0..100 {
+        for l in 0..scene.lights.len() {
+            big.push(
+                glam::Vec3::new(scene.lights.x[l], scene.lights.y[l], scene.lights.z[l]),
+                scene.lights.radius[l],
+            );
+        }
+    }
+    for method in [Method::Binary, Method::Refined] {
+        let mut small = LightLists::new();
+        let mut large = LightLists::new();
+        let s = Assigner::new().assign(
+            method,
+            &scene.lights.input(false),
+            &scene.camera,
+            &scene.grid,
+            &mut small,
+        );
+        let b = Assigner::new().assign(
+            method,
+            &big.input(false),
+            &scene.camera,
+            &scene.grid,
+            &mut large,
+        );
+        assert_eq!(s.tasks, 1);
+        assert!(b.tasks > 1 || rayon::current_num_threads() == 1);
+        assert_eq!(b.pairs, 100 * s.pairs);
+        for c in 0..small.cluster_count() {
+            let expect: Vec<u32> = (0..100u32)
+                .flat_map(|rep| small.lights_of(c).iter().map(move |&l| l + rep * 200))
+                .collect();
+            assert_eq!(large.lights_of(c), &expect[..], "{method} cluster {c}");
+        }
+    }
+}

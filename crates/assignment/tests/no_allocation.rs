@@ -1,0 +1,82 @@
+//! Steady-state frames allocate nothing: a counting global allocator watches a third frame after
+//! two warm-up frames with the same sizes, on every method and on the thread pool.
+
+mod common;
+
+use common::*;
+use glam::UVec3;
+use myriad_assignment::{Assigner, LightLists, Method};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+struct Counting;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn steady_state_frames_do_not_allocate() {
+    let scene = make_scene(&SceneParams {
+        seed: 3,
+        fov_deg: 60.0,
+        aspect: 16.0 / 9.0,
+        near: 0.1,
+        far_ratio: 500.0,
+        eye_scale: 5.0,
+        dims: UVec3::new(16, 9, 24),
+        slicing: 1,
+        lights: 10_000,
+        spots: true,
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    for spots in [false, true] {
+        for method in [Method::Linear, Method::Binary, Method::Refined] {
+            let mut assigner = Assigner::new();
+            let mut lists = LightLists::new();
+            let input = scene.lights.input(spots);
+            let frame = |a: &mut Assigner, l: &mut LightLists| {
+                pool.install(|| a.assign(method, &input, &scene.camera, &scene.grid, l))
+            };
+            frame(&mut assigner, &mut lists);
+            frame(&mut assigner, &mut lists);
+            ALLOCATIONS.store(0, Ordering::SeqCst);
+            COUNTING.store(true, Ordering::SeqCst);
+            let stats = frame(&mut assigner, &mut lists);
+            COUNTING.store(false, Ordering::SeqCst);
+            assert!(stats.pairs > 0 && stats.tasks > 1 || method == Method::Linear);
+            assert_eq!(
+                ALLOCATIONS.load(Ordering::SeqCst),
+                0,
+                "{method} (spots: {spots}) allocated in a steady-state frame"
+            );
+        }
+    }
+}

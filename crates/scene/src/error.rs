@@ -1,0 +1,118 @@
+//! The crate's one error type, and [`Problem`]: a single thing wrong with a scene, located by its JSON
+//! path.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// `Result` with this crate's [`Error`] as the default error type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong reading or writing scenes. Every variant names the file (or, for
+/// text parsed from memory, the origin name the caller gave).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The file could not be read.
+    #[error("cannot read scene file {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// The file could not be written.
+    #[error("cannot write scene file {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// The text is not JSON (syntax error, truncated text, invalid UTF-8, a number too large for an
+    /// f64, nesting deeper than 128), or its top level is not an object. serde_json's message
+    /// carries the line and column.
+    #[error("{origin}: cannot parse scene JSON: {source}")]
+    Json {
+        /// File path or caller-given origin name.
+        origin: String,
+        /// The parser's error, with line and column.
+        source: serde_json::Error,
+    },
+    /// The JSON parsed but describes an invalid scene. Holds the first problem (in the order camera,
+    /// grid, then lights by index); use [`crate::validate_file`] to list them all.
+    #[error("{origin}: {problem}{}", more_problems(*more))]
+    Invalid {
+        /// File path or caller-given origin name.
+        origin: String,
+        /// The first problem found.
+        problem: Problem,
+        /// How many further problems the scene has (0 when this was the only one).
+        more: usize,
+    },
+}
+
+fn more_problems(more: usize) -> String {
+    match more {
+        0 => String::new(),
+        1 => " (and 1 more problem)".to_string(),
+        n => format!(" (and {n} more problems)"),
+    }
+}
+
+/// One thing wrong with a scene: where (a JSON path such as `camera.near` or
+/// `lights[3].spot.angle_deg`) and what.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Problem {
+    /// JSON path of the offending value: `camera.near`, `grid`, `lights[3].position[1]`. Lights are
+    /// indexed by their position in the file's `lights` array. The document root is `<root>`.
+    pub path: String,
+    /// Index in the file's `lights` array when the problem belongs to one light, else `None`.
+    pub light: Option<u32>,
+    /// What is wrong, e.g. `must be finite and > 0, got -1`.
+    pub message: String,
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path, self.message)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_error_names_origin_path_and_count_of_the_rest() {
+        let problem = Problem {
+            path: "lights[3].radius".into(),
+            light: Some(3),
+            message: "must be finite and > 0, got -1".into(),
+        };
+        let e = Error::Invalid {
+            origin: "a.json".into(),
+            problem: problem.clone(),
+            more: 2,
+        };
+        assert_eq!(
+            e.to_string(),
+            "a.json: lights[3].radius: must be finite and > 0, got -1 (and 2 more problems)"
+        );
+        let e = Error::Invalid {
+            origin: "a.json".into(),
+            problem,
+            more: 0,
+        };
+        assert!(e.to_string().ends_with("got -1"));
+    }
+
+    #[test]
+    fn io_errors_name_the_path() {
+        let e = Error::Read {
+            path: "/no/such/scene.json".into(),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        };
+        assert!(e.to_string().contains("/no/such/scene.json"), "{e}");
+        assert!(std::error::Error::source(&e).is_some());
+    }
+}

@@ -1,0 +1,158 @@
+//! `myriad bench`: the time-against-error table, and the main job (no arguments).
+
+use super::assign::parse_method;
+use super::source::{SceneSource, thread_pool};
+use anyhow::Result;
+use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::evaluate::{MethodResult, measure};
+use myriad::scene::{Preset, Scene};
+use serde::Serialize;
+use std::process::ExitCode;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    source: SceneSource,
+    /// Comma-separated methods (default: all).
+    #[arg(long, value_delimiter = ',')]
+    methods: Vec<String>,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Timed runs per method (the median is reported).
+    #[arg(long, default_value_t = 21)]
+    runs: usize,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Report {
+    scene: String,
+    lights: usize,
+    grid: [u32; 3],
+    threads: usize,
+    methods: Vec<MethodResult>,
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let methods = if args.methods.is_empty() {
+        Method::ALL.to_vec()
+    } else {
+        args.methods
+            .iter()
+            .map(|m| parse_method(m))
+            .collect::<Result<_>>()?
+    };
+    let (scene, name) = args.source.load()?;
+    let report = bench(&scene, name, &methods, args.threads, args.runs)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_table(&report);
+    }
+    Ok(exit_code(&report))
+}
+
+/// The main job until the renderer lands: the paper preset with 1000 lights, every method.
+pub fn main_job() -> Result<ExitCode> {
+    let scene = Preset::Paper.generate(1000, 1);
+    let report = bench(
+        &scene,
+        "default scene: preset paper (1000 lights, seed 1)".into(),
+        &Method::ALL,
+        0,
+        21,
+    )?;
+    print_table(&report);
+    Ok(exit_code(&report))
+}
+
+fn bench(
+    scene: &Scene,
+    name: String,
+    methods: &[Method],
+    threads: usize,
+    runs: usize,
+) -> Result<Report> {
+    let pool = thread_pool(threads)?;
+    let input = myriad::light_input(&scene.lights);
+    pool.install(|| {
+        let mut exact = LightLists::new();
+        Assigner::new().assign(
+            Method::Exact,
+            &input,
+            &scene.camera,
+            &scene.grid,
+            &mut exact,
+        );
+        let methods = methods
+            .iter()
+            .map(|&m| {
+                // The oracle-backed and the paper's method are slow on big scenes: fewer runs.
+                let runs = if matches!(m, Method::Exact) {
+                    runs.min(3)
+                } else {
+                    runs
+                };
+                measure(m, &input, &scene.camera, &scene.grid, &exact, runs)
+            })
+            .collect();
+        let d = scene.grid.dims;
+        Ok(Report {
+            scene: name,
+            lights: scene.lights.len(),
+            grid: [d.x, d.y, d.z],
+            threads: rayon::current_num_threads(),
+            methods,
+        })
+    })
+}
+
+fn print_table(report: &Report) {
+    let [x, y, z] = report.grid;
+    println!(
+        "{} — {} lights, grid {x}x{y}x{z}, {} threads",
+        report.scene, report.lights, report.threads
+    );
+    println!(
+        "{:<8} {:>12} {:>12} {:>10} {:>9} {:>7} {:>11} {:>8}",
+        "method", "median µs", "min µs", "pairs", "fp ratio", "misses", "bytes", "GB/s"
+    );
+    for m in &report.methods {
+        println!(
+            "{:<8} {:>12.1} {:>12.1} {:>10} {:>9.4} {:>7} {:>11} {:>8.2}",
+            m.method,
+            m.median_us,
+            m.min_us,
+            m.pairs,
+            m.false_positive_ratio,
+            m.misses,
+            m.bytes,
+            m.effective_gb_s
+        );
+    }
+    if let Some(linear) = report.methods.iter().find(|m| m.method == "linear") {
+        for m in report
+            .methods
+            .iter()
+            .filter(|m| m.method == "binary" || m.method == "refined")
+        {
+            println!(
+                "{} is {:.1}x faster than linear",
+                m.method,
+                linear.median_us / m.median_us
+            );
+        }
+    }
+}
+
+fn exit_code(report: &Report) -> ExitCode {
+    if report.methods.iter().any(|m| m.misses > 0) {
+        eprintln!("error: a method missed lights the oracle says touch a cluster");
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
+}

@@ -1,0 +1,154 @@
+//! Accuracy and speed of assignment methods: pair-by-pair comparison with the exact method, and
+//! the "time against error" measurement behind `myriad bench`.
+
+use myriad_assignment::{AssignStats, Assigner, LightInput, LightLists, Method};
+use myriad_cluster_math::{Camera, ClusterGrid};
+use serde::Serialize;
+use std::time::Instant;
+
+/// How a reported assignment compares with the exact one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Pairs the oracle says touch.
+    pub exact_pairs: u64,
+    /// Pairs reported.
+    pub reported_pairs: u64,
+    /// Exact pairs missing from the report (must be 0).
+    pub misses: u64,
+    /// Reported pairs the oracle rejects.
+    pub false_positives: u64,
+    /// `false_positives / exact_pairs` (0 when there are no exact pairs).
+    pub false_positive_ratio: f64,
+}
+
+/// Compares two sets of CSR lists over the same clusters; each list must be ascending.
+pub fn compare(reported: &LightLists, exact: &LightLists) -> Comparison {
+    assert_eq!(
+        reported.cluster_count(),
+        exact.cluster_count(),
+        "different cluster counts"
+    );
+    let mut cmp = Comparison::default();
+    for c in 0..exact.cluster_count() {
+        let (mut a, mut b) = (reported.lights_of(c), exact.lights_of(c));
+        cmp.exact_pairs += b.len() as u64;
+        cmp.reported_pairs += a.len() as u64;
+        let mut reported_sorted;
+        if !a.windows(2).all(|w| w[0] < w[1]) {
+            reported_sorted = a.to_vec();
+            reported_sorted.sort_unstable();
+            reported_sorted.dedup();
+            a = &reported_sorted;
+        }
+        let mut hits = 0u64;
+        while let (Some(&x), Some(&y)) = (a.first(), b.first()) {
+            match x.cmp(&y) {
+                std::cmp::Ordering::Less => a = &a[1..],
+                std::cmp::Ordering::Greater => b = &b[1..],
+                std::cmp::Ordering::Equal => {
+                    hits += 1;
+                    a = &a[1..];
+                    b = &b[1..];
+                }
+            }
+        }
+        cmp.misses += exact.lights_of(c).len() as u64 - hits;
+    }
+    cmp.false_positives = cmp.reported_pairs - (cmp.exact_pairs - cmp.misses);
+    cmp.false_positive_ratio = if cmp.exact_pairs > 0 {
+        cmp.false_positives as f64 / cmp.exact_pairs as f64
+    } else {
+        0.0
+    };
+    cmp
+}
+
+/// One method's row of the time-against-error table.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodResult {
+    /// Method name.
+    pub method: String,
+    /// Median wall time of one assignment, microseconds.
+    pub median_us: f64,
+    /// Fastest run, microseconds.
+    pub min_us: f64,
+    /// Timed runs.
+    pub runs: usize,
+    /// Cluster–light pairs written.
+    pub pairs: u64,
+    /// False-positive pairs / exact pairs.
+    pub false_positive_ratio: f64,
+    /// Exact pairs missing (must be 0).
+    pub misses: u64,
+    /// Bytes of the CSR output (offsets + counts + indices).
+    pub bytes: u64,
+    /// Output bytes per second at the median time, GB/s.
+    pub effective_gb_s: f64,
+    /// Lights visible (not culled or rejected).
+    pub visible_lights: u32,
+}
+
+/// Times `method` (median of `runs` after one warm-up) and compares its output with `exact`.
+pub fn measure(
+    method: Method,
+    lights: &LightInput<'_>,
+    camera: &Camera,
+    grid: &ClusterGrid,
+    exact: &LightLists,
+    runs: usize,
+) -> MethodResult {
+    let mut assigner = Assigner::new();
+    let mut lists = LightLists::new();
+    let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
+    let mut times = Vec::with_capacity(runs);
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        stats = assigner.assign(method, lights, camera, grid, &mut lists);
+        times.push(start.elapsed().as_secs_f64() * 1e6);
+    }
+    times.sort_by(f64::total_cmp);
+    let median_us = times[times.len() / 2];
+    let cmp = compare(&lists, exact);
+    let bytes = lists.byte_size() as u64;
+    MethodResult {
+        method: method.name().to_string(),
+        median_us,
+        min_us: times[0],
+        runs: times.len(),
+        pairs: stats.pairs,
+        false_positive_ratio: cmp.false_positive_ratio,
+        misses: cmp.misses,
+        bytes,
+        effective_gb_s: bytes as f64 / (median_us * 1e-6) / 1e9,
+        visible_lights: stats.visible(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lists(per_cluster: &[&[u32]]) -> LightLists {
+        let mut l = LightLists::default();
+        for c in per_cluster {
+            l.offsets.push(l.indices.len() as u32);
+            l.counts.push(c.len() as u32);
+            l.indices.extend_from_slice(c);
+        }
+        l
+    }
+
+    #[test]
+    fn counts_misses_and_false_positives() {
+        let exact = lists(&[&[1, 2, 3], &[], &[7]]);
+        let reported = lists(&[&[1, 3, 4], &[5], &[7]]);
+        let c = compare(&reported, &exact);
+        assert_eq!(c.exact_pairs, 4);
+        assert_eq!(c.reported_pairs, 5);
+        assert_eq!(c.misses, 1);
+        assert_eq!(c.false_positives, 2);
+        assert!((c.false_positive_ratio - 0.5).abs() < 1e-12);
+        let same = compare(&exact, &exact);
+        assert_eq!((same.misses, same.false_positives), (0, 0));
+    }
+}
