@@ -8,7 +8,7 @@
 //! 1. **z phase**: the depth band `[da, db]` the sphere occupies inside `[near, far]`, and the slices
 //!    it touches, by binary search of the z-plane set (the slice edges).
 //! 2. **x and y phases**: the range of slopes (`x/d`, `y/d`) the sphere covers, by intersecting two
-//!    conservative bounds — the exact tangent planes from the eye (computed in f64) and the box
+//!    conservative bounds — the exact tangent planes from the eye and the box
 //!    `[c ± R] × [da, db]` of the sphere's part inside the band — and then the tiles whose plane
 //!    slopes overlap that range, by searching the x- and y-plane sets (`search.rs`).
 //! 3. **refinement** (method `refined`): per slice, the sphere shrunk to the slab is bounded by a
@@ -79,31 +79,34 @@ pub(crate) fn box_slopes(lo: f32, hi: f32, da: f32, db: f32) -> (f32, f32) {
 }
 
 /// Slope range of the tangent planes from the eye to a circle of radius `r` at `(c, dc)` in the
-/// plane spanned by one screen axis and depth; ±∞ where a tangent does not point forward. Computed
-/// in f64 (the formula cancels badly in f32 near grazing angles) and rounded outward.
+/// plane spanned by one screen axis and depth; ±∞ where a tangent does not point forward.
+///
+/// Computed in f32 and branch-free (the block pass vectorises it), which is accurate enough only
+/// while the eye is clearly outside the circle: with distance `L ≥ 1.1 r`, the tangent length
+/// `h = sqrt((L − r)(L + r))` has a relative error of at most ~6 ulps (the factored form avoids
+/// the cancellation of `L² − r²`), so the tangent directions are off by at most ~2·10⁻⁶ rad —
+/// inside the radius padding (`PAD` = 4·10⁻⁶ of the distance). Closer than that the bound is
+/// dropped (±∞) and the depth-band box bound alone applies, which is conservative.
 #[inline]
 pub(crate) fn tangent_slopes(c: f32, dc: f32, r: f32) -> (f32, f32) {
-    let (c, dc, r) = (c as f64, dc as f64, r as f64);
-    let l2 = c * c + dc * dc;
-    let r2 = r * r;
-    // Branch-free so the block pass vectorises: compute everything, then select.
-    let outside = l2 > r2 * (1.0 + 1e-9);
-    let h = (l2 - r2).max(0.0).sqrt();
+    let l = (c * c + dc * dc).sqrt();
+    let far_enough = l >= 1.1 * r;
+    let h = ((l - r).max(0.0) * (l + r)).sqrt();
     let den_max = dc * h - c * r;
     let den_min = dc * h + c * r;
     let max = (c * h + dc * r) / den_max;
     let min = (c * h - dc * r) / den_min;
-    let max = if outside && den_max > 0.0 {
-        max as f32
+    let max = if far_enough & (den_max > 0.0) {
+        max.next_up()
     } else {
         f32::INFINITY
     };
-    let min = if outside && den_min > 0.0 {
-        min as f32
+    let min = if far_enough & (den_min > 0.0) {
+        min.next_down()
     } else {
         f32::NEG_INFINITY
     };
-    (min.next_down(), max.next_up())
+    (min, max)
 }
 
 /// A light's cluster box after the three axis phases.

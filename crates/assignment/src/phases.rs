@@ -27,6 +27,8 @@ pub(crate) struct Block {
     band_r: [f32; BLOCK],
     smin: [f32; BLOCK],
     smax: [f32; BLOCK],
+    guess0: [u32; BLOCK],
+    guess1: [u32; BLOCK],
     k0: [u32; BLOCK],
     k1: [u32; BLOCK],
     i0: [u32; BLOCK],
@@ -49,6 +51,8 @@ impl Block {
             band_r: [0.0; BLOCK],
             smin: [0.0; BLOCK],
             smax: [0.0; BLOCK],
+            guess0: [0; BLOCK],
+            guess1: [0; BLOCK],
             k0: [0; BLOCK],
             k1: [0; BLOCK],
             i0: [0; BLOCK],
@@ -93,11 +97,13 @@ impl Block {
             self.da[b] = da;
             self.db[b] = db;
             self.band_r[b] = geometry::band_radius(dc, r, da, db);
+            self.guess0[b] = planes.slice_guess(da);
+            self.guess1[b] = planes.slice_guess(db);
         }
         for b in 0..n {
             if self.alive[b] {
-                self.k0[b] = planes.slice_of(self.da[b]);
-                self.k1[b] = planes.slice_of(self.db[b]);
+                self.k0[b] = planes.slice_exact(self.da[b], self.guess0[b]);
+                self.k1[b] = planes.slice_exact(self.db[b], self.guess1[b]);
             }
         }
     }
@@ -112,12 +118,18 @@ impl Block {
                 self.db[b],
             );
             let (tlo, thi) = geometry::tangent_slopes(self.cx[b], self.dc[b], self.rad[b]);
-            self.smin[b] = lo.max(tlo);
-            self.smax[b] = hi.min(thi);
+            let (min, max) = (lo.max(tlo), hi.min(thi));
+            self.smin[b] = min;
+            self.smax[b] = max;
+            (self.guess0[b], self.guess1[b]) = planes.columns_guess(min, max);
         }
         for b in 0..n {
             if self.alive[b] {
-                match planes.columns(self.smin[b], self.smax[b]) {
+                match planes.columns_exact(
+                    self.smin[b],
+                    self.smax[b],
+                    (self.guess0[b], self.guess1[b]),
+                ) {
                     Some((first, last)) => {
                         self.i0[b] = first;
                         self.i1[b] = last;
@@ -138,12 +150,18 @@ impl Block {
                 self.db[b],
             );
             let (tlo, thi) = geometry::tangent_slopes(self.cy[b], self.dc[b], self.rad[b]);
-            self.smin[b] = lo.max(tlo);
-            self.smax[b] = hi.min(thi);
+            let (min, max) = (lo.max(tlo), hi.min(thi));
+            self.smin[b] = min;
+            self.smax[b] = max;
+            (self.guess0[b], self.guess1[b]) = planes.rows_guess(min, max);
         }
         for b in 0..n {
             if self.alive[b] {
-                match planes.rows(self.smin[b], self.smax[b]) {
+                match planes.rows_exact(
+                    self.smin[b],
+                    self.smax[b],
+                    (self.guess0[b], self.guess1[b]),
+                ) {
                     Some((first, last)) => {
                         self.j0[b] = first;
                         self.j1[b] = last;
