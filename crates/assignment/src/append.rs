@@ -160,6 +160,109 @@ pub(crate) fn fill(row: &[AtomicU32], spans: &[Span], out: &SharedIndices<'_>) {
     }
 }
 
+/// The measured alternative ([`crate::AppendStrategy::AtomicCounters`]): one shared counter per
+/// cluster, `fetch_add` in both passes, then a sort per list for determinism.
+#[derive(Default)]
+pub(crate) struct AtomicCounters {
+    counters: Vec<AtomicU32>,
+}
+
+impl AtomicCounters {
+    /// Counts, scans, fills and sorts the tasks' spans into `out`; returns the pair count.
+    pub fn assign(
+        &mut self,
+        tasks: &[crate::jobs::TaskOutput],
+        clusters: usize,
+        parallel: bool,
+        out: &mut crate::LightLists,
+    ) -> usize {
+        if self.counters.len() < clusters {
+            self.counters.resize_with(clusters, || AtomicU32::new(0));
+        }
+        let counters = &self.counters[..clusters];
+        counters.iter().for_each(|c| c.store(0, Relaxed));
+        let count = |task: &crate::jobs::TaskOutput| {
+            for s in &task.spans {
+                for c in &counters[s.first as usize..(s.first + s.len) as usize] {
+                    c.fetch_add(1, Relaxed);
+                }
+            }
+        };
+        if parallel {
+            tasks.par_iter().for_each(count);
+        } else {
+            tasks.iter().for_each(count);
+        }
+        out.reset(clusters);
+        let mut running = 0u64;
+        for (c, counter) in counters.iter().enumerate() {
+            let n = counter.load(Relaxed);
+            out.offsets[c] = running as u32;
+            out.counts[c] = n;
+            counter.store(running as u32, Relaxed);
+            running += n as u64;
+        }
+        assert!(
+            running <= u32::MAX as u64,
+            "{running} cluster-light pairs do not fit u32 offsets"
+        );
+        out.indices.resize(running as usize, 0);
+        let shared = SharedIndices::new(&mut out.indices);
+        let fill = |task: &crate::jobs::TaskOutput| {
+            for s in &task.spans {
+                for c in &counters[s.first as usize..(s.first + s.len) as usize] {
+                    let at = c.fetch_add(1, Relaxed);
+                    // SAFETY: `fetch_add` hands every caller a distinct slot of the cluster's
+                    // range [offset, offset + count), which lies inside `0..pairs`.
+                    unsafe { shared.write(at as usize, s.light) };
+                }
+            }
+        };
+        if parallel {
+            tasks.par_iter().for_each(fill);
+        } else {
+            tasks.iter().for_each(fill);
+        }
+        sort_lists(&mut out.indices, &out.offsets, 0, 0..clusters, parallel);
+        running as usize
+    }
+}
+
+/// Sorts every cluster's list in `indices` (which starts at pair `base`), splitting the cluster
+/// range in halves across the pool.
+fn sort_lists(
+    indices: &mut [u32],
+    offsets: &[u32],
+    base: usize,
+    clusters: std::ops::Range<usize>,
+    parallel: bool,
+) {
+    if parallel && clusters.len() > 512 {
+        let mid = clusters.start + clusters.len() / 2;
+        let split = offsets[mid] as usize - base;
+        let (left, right) = indices.split_at_mut(split);
+        rayon::join(
+            || sort_lists(left, offsets, base, clusters.start..mid, true),
+            || sort_lists(right, offsets, base + split, mid..clusters.end, true),
+        );
+        return;
+    }
+    for c in clusters.clone() {
+        let start = offsets[c] as usize - base;
+        let end = if c + 1 < offsets.len() {
+            offsets[c + 1] as usize - base
+        } else {
+            indices.len()
+        };
+        let end = if c + 1 == clusters.end {
+            indices.len().min(end)
+        } else {
+            end
+        };
+        indices[start..end].sort_unstable();
+    }
+}
+
 /// The output index array, writable from several tasks at disjoint positions.
 pub(crate) struct SharedIndices<'a> {
     ptr: *mut u32,

@@ -53,6 +53,19 @@ impl std::fmt::Display for Method {
     }
 }
 
+/// How the per-cluster lists are appended (see `append.rs`). Both give identical output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum AppendStrategy {
+    /// Per-task histogram rows (difference arrays), a parallel prefix sum, then a scatter to
+    /// disjoint cursor ranges. No atomic read-modify-write at all. The default: faster on every
+    /// scene `benches/append.rs` measures.
+    #[default]
+    PerTaskHistograms,
+    /// One shared counter per cluster, `fetch_add` in the count and the fill passes, then a sort
+    /// of every list to make the order deterministic. Kept to measure against.
+    AtomicCounters,
+}
+
 /// What one assignment did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AssignStats {
@@ -94,12 +107,20 @@ pub struct Assigner {
     cluster_spheres: Vec<Vec4>,
     spheres_key: Option<(glam::Vec2, ClusterGrid)>,
     linear: LinearScratch,
+    append: AppendStrategy,
+    atomic: append::AtomicCounters,
 }
 
 impl Assigner {
     /// An assigner with no storage yet.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Selects how lists are appended (the default is the faster one; this exists to measure).
+    pub fn with_append_strategy(mut self, strategy: AppendStrategy) -> Self {
+        self.append = strategy;
+        self
     }
 
     /// Assigns `lights` to the clusters of `grid` seen by `camera` with `method`, refilling `out`.
@@ -164,36 +185,40 @@ impl Assigner {
             ],
         };
         let parallel = tasks > 1;
-        let histograms = &self.histograms;
-        let gather = |(t, task): (usize, &mut TaskOutput)| {
-            let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
-            jobs::run_task(&ctx, begin, end, task);
-            append::count(histograms.row(t), &task.spans);
+        let pairs = match self.append {
+            AppendStrategy::PerTaskHistograms => {
+                let histograms = &self.histograms;
+                let gather = |(t, task): (usize, &mut TaskOutput)| {
+                    let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
+                    jobs::run_task(&ctx, begin, end, task);
+                    append::count(histograms.row(t), &task.spans);
+                };
+                for_each_task(&mut self.tasks[..tasks], parallel, gather);
+                out.reset(clusters);
+                let pairs = self.histograms.prefix(
+                    &mut out.offsets,
+                    &mut out.counts,
+                    parallel && clusters * tasks > 1 << 16,
+                );
+                out.indices.resize(pairs, 0);
+                let shared = SharedIndices::new(&mut out.indices);
+                let histograms = &self.histograms;
+                let scatter = |(t, task): (usize, &mut TaskOutput)| {
+                    append::fill(histograms.row(t), &task.spans, &shared)
+                };
+                for_each_task(&mut self.tasks[..tasks], parallel, scatter);
+                pairs
+            }
+            AppendStrategy::AtomicCounters => {
+                let gather = |(t, task): (usize, &mut TaskOutput)| {
+                    let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
+                    jobs::run_task(&ctx, begin, end, task);
+                };
+                for_each_task(&mut self.tasks[..tasks], parallel, gather);
+                self.atomic
+                    .assign(&self.tasks[..tasks], clusters, parallel, out)
+            }
         };
-        if parallel {
-            self.tasks[..tasks]
-                .par_iter_mut()
-                .enumerate()
-                .for_each(gather);
-        } else {
-            self.tasks[..tasks].iter_mut().enumerate().for_each(gather);
-        }
-        out.reset(clusters);
-        let pairs = self.histograms.prefix(
-            &mut out.offsets,
-            &mut out.counts,
-            parallel && clusters * tasks > 1 << 16,
-        );
-        out.indices.resize(pairs, 0);
-        let shared = SharedIndices::new(&mut out.indices);
-        let histograms = &self.histograms;
-        let scatter =
-            |(t, task): (usize, &TaskOutput)| append::fill(histograms.row(t), &task.spans, &shared);
-        if parallel {
-            self.tasks[..tasks].par_iter().enumerate().for_each(scatter);
-        } else {
-            self.tasks[..tasks].iter().enumerate().for_each(scatter);
-        }
         for task in &self.tasks[..tasks] {
             stats.rejected += task.rejected;
             stats.culled += task.culled;
@@ -201,6 +226,18 @@ impl Assigner {
         stats.pairs = pairs as u64;
         stats.tasks = tasks as u32;
         stats
+    }
+}
+
+/// Runs `f` over the tasks, on the pool when `parallel`.
+fn for_each_task<F>(tasks: &mut [TaskOutput], parallel: bool, f: F)
+where
+    F: Fn((usize, &mut TaskOutput)) + Sync + Send,
+{
+    if parallel {
+        tasks.par_iter_mut().enumerate().for_each(f);
+    } else {
+        tasks.iter_mut().enumerate().for_each(f);
     }
 }
 

@@ -235,6 +235,12 @@ fn emit(
                 }
             }
         }
+        // A single column of clusters cannot get narrower per row: skip the refinement.
+        Method::Refined if bx.i0 == bx.i1 && bx.j0 == bx.j1 => {
+            for k in bx.z.k0..=bx.z.k1 {
+                push_row(bx.j0, k, bx.i0, bx.i1);
+            }
+        }
         Method::Refined => {
             for k in bx.z.k0..=bx.z.k1 {
                 geometry::refine_slice(cx, cy, dc, r, bx, k, &ctx.planes, |j, i0, i1| {

@@ -43,6 +43,6 @@ mod lists;
 mod phases;
 mod search;
 
-pub use assigner::{AssignStats, Assigner, Method, SERIAL_LIGHTS};
+pub use assigner::{AppendStrategy, AssignStats, Assigner, Method, SERIAL_LIGHTS};
 pub use input::{LightInput, SpotInput};
 pub use lists::LightLists;

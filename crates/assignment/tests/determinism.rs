@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use glam::UVec3;
-use myriad_assignment::{Assigner, LightLists, Method};
+use myriad_assignment::{AppendStrategy, Assigner, LightLists, Method};
 
 #[test]
 fn identical_lists_for_1_2_3_and_8_threads() {
@@ -105,6 +105,52 @@ fn parallel_tasks_agree_with_a_single_serial_task() {
                 .flat_map(|rep| small.lights_of(c).iter().map(move |&l| l + rep * 200))
                 .collect();
             assert_eq!(large.lights_of(c), &expect[..], "{method} cluster {c}");
+        }
+    }
+}
+
+#[test]
+fn both_append_strategies_give_identical_lists() {
+    let scene = make_scene(&SceneParams {
+        seed: 11,
+        fov_deg: 75.0,
+        aspect: 1.5,
+        near: 0.2,
+        far_ratio: 300.0,
+        eye_scale: 3.0,
+        dims: UVec3::new(24, 12, 16),
+        slicing: 2,
+        lights: 12_000,
+        spots: true,
+    });
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for method in [Method::Binary, Method::Refined] {
+            let mut a = LightLists::new();
+            let mut b = LightLists::new();
+            pool.install(|| {
+                Assigner::new().assign(
+                    method,
+                    &scene.lights.input(true),
+                    &scene.camera,
+                    &scene.grid,
+                    &mut a,
+                );
+                Assigner::new()
+                    .with_append_strategy(AppendStrategy::AtomicCounters)
+                    .assign(
+                        method,
+                        &scene.lights.input(true),
+                        &scene.camera,
+                        &scene.grid,
+                        &mut b,
+                    );
+            });
+            assert!(a.pair_count() > 0);
+            assert!(a == b, "{method}, {threads} threads: strategies differ");
         }
     }
 }
