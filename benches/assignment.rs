@@ -1,0 +1,194 @@
+//! # Light-assignment benches: scaling over grids × light counts × methods, and the targets
+//!
+//! Run everything with `cargo bench --bench assignment` (about 3–4 minutes on a 2-core machine, by
+//! the settings in [`timing`]), or a part by criterion's filter:
+//! `cargo bench --bench assignment -- targets`, `-- scaling/32x18x48/refined`; add `--quick` for
+//! rough numbers fast (the whole bench in under a minute).
+//!
+//! ## Groups
+//! * **`scaling/XxYxZ`** — the `uniform` preset's camera (1920×1080, 60°, near 0.1, far 100) and its
+//!   seeded lights (uniform in the frustum's volume, radii 0.2–1.5), with the grid overridden to each
+//!   of 24×12×16, 16×9×24 and 32×18×48 (log slicing over the camera's near/far), and
+//!   10, 1 000, 10 000, 100 000 and 1 000 000 lights. Benchmark ids are `method/lights`.
+//!   Two cells of the table are left out on purpose:
+//!   - `exact` above 10 000 lights: it is the f64 oracle (every candidate cluster tested exactly),
+//!     the reference the other methods are checked against, not a method anyone ships. Its cost
+//!     grows with the pairs it tests: 1.5–2.4 ms per run at 10k of these small lights here, so
+//!     tens of milliseconds at 100k, and seconds at 1M lights of the `paper` preset's radii (4–6 ms
+//!     per 1000 there) — it would dominate the bench's time and tell nothing new.
+//!   - `linear` above 100 000 lights: the paper's Algorithm 1 is single-threaded and linear in the
+//!     lights; at 1M a run takes about a tenth of a second here (7–15 ms at 100k), so 1M would
+//!     cost a long measurement for a number the 100k row already predicts.
+//! * **`targets`** — exactly the issue's target configurations, with each preset's own grid:
+//!   `paper` 1000 lights (`linear`, `binary`, `refined`; the paper's 1.04 ms reference),
+//!   `uniform` 100k `refined` on the default rayon pool and on a 1-thread pool (thread scaling),
+//!   `uniform` 1M `refined`, `sphere` 100k (`binary`, `refined`; the single-threaded engine
+//!   reference of 1.5–2.1 ms).
+//!
+//! ## What is timed
+//! One `Assigner::assign` call into a reused `LightLists`: the steady state of a frame, where the
+//! assigner's scratch and the output vectors have already grown (a warm-up call runs before
+//! timing), so no allocation is measured. Throughput is reported in lights per second.
+//! Scenes are generated from a fixed seed, so every run sees the same lights; each scene is made
+//! only when a benchmark that needs it runs (filters skip the 1M-light generation).
+//!
+//! Sample sizes shrink as inputs grow (see [`timing`]) so the whole bench stays within minutes:
+//! 50 samples for small inputs, 20 around 100k lights, 10 for the biggest.
+
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
+use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::cluster_math::{ClusterGrid, DepthSlicing, glam::UVec3};
+use myriad::scene::{Preset, Scene};
+use std::cell::OnceCell;
+use std::hint::black_box;
+use std::time::Duration;
+
+/// Seed of every generated scene.
+const SEED: u64 = 1;
+/// Grids of the scaling groups, all with log slicing.
+const GRIDS: [[u32; 3]; 3] = [[24, 12, 16], [16, 9, 24], [32, 18, 48]];
+/// Light counts of the scaling groups.
+const LIGHT_COUNTS: [usize; 5] = [10, 1_000, 10_000, 100_000, 1_000_000];
+/// Methods of the scaling groups.
+const METHODS: [Method; 4] = [
+    Method::Linear,
+    Method::Binary,
+    Method::Refined,
+    Method::Exact,
+];
+
+/// Whether the scaling table measures `method` at `lights` (see the module docs for the gaps).
+fn measured(method: Method, lights: usize) -> bool {
+    match method {
+        Method::Exact => lights <= 10_000,
+        Method::Linear => lights <= 100_000,
+        Method::Binary | Method::Refined => true,
+    }
+}
+
+/// Sample size, warm-up and measurement time for one benchmark, by its rough cost per run.
+fn timing(group: &mut BenchmarkGroup<'_, WallTime>, method: Method, lights: usize) {
+    // The oracle costs a few times what the fast methods do per light (2–4x at 10k lights here).
+    let weight = if method == Method::Exact {
+        4 * lights
+    } else {
+        lights
+    };
+    let (samples, warm_up, measurement) = match weight {
+        0..=10_000 => (50, 0.5, 2.0),
+        10_001..=100_000 => (20, 0.5, 2.0),
+        100_001..=1_000_000 => (10, 0.5, 3.0),
+        _ => (10, 1.0, 5.0),
+    };
+    group
+        .sample_size(samples)
+        .warm_up_time(Duration::from_secs_f64(warm_up))
+        .measurement_time(Duration::from_secs_f64(measurement));
+}
+
+/// Times `method` on `lights` lights of `preset` (generated on first use into `scene`, then kept
+/// for the other benchmarks) with the preset's grid or `grid`: one reused `Assigner` and
+/// `LightLists`, warmed up before timing.
+fn bench_assign(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    id: BenchmarkId,
+    method: Method,
+    (preset, lights, scene): (Preset, usize, &OnceCell<Scene>),
+    grid: Option<ClusterGrid>,
+) {
+    timing(group, method, lights);
+    group.throughput(Throughput::Elements(lights as u64));
+    group.bench_function(id, |b| {
+        let scene = scene.get_or_init(|| preset.generate(lights, SEED));
+        let grid = grid.unwrap_or(scene.grid);
+        let input = myriad::light_input(&scene.lights);
+        let mut assigner = Assigner::new();
+        let mut lists = LightLists::new();
+        assigner.assign(method, &input, &scene.camera, &grid, &mut lists);
+        b.iter(|| {
+            black_box(assigner.assign(method, black_box(&input), &scene.camera, &grid, &mut lists))
+        });
+        black_box(&lists);
+    });
+}
+
+fn scaling(c: &mut Criterion) {
+    let (camera, _) = Preset::Uniform.view();
+    let scenes: Vec<OnceCell<Scene>> = LIGHT_COUNTS.iter().map(|_| OnceCell::new()).collect();
+    for [x, y, z] in GRIDS {
+        let grid = ClusterGrid::new(
+            UVec3::new(x, y, z),
+            DepthSlicing::Log,
+            camera.near,
+            camera.far,
+        );
+        let mut group = c.benchmark_group(format!("scaling/{x}x{y}x{z}"));
+        for (&lights, scene) in LIGHT_COUNTS.iter().zip(&scenes) {
+            for method in METHODS.into_iter().filter(|&m| measured(m, lights)) {
+                let id = BenchmarkId::new(method.name(), lights);
+                let source = (Preset::Uniform, lights, scene);
+                bench_assign(&mut group, id, method, source, Some(grid));
+            }
+        }
+        group.finish();
+    }
+}
+
+fn targets(c: &mut Criterion) {
+    let mut group = c.benchmark_group("targets");
+
+    let paper = (Preset::Paper, 1_000, &OnceCell::new());
+    for method in [Method::Linear, Method::Binary, Method::Refined] {
+        let id = BenchmarkId::new(format!("paper/{}", method.name()), 1_000);
+        bench_assign(&mut group, id, method, paper, None);
+    }
+
+    let uniform_100k = (Preset::Uniform, 100_000, &OnceCell::new());
+    let id = BenchmarkId::new("uniform/refined", 100_000);
+    bench_assign(&mut group, id, Method::Refined, uniform_100k, None);
+    // The same on a 1-thread pool: the whole timed loop runs inside the pool, so each assignment
+    // sees one worker thread (the default pool, above, has one per core).
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("cannot start a 1-thread rayon pool");
+    timing(&mut group, Method::Refined, 100_000);
+    group.throughput(Throughput::Elements(100_000));
+    let id = BenchmarkId::new("uniform/refined-1-thread", 100_000);
+    group.bench_function(id, |b| {
+        let (preset, lights, scene) = uniform_100k;
+        let scene = scene.get_or_init(|| preset.generate(lights, SEED));
+        let input = myriad::light_input(&scene.lights);
+        let mut assigner = Assigner::new();
+        let mut lists = LightLists::new();
+        one_thread.install(|| {
+            let mut run = || {
+                let lists = &mut lists;
+                assigner.assign(
+                    Method::Refined,
+                    black_box(&input),
+                    &scene.camera,
+                    &scene.grid,
+                    lists,
+                )
+            };
+            run();
+            b.iter(|| black_box(run()));
+        });
+        black_box(&lists);
+    });
+
+    let uniform_1m = (Preset::Uniform, 1_000_000, &OnceCell::new());
+    let id = BenchmarkId::new("uniform/refined", 1_000_000);
+    bench_assign(&mut group, id, Method::Refined, uniform_1m, None);
+
+    let sphere = (Preset::Sphere, 100_000, &OnceCell::new());
+    for method in [Method::Binary, Method::Refined] {
+        let id = BenchmarkId::new(format!("sphere/{}", method.name()), 100_000);
+        bench_assign(&mut group, id, method, sphere, None);
+    }
+    group.finish();
+}
+
+criterion::criterion_group!(benches, targets, scaling);
+criterion::criterion_main!(benches);

@@ -1,0 +1,543 @@
+//! End-to-end tests of the `myriad` binary: every subcommand run as a user runs it, through
+//! files on disk, checking exit codes, messages and the JSON the tools write.
+//!
+//! Each test works in its own folder under cargo's `CARGO_TARGET_TMPDIR`, so tests run in
+//! parallel without sharing files. Scenes are small (hundreds of lights): the whole file runs in
+//! well under a second of tool time.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A scene in the DESIGN.md format, written by hand: four valid lights, one of them a spot.
+const GOOD_SCENE: &str = r#"{
+  "camera": {"position": [0, 2, 10], "target": [0, 2, 0], "up": [0, 1, 0], "fov_y_deg": 60,
+             "width": 1536, "height": 768, "near": 0.1, "far": 100},
+  "grid":   {"x": 24, "y": 12, "z": 16, "depth": "log"},
+  "lights": [{"position": [0, 2, 0], "radius": 2, "color": [1, 0.5, 0.2], "intensity": 4},
+             {"position": [3, 1, -5], "radius": 4},
+             {"position": [-2, 3, 2], "radius": 1.5, "color": [0, 0, 1], "intensity": 1},
+             {"position": [0, 5, 0], "radius": 8, "spot": {"direction": [0, -1, 0], "angle_deg": 30}}]
+}"#;
+
+/// The camera and grid of [`GOOD_SCENE`] around a `lights` array.
+fn scene_with_lights(lights: &str) -> String {
+    format!(
+        r#"{{
+  "camera": {{"position": [0, 2, 10], "target": [0, 2, 0], "up": [0, 1, 0], "fov_y_deg": 60,
+             "width": 1536, "height": 768, "near": 0.1, "far": 100}},
+  "grid":   {{"x": 24, "y": 12, "z": 16, "depth": "log"}},
+  "lights": [{lights}]
+}}"#
+    )
+}
+
+/// A fresh, empty folder for one test.
+fn work_dir(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join(test);
+    if dir.exists() {
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes `text` to `dir/name` and returns the path.
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs `myriad` with `args`.
+fn myriad<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(args)
+        .output()
+        .expect("cannot run the myriad binary")
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Both streams, for messages whose stream does not matter to the user.
+fn all_output(out: &Output) -> String {
+    format!("{}{}", stdout(out), stderr(out))
+}
+
+/// Runs `myriad` and asserts it succeeded.
+fn myriad_ok<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
+    let out = myriad(args);
+    assert!(
+        out.status.success(),
+        "myriad {:?} failed ({}):\n{}",
+        args.iter().map(|a| a.as_ref()).collect::<Vec<_>>(),
+        out.status,
+        all_output(&out)
+    );
+    out
+}
+
+/// Runs `myriad` and asserts it failed; returns both streams.
+fn myriad_fails<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
+    let out = myriad(args);
+    assert!(
+        !out.status.success(),
+        "myriad {:?} should have failed:\n{}",
+        args.iter().map(|a| a.as_ref()).collect::<Vec<_>>(),
+        all_output(&out)
+    );
+    all_output(&out)
+}
+
+fn assert_mentions(text: &str, needles: &[&str]) {
+    for needle in needles {
+        assert!(text.contains(needle), "expected {needle:?} in:\n{text}");
+    }
+}
+
+/// `myriad assign` then `myriad check --json`; returns the parsed comparison.
+fn assign_and_check(scene: &Path, method: &str, dump: &Path) -> Value {
+    myriad_ok(&[
+        "assign".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--method".as_ref(),
+        method.as_ref(),
+        "--out".as_ref(),
+        dump.as_os_str(),
+    ]);
+    check_json(scene, dump)
+}
+
+/// `myriad check --json` (must succeed); the parsed comparison.
+fn check_json(scene: &Path, dump: &Path) -> Value {
+    let out = myriad_ok(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--dump".as_ref(),
+        dump.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    serde_json::from_str(&stdout(&out)).expect("check --json prints one JSON object")
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn u64_field(v: &Value, field: &str) -> u64 {
+    v[field]
+        .as_u64()
+        .unwrap_or_else(|| panic!("{field} missing or not an integer in {v}"))
+}
+
+/// The scene-file light indices in a dump, as a sorted set.
+fn dump_lights(dump: &Value) -> Vec<u64> {
+    let mut lights: Vec<u64> = dump["indices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i.as_u64().unwrap())
+        .collect();
+    lights.sort_unstable();
+    lights.dedup();
+    lights
+}
+
+#[test]
+fn validate_accepts_a_hand_written_scene() {
+    let dir = work_dir("validate_good");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let out = myriad_ok(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+    assert_mentions(
+        &stdout(&out),
+        &[&scene.display().to_string(), "valid", "4 ok, 0 bad"],
+    );
+}
+
+#[test]
+fn validate_names_file_light_and_problem() {
+    let dir = work_dir("validate_bad");
+    // Two problems at once: near >= far on the camera, and a negative radius on light 2.
+    let text = GOOD_SCENE
+        .replace(r#""near": 0.1, "far": 100"#, r#""near": 100, "far": 10"#)
+        .replace(r#""radius": 1.5"#, r#""radius": -1"#);
+    assert_ne!(text, GOOD_SCENE);
+    let scene = write(&dir, "bad.json", &text);
+    let out = myriad_fails(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+    assert_mentions(
+        &out,
+        &[
+            &scene.display().to_string(),
+            "lights[2].radius",
+            "-1",
+            "camera.far",
+            "near",
+        ],
+    );
+    // Every problem is reported, not just the first.
+    assert_mentions(&out, &["2 problems", "1 bad"]);
+}
+
+#[test]
+fn validate_reports_unreadable_and_missing_files() {
+    let dir = work_dir("validate_unreadable");
+    let truncated = write(&dir, "truncated.json", &GOOD_SCENE[..GOOD_SCENE.len() / 2]);
+    let out = myriad_fails(&[
+        "validate".as_ref(),
+        "--scene".as_ref(),
+        truncated.as_os_str(),
+    ]);
+    assert_mentions(&out, &[&truncated.display().to_string()]);
+    let missing = dir.join("missing.json");
+    let out = myriad_fails(&["validate".as_ref(), "--scene".as_ref(), missing.as_os_str()]);
+    assert_mentions(&out, &[&missing.display().to_string()]);
+}
+
+#[test]
+fn generated_scenes_validate() {
+    let dir = work_dir("scene_validates");
+    for preset in ["paper", "uniform", "sphere"] {
+        let scene = dir.join(format!("{preset}.json"));
+        let out = myriad_ok(&[
+            "scene".as_ref(),
+            "--preset".as_ref(),
+            preset.as_ref(),
+            "--lights".as_ref(),
+            "200".as_ref(),
+            "--seed".as_ref(),
+            "7".as_ref(),
+            "--out".as_ref(),
+            scene.as_os_str(),
+        ]);
+        assert_mentions(&stdout(&out), &[&scene.display().to_string()]);
+        let out = myriad_ok(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+        assert_mentions(&stdout(&out), &["200 ok, 0 bad"]);
+        assert_eq!(read_json(&scene)["lights"].as_array().unwrap().len(), 200);
+    }
+}
+
+#[test]
+fn every_method_passes_the_oracle_check() {
+    let dir = work_dir("methods_check");
+    let scene = dir.join("paper.json");
+    myriad_ok(&[
+        "scene".as_ref(),
+        "--preset".as_ref(),
+        "paper".as_ref(),
+        "--lights".as_ref(),
+        "300".as_ref(),
+        "--out".as_ref(),
+        scene.as_os_str(),
+    ]);
+    let hand_written = write(&dir, "good.json", GOOD_SCENE);
+    for scene in [&scene, &hand_written] {
+        for method in ["exact", "linear", "binary", "refined"] {
+            let dump = dir.join(format!("{method}.dump.json"));
+            let cmp = assign_and_check(scene, method, &dump);
+            let context = format!("{} / {method}: {cmp}", scene.display());
+            assert_eq!(u64_field(&cmp, "misses"), 0, "{context}");
+            assert!(u64_field(&cmp, "exact_pairs") > 0, "{context}");
+            assert!(
+                u64_field(&cmp, "reported_pairs") >= u64_field(&cmp, "exact_pairs"),
+                "{context}"
+            );
+            if method == "exact" {
+                assert_eq!(u64_field(&cmp, "false_positives"), 0, "{context}");
+                assert_eq!(cmp["false_positive_ratio"].as_f64(), Some(0.0), "{context}");
+            }
+            // The dump has the DESIGN.md shape.
+            let d = read_json(&dump);
+            assert_eq!(d["grid"], serde_json::json!([24, 12, 16]));
+            assert_eq!(d["x_edges"].as_array().unwrap().len(), 25);
+            assert_eq!(d["y_edges"].as_array().unwrap().len(), 13);
+            assert_eq!(d["z_planes"].as_array().unwrap().len(), 17);
+            assert_eq!(d["offsets"].as_array().unwrap().len(), 24 * 12 * 16);
+            assert_eq!(d["counts"].as_array().unwrap().len(), 24 * 12 * 16);
+        }
+    }
+}
+
+#[test]
+fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
+    let dir = work_dir("skipped_lights");
+    let l0 = r#"{"position": [0, 2, 0], "radius": 2}"#;
+    let l1 = r#"{"position": [3, 1, -5], "radius": 4}"#;
+    let l3 = r#"{"position": [-1, 1, 0], "radius": 3}"#;
+    // Light 2 is invalid in one file; in the other it is valid but behind the camera (culled).
+    let with_bad = write(
+        &dir,
+        "with_bad.json",
+        &scene_with_lights(&format!(
+            r#"{l0}, {l1}, {{"position": [2, 2, 0], "radius": -1}}, {l3}"#
+        )),
+    );
+    let with_culled = write(
+        &dir,
+        "with_culled.json",
+        &scene_with_lights(&format!(
+            r#"{l0}, {l1}, {{"position": [0, 2, 50], "radius": 1}}, {l3}"#
+        )),
+    );
+
+    for method in ["exact", "refined"] {
+        let bad_dump = dir.join(format!("with_bad.{method}.json"));
+        let out = myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            with_bad.as_os_str(),
+            "--method".as_ref(),
+            method.as_ref(),
+            "--out".as_ref(),
+            bad_dump.as_os_str(),
+        ]);
+        assert_mentions(&stderr(&out), &["skipped", "light 2", "radius"]);
+
+        // The dump names lights by their index in the file: 0, 1 and 3, never 2.
+        let dump = read_json(&bad_dump);
+        assert_eq!(dump_lights(&dump), [0, 1, 3], "{method}");
+        let culled_dump = dir.join(format!("with_culled.{method}.json"));
+        myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            with_culled.as_os_str(),
+            "--method".as_ref(),
+            method.as_ref(),
+            "--out".as_ref(),
+            culled_dump.as_os_str(),
+        ]);
+        assert_eq!(dump, read_json(&culled_dump), "{method}");
+
+        // check compares in file indices too, with either scene.
+        for scene in [&with_bad, &with_culled] {
+            let cmp = check_json(scene, &bad_dump);
+            assert_eq!(u64_field(&cmp, "misses"), 0, "{method}: {cmp}");
+            assert!(u64_field(&cmp, "exact_pairs") > 0);
+            if method == "exact" {
+                assert_eq!(u64_field(&cmp, "false_positives"), 0, "{cmp}");
+            }
+        }
+    }
+
+    // Negative control: renumbering light 3 as 2 (what a dump in kept-light order would say)
+    // must fail the check.
+    let exact_dump = dir.join("with_bad.exact.json");
+    let mut dump = read_json(&exact_dump);
+    for index in dump["indices"].as_array_mut().unwrap() {
+        if *index == 3 {
+            *index = 2.into();
+        }
+    }
+    let renumbered = write(&dir, "renumbered.json", &dump.to_string());
+    let out = myriad(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        with_bad.as_os_str(),
+        "--dump".as_ref(),
+        renumbered.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert!(!out.status.success(), "{}", all_output(&out));
+    let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert!(u64_field(&cmp, "misses") > 0, "{cmp}");
+}
+
+#[test]
+fn check_rejects_broken_dumps_naming_the_file() {
+    let dir = work_dir("broken_dumps");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let dump = dir.join("dump.json");
+    assign_and_check(&scene, "refined", &dump);
+    let text = std::fs::read_to_string(&dump).unwrap();
+    let check = |dump: &Path| {
+        myriad_fails(&[
+            "check".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--dump".as_ref(),
+            dump.as_os_str(),
+        ])
+    };
+
+    let truncated = write(&dir, "truncated.json", &text[..text.len() / 2]);
+    let out = check(&truncated);
+    assert_mentions(
+        &out,
+        &[
+            &truncated.display().to_string(),
+            "not a valid assignment dump",
+        ],
+    );
+
+    let garbage = write(&dir, "garbage.json", "this is not JSON");
+    assert_mentions(&check(&garbage), &[&garbage.display().to_string()]);
+
+    // Well-formed JSON whose lists run past the end of `indices`.
+    let mut value = read_json(&dump);
+    value["counts"][0] = 1_000_000.into();
+    let inconsistent = write(&dir, "inconsistent.json", &value.to_string());
+    assert_mentions(
+        &check(&inconsistent),
+        &[&inconsistent.display().to_string(), "inconsistent"],
+    );
+
+    // A dump of another grid.
+    let other = dir.join("other.json");
+    myriad_ok(&[
+        "assign".as_ref(),
+        "--preset".as_ref(),
+        "uniform".as_ref(),
+        "--lights".as_ref(),
+        "50".as_ref(),
+        "--out".as_ref(),
+        other.as_os_str(),
+    ]);
+    assert_mentions(
+        &check(&other),
+        &[&other.display().to_string(), "does not match"],
+    );
+
+    let missing = dir.join("missing.json");
+    assert_mentions(
+        &check(&missing),
+        &[&missing.display().to_string(), "cannot read dump"],
+    );
+}
+
+#[test]
+fn bench_json_reports_every_method_without_misses() {
+    let out = myriad_ok(&[
+        "bench", "--preset", "paper", "--lights", "300", "--json", "--runs", "3",
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).expect("bench --json prints JSON");
+    assert_eq!(report["lights"].as_u64(), Some(300));
+    let methods = report["methods"].as_array().expect("a methods array");
+    let names: Vec<&str> = methods
+        .iter()
+        .map(|m| m["method"].as_str().expect("method name"))
+        .collect();
+    assert_eq!(names, ["exact", "linear", "binary", "refined"]);
+    for m in methods {
+        assert!(m["median_us"].as_f64().is_some_and(|t| t > 0.0), "{m}");
+        assert!(u64_field(m, "pairs") > 0, "{m}");
+        assert!(
+            m["false_positive_ratio"].as_f64().is_some_and(|r| r >= 0.0),
+            "{m}"
+        );
+        assert_eq!(u64_field(m, "misses"), 0, "{m}");
+    }
+    let exact = &methods[0];
+    assert_eq!(exact["false_positive_ratio"].as_f64(), Some(0.0));
+
+    // A chosen subset of methods on a scene file.
+    let dir = work_dir("bench_json");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let out = myriad_ok(&[
+        "bench".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--methods".as_ref(),
+        "binary,refined".as_ref(),
+        "--runs".as_ref(),
+        "3".as_ref(),
+        "--json".as_ref(),
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let names: Vec<&str> = report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["binary", "refined"]);
+}
+
+#[test]
+fn bad_options_fail_with_a_helpful_message() {
+    let dir = work_dir("bad_options");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let out_file = dir.join("out.json");
+
+    let out = myriad_fails(&[
+        "assign".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--method".as_ref(),
+        "fancy".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    assert_mentions(
+        &out,
+        &[
+            "unknown method",
+            "fancy",
+            "exact",
+            "linear",
+            "binary",
+            "refined",
+        ],
+    );
+    assert!(!out_file.exists(), "no dump is written for a bad method");
+
+    let out = myriad_fails(&["bench", "--preset", "paper", "--methods", "refined,bogus"]);
+    assert_mentions(&out, &["unknown method", "bogus"]);
+
+    let out = myriad_fails(&[
+        "scene".as_ref(),
+        "--preset".as_ref(),
+        "nope".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    assert_mentions(
+        &out,
+        &["unknown preset", "nope", "paper", "uniform", "sphere"],
+    );
+    assert!(!out_file.exists());
+
+    let out = myriad_fails(&["bench", "--preset", "nope"]);
+    assert_mentions(&out, &["unknown preset", "nope"]);
+
+    // No scene at all, and an unknown flag (clap's own message).
+    let out = myriad_fails(&["bench"]);
+    assert_mentions(&out, &["--scene", "--preset"]);
+    let out = myriad_fails(&["check", "--frobnicate"]);
+    assert_mentions(&out, &["--frobnicate"]);
+}
+
+#[test]
+fn no_arguments_runs_the_main_job() {
+    let out = myriad_ok::<&str>(&[]);
+    let text = stdout(&out);
+    assert_mentions(
+        &text,
+        &[
+            "default scene",
+            "paper",
+            "1000 lights",
+            "median",
+            "fp ratio",
+            "misses",
+        ],
+    );
+    // One table row per method, each with zero misses (the misses column is the 6th).
+    for method in ["exact", "linear", "binary", "refined"] {
+        let row = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(method))
+            .unwrap_or_else(|| panic!("no row for {method} in:\n{text}"));
+        let columns: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!(columns.len(), 8, "{row}");
+        assert_eq!(columns[5], "0", "misses of {method}: {row}");
+    }
+}
