@@ -1,0 +1,65 @@
+//! # Append strategies: per-task histograms vs shared atomic counters
+//!
+//! The lock-free per-cluster append can be built two ways (`myriad_assignment::AppendStrategy`):
+//! * `PerTaskHistograms` (the default): each task counts into its own histogram row (difference
+//!   arrays), a parallel prefix sum turns rows into disjoint cursors, each task scatters its
+//!   indices — no read-modify-write atomics, ascending lists by construction;
+//! * `AtomicCounters`: one shared counter per cluster with `fetch_add` in the count and the fill
+//!   passes, then a sort of each list to make the output deterministic.
+//!
+//! Both produce identical lists (tested in `crates/assignment/tests/determinism.rs`); this bench
+//! times whole `refined` assignments with each, on the default rayon pool, over the standard
+//! scenes: `cargo bench --bench append`.
+
+use criterion::{BenchmarkId, Criterion, Throughput};
+use myriad::assignment::{AppendStrategy, Assigner, LightLists, Method};
+use myriad::scene::Preset;
+use std::hint::black_box;
+use std::time::Duration;
+
+fn append_strategies(c: &mut Criterion) {
+    let mut group = c.benchmark_group("append");
+    group
+        .sample_size(20)
+        .measurement_time(Duration::from_secs(3));
+    for (preset, lights) in [
+        (Preset::Paper, 1_000),
+        (Preset::Paper, 20_000),
+        (Preset::Uniform, 100_000),
+        (Preset::Sphere, 100_000),
+    ] {
+        let scene = preset.generate(lights, 1);
+        let input = myriad::light_input(&scene.lights);
+        group.throughput(Throughput::Elements(lights as u64));
+        for (name, strategy) in [
+            ("per_task", AppendStrategy::PerTaskHistograms),
+            ("atomic", AppendStrategy::AtomicCounters),
+        ] {
+            let mut assigner = Assigner::new().with_append_strategy(strategy);
+            let mut lists = LightLists::new();
+            assigner.assign(
+                Method::Refined,
+                &input,
+                &scene.camera,
+                &scene.grid,
+                &mut lists,
+            );
+            let id = BenchmarkId::new(name, format!("{}-{lights}", preset.name()));
+            group.bench_function(id, |b| {
+                b.iter(|| {
+                    black_box(assigner.assign(
+                        Method::Refined,
+                        &input,
+                        &scene.camera,
+                        &scene.grid,
+                        &mut lists,
+                    ))
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion::criterion_group!(benches, append_strategies);
+criterion::criterion_main!(benches);
