@@ -68,6 +68,12 @@ struct SpotView {
 }
 
 /// Runs lights `begin..end` through all phases into `out` (cleared first).
+///
+/// Compiled twice: for AVX2 + FMA (8-wide passes; picked at run time when the CPU has them) and for
+/// the baseline target. FMA rounds `a·b + c` once instead of twice, so boxes may differ by a cluster
+/// at exact boundaries between the two builds — both stay conservative, and each is deterministic
+/// for any thread count.
+#[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     out.spans.clear();
     out.rejected = 0;

@@ -63,6 +63,7 @@ impl Block {
     }
 
     /// Runs the z, x and y phases over the first `n` lights.
+    #[inline(always)]
     pub fn run_phases(&mut self, n: usize, planes: &FramePlanes<'_>) {
         self.z_phase(n, planes);
         self.x_phase(n, planes);
@@ -86,6 +87,7 @@ impl Block {
     }
 
     /// Depth band, the widest cross-section inside it, then the slices.
+    #[inline(always)]
     fn z_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
         let z = &planes.sets.z_depths;
         let (near, far) = (z[0], z[z.len() - 1]);
@@ -109,6 +111,7 @@ impl Block {
     }
 
     /// Slope range across the screen's x axis, then the tile columns.
+    #[inline(always)]
     fn x_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
         for b in 0..n {
             let (lo, hi) = geometry::box_slopes(
@@ -141,6 +144,7 @@ impl Block {
     }
 
     /// Slope range across the screen's y axis, then the tile rows.
+    #[inline(always)]
     fn y_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
         for b in 0..n {
             let (lo, hi) = geometry::box_slopes(
