@@ -1,16 +1,17 @@
 //! The lock-free per-cluster append: spans of clusters per light → CSR lists, in three steps.
 //!
 //! 1. **Count.** Each task owns a contiguous range of lights and a private histogram row (one
-//!    counter per cluster) in a shared table of relaxed atomics. A task only ever touches its own
-//!    row, so the counters are plain loads and stores — no contention, no read-modify-write.
-//! 2. **Prefix.** Parallel over blocks of clusters: `offsets[c]` is the exclusive prefix sum over
-//!    clusters, and inside a cluster the tasks follow in light order; each task's counter is
-//!    replaced by the position where that task starts writing into cluster `c`.
-//! 3. **Fill.** Each task walks its spans again and writes light indices at its cursors.
+//!    counter per cluster, handed out as disjoint `&mut` chunks of one table). Spans are runs of
+//!    consecutive clusters, so a row first collects a difference array (+1 at a span's start, −1
+//!    just past its end: O(spans), not O(pairs)) and one running sum turns it into counts.
+//! 2. **Prefix.** `counts[c]` sums the rows, `offsets` is their exclusive prefix sum, and each row
+//!    becomes write cursors: inside a cluster, task `t` starts after the lights of tasks `< t`.
+//!    These are plain loops over whole rows (vectorised; O(tasks × clusters)).
+//! 3. **Fill.** Each task walks its spans again and writes light indices at its own cursors.
 //!
-//! Because tasks are contiguous light ranges merged in order, every cluster's list comes out in
-//! ascending light order whatever the number of tasks or threads — the output is deterministic.
-//!
+//! No counter is shared, so there is no read-modify-write anywhere; and because tasks are
+//! contiguous light ranges merged in order, every cluster's list comes out in ascending light
+//! order whatever the number of tasks or threads — the output is deterministic.
 
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -23,134 +24,92 @@ pub(crate) struct Span {
     pub len: u32,
 }
 
-/// Clusters per block of the parallel prefix sum.
-const PREFIX_BLOCK: usize = 4096;
-
 /// Histogram rows, `tasks × clusters`, reused across frames.
 #[derive(Default)]
 pub(crate) struct Histograms {
-    cells: Vec<AtomicU32>,
-    block_sums: Vec<u64>,
+    cells: Vec<u32>,
+    running: Vec<u32>,
     clusters: usize,
     tasks: usize,
 }
 
 impl Histograms {
-    /// Sizes the table for `tasks × clusters`, growing only; rows are zeroed by their tasks.
+    /// Sizes the table for `tasks × clusters` (storage only grows); rows are zeroed by their
+    /// tasks.
     pub fn prepare(&mut self, tasks: usize, clusters: usize) {
-        let needed = tasks * clusters;
-        if self.cells.len() < needed {
-            self.cells.resize_with(needed, || AtomicU32::new(0));
-        }
+        assert!(clusters > 0);
+        self.cells.resize(tasks * clusters, 0);
         self.tasks = tasks;
         self.clusters = clusters;
     }
 
-    /// Task `t`'s row.
-    pub fn row(&self, t: usize) -> &[AtomicU32] {
-        &self.cells[t * self.clusters..(t + 1) * self.clusters]
+    /// The rows, one disjoint `&mut` chunk per task.
+    pub fn rows(&mut self) -> std::slice::ChunksExactMut<'_, u32> {
+        self.cells.chunks_exact_mut(self.clusters)
+    }
+
+    /// The rows for the thread pool.
+    pub fn par_rows(&mut self) -> rayon::slice::ChunksExactMut<'_, u32> {
+        self.cells.par_chunks_exact_mut(self.clusters)
     }
 
     /// Step 2: fills `offsets` and `counts` and turns every row into write cursors. Returns the
     /// total number of pairs.
-    pub fn prefix(&mut self, offsets: &mut [u32], counts: &mut [u32], parallel: bool) -> usize {
-        let (tasks, clusters) = (self.tasks, self.clusters);
+    pub fn prefix(&mut self, offsets: &mut [u32], counts: &mut [u32]) -> usize {
+        let clusters = self.clusters;
         assert!(offsets.len() == clusters && counts.len() == clusters);
-        let cells = &self.cells[..tasks * clusters];
-        // Turns clusters `base..base + offsets.len()` into cursors starting at `start`; returns
-        // the running total after them.
-        let scan = |base: usize, start: u64, offsets: &mut [u32], counts: &mut [u32]| -> u64 {
-            let mut at = start;
-            for (i, (offset, count)) in offsets.iter_mut().zip(counts.iter_mut()).enumerate() {
-                let c = base + i;
-                *offset = at as u32;
-                for t in 0..tasks {
-                    let cell = &cells[t * clusters + c];
-                    let n = cell.load(Relaxed);
-                    cell.store(at as u32, Relaxed);
-                    at += n as u64;
-                }
-                *count = (at - *offset as u64) as u32;
+        counts.fill(0);
+        for row in self.cells.chunks_exact(clusters) {
+            for (count, &n) in counts.iter_mut().zip(row) {
+                *count += n;
             }
-            at
-        };
-        let total = if !parallel {
-            scan(0, 0, offsets, counts)
-        } else {
-            // Pass 1: each block's total; pass 2: scan the blocks from their exclusive bases.
-            let blocks = clusters.div_ceil(PREFIX_BLOCK);
-            self.block_sums.clear();
-            self.block_sums.resize(blocks, 0);
-            self.block_sums
-                .par_iter_mut()
-                .enumerate()
-                .for_each(|(b, sum)| {
-                    let range = b * PREFIX_BLOCK..((b + 1) * PREFIX_BLOCK).min(clusters);
-                    *sum = (0..tasks)
-                        .map(|t| {
-                            cells[t * clusters..][range.clone()]
-                                .iter()
-                                .map(|n| n.load(Relaxed) as u64)
-                                .sum::<u64>()
-                        })
-                        .sum();
-                });
-            let mut running = 0u64;
-            for s in self.block_sums.iter_mut() {
-                (*s, running) = (running, running + *s);
-            }
-            if running <= u32::MAX as u64 {
-                self.block_sums
-                    .par_iter()
-                    .zip(
-                        offsets
-                            .par_chunks_mut(PREFIX_BLOCK)
-                            .zip(counts.par_chunks_mut(PREFIX_BLOCK)),
-                    )
-                    .enumerate()
-                    .for_each(|(b, (&start, (offsets, counts)))| {
-                        scan(b * PREFIX_BLOCK, start, offsets, counts);
-                    });
-            }
-            running
-        };
+        }
+        let mut total = 0u64;
+        for (offset, &n) in offsets.iter_mut().zip(counts.iter()) {
+            *offset = total as u32;
+            total += n as u64;
+        }
         assert!(
             total <= u32::MAX as u64,
             "{total} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
         );
+        self.running.clear();
+        self.running.extend_from_slice(offsets);
+        for row in self.cells.chunks_exact_mut(clusters) {
+            for (cell, at) in row.iter_mut().zip(self.running.iter_mut()) {
+                let n = *cell;
+                *cell = *at;
+                *at += n;
+            }
+        }
         total as usize
     }
 }
 
-/// Step 1 for one task: count every span's clusters into the task's row. Spans are runs of
-/// consecutive clusters, so the row first collects a difference array (+1 at a span's start, −1
-/// just past its end: O(spans) instead of O(pairs)) and one running sum turns it into counts.
-pub(crate) fn count(row: &[AtomicU32], spans: &[Span]) {
-    for cell in row {
-        cell.store(0, Relaxed);
-    }
-    let bump = |at: usize, delta: u32| {
-        if let Some(cell) = row.get(at) {
-            cell.store(cell.load(Relaxed).wrapping_add(delta), Relaxed);
-        }
-    };
+/// Step 1 for one task: count every span's clusters into the task's row.
+pub(crate) fn count(row: &mut [u32], spans: &[Span]) {
+    row.fill(0);
+    let clusters = row.len();
     for s in spans {
-        bump(s.first as usize, 1);
-        bump((s.first + s.len) as usize, u32::MAX); // −1 in wrapping arithmetic
+        row[s.first as usize] = row[s.first as usize].wrapping_add(1);
+        let end = (s.first + s.len) as usize;
+        if end < clusters {
+            row[end] = row[end].wrapping_sub(1);
+        }
     }
     let mut running = 0u32;
-    for cell in row {
-        running = running.wrapping_add(cell.load(Relaxed));
-        cell.store(running, Relaxed);
+    for cell in row.iter_mut() {
+        running = running.wrapping_add(*cell);
+        *cell = running;
     }
 }
 
 /// Step 3 for one task: write each span's light at the task's cursors.
-pub(crate) fn fill(row: &[AtomicU32], spans: &[Span], out: &SharedIndices<'_>) {
+pub(crate) fn fill(row: &mut [u32], spans: &[Span], out: &SharedIndices<'_>) {
     for s in spans {
-        for cell in &row[s.first as usize..(s.first + s.len) as usize] {
-            let at = cell.load(Relaxed);
-            cell.store(at + 1, Relaxed);
+        for cell in &mut row[s.first as usize..(s.first + s.len) as usize] {
+            let at = *cell;
+            *cell = at + 1;
             // SAFETY: after `prefix`, task t's cursor for cluster c walks the range
             // [start(t, c), start(t, c) + count(t, c)), and these ranges are disjoint across all
             // (t, c) and lie inside `0..pairs` = `out.len()`. Each task writes only through its own

@@ -187,26 +187,40 @@ impl Assigner {
         let parallel = tasks > 1;
         let pairs = match self.append {
             AppendStrategy::PerTaskHistograms => {
-                let histograms = &self.histograms;
-                let gather = |(t, task): (usize, &mut TaskOutput)| {
+                let gather = |(t, (task, row)): (usize, (&mut TaskOutput, &mut [u32]))| {
                     let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
                     jobs::run_task(&ctx, begin, end, task);
-                    append::count(histograms.row(t), &task.spans);
+                    append::count(row, &task.spans);
                 };
-                for_each_task(&mut self.tasks[..tasks], parallel, gather);
+                let work = &mut self.tasks[..tasks];
+                if parallel {
+                    work.par_iter_mut()
+                        .zip(self.histograms.par_rows())
+                        .enumerate()
+                        .for_each(gather);
+                } else {
+                    work.iter_mut()
+                        .zip(self.histograms.rows())
+                        .enumerate()
+                        .for_each(gather);
+                }
                 out.reset(clusters);
-                let pairs = self.histograms.prefix(
-                    &mut out.offsets,
-                    &mut out.counts,
-                    parallel && clusters * tasks > 1 << 16,
-                );
+                let pairs = self.histograms.prefix(&mut out.offsets, &mut out.counts);
                 out.indices.resize(pairs, 0);
                 let shared = SharedIndices::new(&mut out.indices);
-                let histograms = &self.histograms;
-                let scatter = |(t, task): (usize, &mut TaskOutput)| {
-                    append::fill(histograms.row(t), &task.spans, &shared)
+                let scatter = |(task, row): (&mut TaskOutput, &mut [u32])| {
+                    append::fill(row, &task.spans, &shared)
                 };
-                for_each_task(&mut self.tasks[..tasks], parallel, scatter);
+                let work = &mut self.tasks[..tasks];
+                if parallel {
+                    work.par_iter_mut()
+                        .zip(self.histograms.par_rows())
+                        .for_each(scatter);
+                } else {
+                    work.iter_mut()
+                        .zip(self.histograms.rows())
+                        .for_each(scatter);
+                }
                 pairs
             }
             AppendStrategy::AtomicCounters => {
