@@ -263,5 +263,5 @@ fn plan_tasks(lights: usize, clusters: usize, method: Method) -> usize {
     let threads = rayon::current_num_threads();
     let by_work = lights.div_ceil(LIGHTS_PER_TASK).max(1);
     let by_memory = (HISTOGRAM_BUDGET / (4 * clusters.max(1))).max(1);
-    (4 * threads).min(by_work).min(by_memory).max(1)
+    (2 * threads).min(by_work).min(by_memory).max(1)
 }

@@ -148,7 +148,7 @@ pub(crate) fn cluster_box(
 /// Refinement of one slice `k` of a light's box: calls `row(j, i0, i1)` for every row of the slice
 /// the sphere (shrunk to the slab) can touch, with the tightened x tile span.
 #[allow(clippy::too_many_arguments)] // One light's columns, passed by value in the hot loop.
-#[inline]
+#[inline(always)]
 pub(crate) fn refine_slice(
     cx: f32,
     cy: f32,

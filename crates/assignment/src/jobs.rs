@@ -198,7 +198,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
 }
 
 #[allow(clippy::too_many_arguments)] // The per-light columns of one block, passed by value.
-#[inline]
+#[inline(always)] // Into `run_task`'s AVX2 + FMA build.
 fn emit(
     ctx: &FrameContext<'_>,
     light: u32,
