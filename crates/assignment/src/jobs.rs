@@ -233,21 +233,22 @@ fn emit(
             });
         }
     };
+    let refine = ctx.method == Method::Refined
+        && !((bx.i0 == bx.i1 && bx.j0 == bx.j1)
+            || (bx.z.k0 == bx.z.k1 && (bx.i0 == bx.i1 || bx.j0 == bx.j1)));
     match ctx.method {
-        Method::Binary => {
+        // Boxes the refinement cannot (or almost never can) tighten go out whole: a single column
+        // of clusters (no row gets narrower than one tile), and a single row or column in a
+        // single slice (the slab is the whole depth band, so rows and columns are already those
+        // of the sphere's widest cross-section).
+        Method::Binary | Method::Refined if !refine => {
             for k in bx.z.k0..=bx.z.k1 {
                 for j in bx.j0..=bx.j1 {
                     push_row(j, k, bx.i0, bx.i1);
                 }
             }
         }
-        // A single column of clusters cannot get narrower per row: skip the refinement.
-        Method::Refined if bx.i0 == bx.i1 && bx.j0 == bx.j1 => {
-            for k in bx.z.k0..=bx.z.k1 {
-                push_row(bx.j0, k, bx.i0, bx.i1);
-            }
-        }
-        Method::Refined => {
+        Method::Binary | Method::Refined => {
             for k in bx.z.k0..=bx.z.k1 {
                 geometry::refine_slice(cx, cy, dc, r, bx, k, &ctx.planes, |j, i0, i1| {
                     push_row(j, k, i0, i1)
