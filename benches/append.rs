@@ -1,9 +1,10 @@
-//! # Append strategies: per-task histograms vs shared atomic counters
+//! # Append strategies: partitioned by depth vs shared atomic counters
 //!
 //! The lock-free per-cluster append can be built two ways (`myriad_assignment::AppendStrategy`):
-//! * `PerTaskHistograms` (the default): each task counts into its own histogram row (difference
-//!   arrays), a parallel prefix sum turns rows into disjoint cursors, each task scatters its
-//!   indices — no read-modify-write atomics, ascending lists by construction;
+//! * `PartitionedByDepth` (the default): spans are bucketed by parts (groups of depth slices);
+//!   per part, in parallel, counts as difference arrays, one prefix sum, then a fill into the
+//!   part's own slice of the output — no atomics, no cache line written by two threads, ascending
+//!   lists by construction;
 //! * `AtomicCounters`: one shared counter per cluster with `fetch_add` in the count and the fill
 //!   passes, then a sort of each list to make the output deterministic.
 //!
@@ -32,7 +33,7 @@ fn append_strategies(c: &mut Criterion) {
         let input = myriad::light_input(&scene.lights);
         group.throughput(Throughput::Elements(lights as u64));
         for (name, strategy) in [
-            ("per_task", AppendStrategy::PerTaskHistograms),
+            ("partitioned", AppendStrategy::PartitionedByDepth),
             ("atomic", AppendStrategy::AtomicCounters),
         ] {
             let mut assigner = Assigner::new().with_append_strategy(strategy);

@@ -1,18 +1,25 @@
-//! The lock-free per-cluster append: spans of clusters per light → CSR lists, in three steps.
+//! The lock-free per-cluster append: spans of clusters per light → CSR lists.
 //!
-//! 1. **Count.** Each task owns a contiguous range of lights and a private histogram row (one
-//!    counter per cluster, handed out as disjoint `&mut` chunks of one table). Spans are runs of
-//!    consecutive clusters, so a row first collects a difference array (+1 at a span's start, −1
-//!    just past its end: O(spans), not O(pairs)) and one running sum turns it into counts.
-//! 2. **Prefix.** `counts[c]` sums the rows, `offsets` is their exclusive prefix sum, and each row
-//!    becomes write cursors: inside a cluster, task `t` starts after the lights of tasks `< t`.
-//!    These are plain loops over whole rows (vectorised; O(tasks × clusters)).
-//! 3. **Fill.** Each task walks its spans again and writes light indices at its own cursors.
+//! The clusters are split into *parts*: groups of consecutive depth slices, so each part is a
+//! contiguous range of cluster ids and, after the prefix sum, a contiguous range of the output.
+//! Every span is one row of one slice, so it lies inside a single part, and the tasks already
+//! bucket their spans by part while emitting them. Then:
 //!
-//! No counter is shared, so there is no read-modify-write anywhere; and because tasks are
-//! contiguous light ranges merged in order, every cluster's list comes out in ascending light
-//! order whatever the number of tasks or threads — the output is deterministic.
+//! 1. **Count**, in parallel over parts: a part walks the tasks' buckets for it in task order and
+//!    counts into its own chunk of `counts` — as a difference array (+1 at a span's start, −1
+//!    just past its end: O(spans), not O(pairs)) closed by one running sum.
+//! 2. **Prefix**: `offsets` is the exclusive prefix sum of `counts` (one pass over the clusters).
+//! 3. **Fill**, in parallel over parts: a part walks the same buckets again, in the same order, and
+//!    writes light indices at per-cluster cursors into *its own* slice of `indices`.
+//!
+//! Nothing is shared between threads while it is written: each part owns disjoint chunks of
+//! `counts`, of the cursors and of `indices` (plain `&mut` splits — no atomics, no `unsafe`, and
+//! no cache line written by two threads, which an earlier per-task fill suffered from: a
+//! cluster's list of ~10 entries is one cache line, and all tasks wrote into it). Lists come out
+//! in ascending light order, because tasks are contiguous light ranges walked in order: the
+//! output is identical for any number of tasks, parts or threads.
 
+use crate::jobs::TaskOutput;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
@@ -24,97 +31,127 @@ pub(crate) struct Span {
     pub len: u32,
 }
 
-/// Histogram rows, `tasks × clusters`, reused across frames.
-#[derive(Default)]
-pub(crate) struct Histograms {
-    cells: Vec<u32>,
-    running: Vec<u32>,
-    clusters: usize,
-    tasks: usize,
+/// How the clusters are split into parts.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Parts {
+    /// Number of parts.
+    pub count: usize,
+    /// Clusters per part (the last part may have fewer).
+    pub clusters: usize,
 }
 
-impl Histograms {
-    /// Sizes the table for `tasks × clusters` (storage only grows); rows are zeroed by their
-    /// tasks.
-    pub fn prepare(&mut self, tasks: usize, clusters: usize) {
-        assert!(clusters > 0);
-        self.cells.resize(tasks * clusters, 0);
-        self.tasks = tasks;
-        self.clusters = clusters;
+/// Steps 1–3: the tasks' bucketed spans → `counts`, `offsets`, `indices`; returns the pair count.
+/// `cursors` is reused scratch.
+pub(crate) fn append(
+    tasks: &[TaskOutput],
+    parts: Parts,
+    parallel: bool,
+    counts: &mut [u32],
+    offsets: &mut [u32],
+    indices: &mut Vec<u32>,
+    cursors: &mut Vec<u32>,
+) -> usize {
+    let count_part = |(p, counts): (usize, &mut [u32])| count(tasks, p, p * parts.clusters, counts);
+    if parallel {
+        counts
+            .par_chunks_mut(parts.clusters)
+            .enumerate()
+            .for_each(count_part);
+    } else {
+        counts
+            .chunks_mut(parts.clusters)
+            .enumerate()
+            .for_each(count_part);
     }
-
-    /// The rows, one disjoint `&mut` chunk per task.
-    pub fn rows(&mut self) -> std::slice::ChunksExactMut<'_, u32> {
-        self.cells.chunks_exact_mut(self.clusters)
+    let mut total = 0u64;
+    for (offset, &n) in offsets.iter_mut().zip(counts.iter()) {
+        *offset = total as u32;
+        total += n as u64;
     }
-
-    /// The rows for the thread pool.
-    pub fn par_rows(&mut self) -> rayon::slice::ChunksExactMut<'_, u32> {
-        self.cells.par_chunks_exact_mut(self.clusters)
-    }
-
-    /// Step 2: fills `offsets` and `counts` and turns every row into write cursors. Returns the
-    /// total number of pairs.
-    pub fn prefix(&mut self, offsets: &mut [u32], counts: &mut [u32]) -> usize {
-        let clusters = self.clusters;
-        assert!(offsets.len() == clusters && counts.len() == clusters);
-        counts.fill(0);
-        for row in self.cells.chunks_exact(clusters) {
-            for (count, &n) in counts.iter_mut().zip(row) {
-                *count += n;
-            }
-        }
-        let mut total = 0u64;
-        for (offset, &n) in offsets.iter_mut().zip(counts.iter()) {
-            *offset = total as u32;
-            total += n as u64;
-        }
-        assert!(
-            total <= u32::MAX as u64,
-            "{total} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
-        );
-        self.running.clear();
-        self.running.extend_from_slice(offsets);
-        for row in self.cells.chunks_exact_mut(clusters) {
-            for (cell, at) in row.iter_mut().zip(self.running.iter_mut()) {
-                let n = *cell;
-                *cell = *at;
-                *at += n;
-            }
-        }
-        total as usize
-    }
+    assert!(
+        total <= u32::MAX as u64,
+        "{total} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
+    );
+    indices.resize(total as usize, 0);
+    cursors.clear();
+    cursors.extend_from_slice(offsets);
+    let job = FillJob {
+        tasks,
+        parts,
+        offsets,
+        parallel,
+    };
+    job.fill(0..parts.count, indices, 0, cursors);
+    total as usize
 }
 
-/// Step 1 for one task: count every span's clusters into the task's row.
-pub(crate) fn count(row: &mut [u32], spans: &[Span]) {
-    row.fill(0);
-    let clusters = row.len();
-    for s in spans {
-        row[s.first as usize] = row[s.first as usize].wrapping_add(1);
-        let end = (s.first + s.len) as usize;
-        if end < clusters {
-            row[end] = row[end].wrapping_sub(1);
+/// Step 1 for one part: count its spans into its chunk of `counts` (clusters from `base`).
+fn count(tasks: &[TaskOutput], part: usize, base: usize, counts: &mut [u32]) {
+    counts.fill(0);
+    let len = counts.len();
+    for task in tasks {
+        for s in &task.buckets[part] {
+            let start = s.first as usize - base;
+            counts[start] = counts[start].wrapping_add(1);
+            let end = start + s.len as usize;
+            if end < len {
+                counts[end] = counts[end].wrapping_sub(1);
+            }
         }
     }
     let mut running = 0u32;
-    for cell in row.iter_mut() {
-        running = running.wrapping_add(*cell);
-        *cell = running;
+    for n in counts.iter_mut() {
+        running = running.wrapping_add(*n);
+        *n = running;
     }
 }
 
-/// Step 3 for one task: write each span's light at the task's cursors.
-pub(crate) fn fill(row: &mut [u32], spans: &[Span], out: &SharedIndices<'_>) {
-    for s in spans {
-        for cell in &mut row[s.first as usize..(s.first + s.len) as usize] {
-            let at = *cell;
-            *cell = at + 1;
-            // SAFETY: after `prefix`, task t's cursor for cluster c walks the range
-            // [start(t, c), start(t, c) + count(t, c)), and these ranges are disjoint across all
-            // (t, c) and lie inside `0..pairs` = `out.len()`. Each task writes only through its own
-            // row, once per counted pair, so every index is written by exactly one task, once.
-            unsafe { out.write(at as usize, s.light) };
+/// Step 3, split recursively over the parts so each gets its own `&mut` slices.
+struct FillJob<'a> {
+    tasks: &'a [TaskOutput],
+    parts: Parts,
+    offsets: &'a [u32],
+    parallel: bool,
+}
+
+impl FillJob<'_> {
+    /// Fills parts `range`, whose pairs are `indices` (starting at pair `base`) and whose
+    /// clusters' cursors are `cursors`.
+    fn fill(
+        &self,
+        range: std::ops::Range<usize>,
+        indices: &mut [u32],
+        base: usize,
+        cursors: &mut [u32],
+    ) {
+        if range.len() > 1 {
+            let mid = range.start + range.len() / 2;
+            let first_cluster = mid * self.parts.clusters;
+            let split = self.offsets[first_cluster] as usize - base;
+            let (left, right) = indices.split_at_mut(split);
+            let (left_cursors, right_cursors) =
+                cursors.split_at_mut((mid - range.start) * self.parts.clusters);
+            if self.parallel {
+                rayon::join(
+                    || self.fill(range.start..mid, left, base, left_cursors),
+                    || self.fill(mid..range.end, right, base + split, right_cursors),
+                );
+            } else {
+                self.fill(range.start..mid, left, base, left_cursors);
+                self.fill(mid..range.end, right, base + split, right_cursors);
+            }
+            return;
+        }
+        let part = range.start;
+        let first_cluster = part * self.parts.clusters;
+        for task in self.tasks {
+            for s in &task.buckets[part] {
+                let start = s.first as usize - first_cluster;
+                for cursor in &mut cursors[start..start + s.len as usize] {
+                    indices[*cursor as usize - base] = s.light;
+                    *cursor += 1;
+                }
+            }
         }
     }
 }
@@ -141,7 +178,7 @@ impl AtomicCounters {
         let counters = &self.counters[..clusters];
         counters.iter().for_each(|c| c.store(0, Relaxed));
         let count = |task: &crate::jobs::TaskOutput| {
-            for s in &task.spans {
+            for s in task.buckets.iter().flatten() {
                 for c in &counters[s.first as usize..(s.first + s.len) as usize] {
                     c.fetch_add(1, Relaxed);
                 }
@@ -168,7 +205,7 @@ impl AtomicCounters {
         out.indices.resize(running as usize, 0);
         let shared = SharedIndices::new(&mut out.indices);
         let fill = |task: &crate::jobs::TaskOutput| {
-            for s in &task.spans {
+            for s in task.buckets.iter().flatten() {
                 for c in &counters[s.first as usize..(s.first + s.len) as usize] {
                     let at = c.fetch_add(1, Relaxed);
                     // SAFETY: `fetch_add` hands every caller a distinct slot of the cluster's

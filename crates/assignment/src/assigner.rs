@@ -1,6 +1,6 @@
 //! The frame driver: plans the tasks, runs the phases in parallel, and owns every reusable buffer.
 
-use crate::append::{self, Histograms, SharedIndices};
+use crate::append::{self, Parts};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
 use crate::search::FramePlanes;
@@ -56,11 +56,12 @@ impl std::fmt::Display for Method {
 /// How the per-cluster lists are appended (see `append.rs`). Both give identical output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum AppendStrategy {
-    /// Per-task histogram rows (difference arrays), a parallel prefix sum, then a scatter to
-    /// disjoint cursor ranges. No atomic read-modify-write at all. The default: faster on every
-    /// scene `benches/append.rs` measures.
+    /// Spans bucketed by parts (groups of depth slices); per part, in parallel: counts as
+    /// difference arrays, then, after one prefix sum, a fill into the part's own slice of the
+    /// output. No shared counters, no atomics, no cache line written by two threads. The
+    /// default: faster on every scene `benches/append.rs` measures.
     #[default]
-    PerTaskHistograms,
+    PartitionedByDepth,
     /// One shared counter per cluster, `fetch_add` in the count and the fill passes, then a sort
     /// of every list to make the order deterministic. Kept to measure against.
     AtomicCounters,
@@ -88,13 +89,14 @@ impl AssignStats {
     }
 }
 
-/// Below this many lights the frame runs as one task on the calling thread: waking the pool costs
-/// more than it saves (measured in `benches/assignment.rs`).
+/// Below this many lights the frame runs as one task on the calling thread: waking the pool and
+/// splitting the work would cost about as much as the assignment itself. (On the `paper` preset,
+/// 1000 lights on two threads, 256 lights per task timed better than 512 or 1024 with
+/// `myriad bench`; the threshold matches that granularity.)
 pub const SERIAL_LIGHTS: usize = 256;
-/// Lights per task at least, so per-task histogram work stays small next to the lights' work.
+/// Lights per task at least, so a task's fixed costs (its bucket set, a rayon job) stay small next
+/// to the lights' work.
 const LIGHTS_PER_TASK: usize = 256;
-/// Upper bound on histogram memory (bytes) before fewer tasks are used.
-const HISTOGRAM_BUDGET: usize = 64 << 20;
 
 /// Runs light assignment and keeps all of its scratch storage between frames, so steady-state
 /// frames allocate nothing. One `Assigner` per concurrent frame; it uses the current rayon pool
@@ -103,7 +105,7 @@ const HISTOGRAM_BUDGET: usize = 64 << 20;
 pub struct Assigner {
     planes: PlaneSets,
     tasks: Vec<TaskOutput>,
-    histograms: Histograms,
+    cursors: Vec<u32>,
     cluster_spheres: Vec<Vec4>,
     spheres_key: Option<(glam::Vec2, ClusterGrid)>,
     linear: LinearScratch,
@@ -164,13 +166,15 @@ impl Assigner {
             }
         }
         let clusters = grid.cluster_count();
-        let tasks = plan_tasks(n, clusters, method);
+        let tasks = plan_tasks(n, method);
         if self.tasks.len() < tasks {
             self.tasks.resize_with(tasks, TaskOutput::default);
         }
-        self.histograms.prepare(tasks, clusters);
+        let parts = plan_parts(grid, tasks);
         let ctx = FrameContext {
             method,
+            parts: parts.count,
+            slices_per_part: (parts.clusters / (grid.dims.x * grid.dims.y) as usize) as u32,
             lights: *lights,
             camera,
             grid,
@@ -186,42 +190,22 @@ impl Assigner {
         };
         let parallel = tasks > 1;
         let pairs = match self.append {
-            AppendStrategy::PerTaskHistograms => {
-                let gather = |(t, (task, row)): (usize, (&mut TaskOutput, &mut [u32]))| {
+            AppendStrategy::PartitionedByDepth => {
+                let gather = |(t, task): (usize, &mut TaskOutput)| {
                     let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
                     jobs::run_task(&ctx, begin, end, task);
-                    append::count(row, &task.spans);
                 };
-                let work = &mut self.tasks[..tasks];
-                if parallel {
-                    work.par_iter_mut()
-                        .zip(self.histograms.par_rows())
-                        .enumerate()
-                        .for_each(gather);
-                } else {
-                    work.iter_mut()
-                        .zip(self.histograms.rows())
-                        .enumerate()
-                        .for_each(gather);
-                }
+                for_each_task(&mut self.tasks[..tasks], parallel, gather);
                 out.reset(clusters);
-                let pairs = self.histograms.prefix(&mut out.offsets, &mut out.counts);
-                out.indices.resize(pairs, 0);
-                let shared = SharedIndices::new(&mut out.indices);
-                let scatter = |(task, row): (&mut TaskOutput, &mut [u32])| {
-                    append::fill(row, &task.spans, &shared)
-                };
-                let work = &mut self.tasks[..tasks];
-                if parallel {
-                    work.par_iter_mut()
-                        .zip(self.histograms.par_rows())
-                        .for_each(scatter);
-                } else {
-                    work.iter_mut()
-                        .zip(self.histograms.rows())
-                        .for_each(scatter);
-                }
-                pairs
+                append::append(
+                    &self.tasks[..tasks],
+                    parts,
+                    parallel,
+                    &mut out.counts,
+                    &mut out.offsets,
+                    &mut out.indices,
+                    &mut self.cursors,
+                )
             }
             AppendStrategy::AtomicCounters => {
                 let gather = |(t, task): (usize, &mut TaskOutput)| {
@@ -243,6 +227,23 @@ impl Assigner {
     }
 }
 
+/// Splits the clusters into parts of whole depth slices: one part when serial, else about four
+/// per thread (for work stealing), never more than the slices.
+fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
+    let slices = grid.dims.z as usize;
+    let wanted = if tasks > 1 {
+        4 * rayon::current_num_threads()
+    } else {
+        1
+    };
+    let slices_per_part = slices.div_ceil(wanted.clamp(1, slices));
+    let per_slice = grid.dims.x as usize * grid.dims.y as usize;
+    Parts {
+        count: slices.div_ceil(slices_per_part),
+        clusters: slices_per_part * per_slice,
+    }
+}
+
 /// Runs `f` over the tasks, on the pool when `parallel`.
 fn for_each_task<F>(tasks: &mut [TaskOutput], parallel: bool, f: F)
 where
@@ -256,12 +257,11 @@ where
 }
 
 /// How many contiguous light ranges to split a frame into.
-fn plan_tasks(lights: usize, clusters: usize, method: Method) -> usize {
+fn plan_tasks(lights: usize, method: Method) -> usize {
     if lights < SERIAL_LIGHTS && method != Method::Exact {
         return 1;
     }
     let threads = rayon::current_num_threads();
     let by_work = lights.div_ceil(LIGHTS_PER_TASK).max(1);
-    let by_memory = (HISTOGRAM_BUDGET / (4 * clusters.max(1))).max(1);
-    (2 * threads).min(by_work).min(by_memory).max(1)
+    (2 * threads).min(by_work).max(1)
 }

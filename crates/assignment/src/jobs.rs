@@ -28,6 +28,10 @@ pub(crate) struct FrameContext<'a> {
     pub view_from_world: Mat3,
     /// View-space bounding spheres of the clusters (for spot cone tests); empty without spots.
     pub cluster_spheres: &'a [Vec4],
+    /// Number of parts (groups of consecutive slices) the spans are bucketed by.
+    pub parts: usize,
+    /// Slices per part (the last part may have fewer).
+    pub slices_per_part: u32,
     /// Unit normals of the frustum's left, right, top and bottom planes (x-plane 0 and X, y-plane
     /// 0 and Y), each pointing right or up, for the cheap early cull.
     pub side_normals: [Vec3; 4],
@@ -49,10 +53,11 @@ impl FrameContext<'_> {
     }
 }
 
-/// One task's private output.
+/// One task's private output: its spans, bucketed by *part* (a group of consecutive depth
+/// slices, see `append.rs`), so that each part can later be counted and filled on its own.
 #[derive(Default)]
 pub(crate) struct TaskOutput {
-    pub spans: Vec<Span>,
+    pub buckets: Vec<Vec<Span>>,
     pub rejected: u32,
     pub culled: u32,
 }
@@ -75,7 +80,12 @@ struct SpotView {
 /// for any thread count.
 #[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
-    out.spans.clear();
+    if out.buckets.len() < ctx.parts {
+        out.buckets.resize_with(ctx.parts, Vec::new);
+    }
+    for bucket in &mut out.buckets[..ctx.parts] {
+        bucket.clear();
+    }
     out.rejected = 0;
     out.culled = 0;
     let eye = ctx.camera.position;
@@ -190,7 +200,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 r,
                 &bx,
                 &spots[source],
-                &mut out.spans,
+                &mut out.buckets[..ctx.parts],
             );
         }
         block_start += n;
@@ -208,11 +218,12 @@ fn emit(
     r: f32,
     bx: &ClusterBox,
     spot: &SpotView,
-    spans: &mut Vec<Span>,
+    buckets: &mut [Vec<Span>],
 ) {
     let grid = ctx.grid;
     let mut push_row = |j: u32, k: u32, i0: u32, i1: u32| {
         let first = grid.cluster_id(i0, j, k);
+        let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
         if spot.active {
             push_filtered(spans, light, first, i1 - i0 + 1, |c| {
                 let s = ctx.cluster_spheres[c as usize];
@@ -255,7 +266,7 @@ fn emit(
                 });
             }
         }
-        Method::Exact => emit_exact(ctx, light, bx, spans),
+        Method::Exact => emit_exact(ctx, light, bx, buckets),
         Method::Linear => unreachable!("the linear method has its own serial path"),
     }
 }
@@ -294,7 +305,7 @@ fn push_filtered(
 }
 
 /// The `exact` method: every cluster of a generously padded box, tested with the f64 oracle.
-fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, spans: &mut Vec<Span>) {
+fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut [Vec<Span>]) {
     let g = light as usize;
     let l = &ctx.lights;
     let world = DVec3::new(l.x[g] as f64, l.y[g] as f64, l.z[g] as f64);
@@ -321,6 +332,7 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, spans: &mut V
     for k in bx.z.k0..=bx.z.k1 {
         for j in bx.j0..=bx.j1 {
             let first = grid.cluster_id(bx.i0, j, k);
+            let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
             push_filtered(spans, light, first, bx.i1 - bx.i0 + 1, |c| {
                 let i = bx.i0 + (c - first);
                 let cell = Cell::of_cluster(camera, grid, i, j, k);

@@ -18,13 +18,15 @@
 //! 1. **Plan**: split the lights into contiguous ranges, one task each (serial below
 //!    [`SERIAL_LIGHTS`]).
 //! 2. **Axis phases, in parallel** (`jobs.rs`, `geometry.rs`): per block of lights, SoA passes —
-//!    camera-relative view transform and validity, z phase, x phase, y phase (binary searches of
-//!    the plane sets: the paper's proposed *binary frustum reduction*, threaded) — then the light's
+//!    camera-relative view transform and validity, z phase, x phase, y phase (searches of the
+//!    plane sets — the paper's proposed *binary frustum reduction*, threaded — started at the
+//!    closed-form guess so they finish in one or two probes, `search.rs`) — then the light's
 //!    rows of clusters as spans, tightened (`refined`), cut by cone tests (spot lights) or checked
 //!    by the oracle (`exact`).
-//! 3. **Lock-free append** (`append.rs`): per-task histograms, a parallel prefix sum, and a scatter
-//!    of light indices to disjoint cursor ranges. Lists come out in ascending light order, so the
-//!    output is identical for any number of threads.
+//! 3. **Lock-free append** (`append.rs`): spans are bucketed by parts (groups of depth slices);
+//!    per part, in parallel, a count (difference arrays), then one prefix sum, then a fill into
+//!    the part's own slice of the output. Lists come out in ascending light order, so the output
+//!    is identical for any number of threads.
 //!
 //! ## Correctness
 //! f32 paths pad every radius by a few hundred ulps of the light's distance, which covers the
