@@ -113,68 +113,74 @@ impl Block {
     /// Slope range across the screen's x axis, then the tile columns.
     #[inline(always)]
     fn x_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
-        for b in 0..n {
-            let (lo, hi) = geometry::box_slopes(
-                self.cx[b] - self.band_r[b],
-                self.cx[b] + self.band_r[b],
-                self.da[b],
-                self.db[b],
-            );
-            let (tlo, thi) = geometry::tangent_slopes(self.cx[b], self.dc[b], self.rad[b]);
-            let (min, max) = (lo.max(tlo), hi.min(thi));
-            self.smin[b] = min;
-            self.smax[b] = max;
-            (self.guess0[b], self.guess1[b]) = planes.columns_guess(min, max);
-        }
-        for b in 0..n {
-            if self.alive[b] {
-                match planes.columns_exact(
-                    self.smin[b],
-                    self.smax[b],
-                    (self.guess0[b], self.guess1[b]),
-                ) {
-                    Some((first, last)) => {
-                        self.i0[b] = first;
-                        self.i1[b] = last;
-                    }
-                    None => self.alive[b] = false,
-                }
-            }
-        }
+        self.axis_phase(n, Axis::X, planes);
     }
 
     /// Slope range across the screen's y axis, then the tile rows.
     #[inline(always)]
     fn y_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
+        self.axis_phase(n, Axis::Y, planes);
+    }
+
+    /// One screen axis: the slope range (depth-band box ∩ tangents), then the tiles along it.
+    #[inline(always)]
+    fn axis_phase(&mut self, n: usize, axis: Axis, planes: &FramePlanes<'_>) {
+        let Block {
+            cx,
+            cy,
+            dc,
+            rad,
+            alive,
+            da,
+            db,
+            band_r,
+            smin,
+            smax,
+            guess0,
+            guess1,
+            i0,
+            i1,
+            j0,
+            j1,
+            ..
+        } = self;
+        let (centre, first, last) = match axis {
+            Axis::X => (&*cx, i0, i1),
+            Axis::Y => (&*cy, j0, j1),
+        };
         for b in 0..n {
-            let (lo, hi) = geometry::box_slopes(
-                self.cy[b] - self.band_r[b],
-                self.cy[b] + self.band_r[b],
-                self.da[b],
-                self.db[b],
-            );
-            let (tlo, thi) = geometry::tangent_slopes(self.cy[b], self.dc[b], self.rad[b]);
+            let c = centre[b];
+            let (lo, hi) = geometry::box_slopes(c - band_r[b], c + band_r[b], da[b], db[b]);
+            let (tlo, thi) = geometry::tangent_slopes(c, dc[b], rad[b]);
             let (min, max) = (lo.max(tlo), hi.min(thi));
-            self.smin[b] = min;
-            self.smax[b] = max;
-            (self.guess0[b], self.guess1[b]) = planes.rows_guess(min, max);
+            smin[b] = min;
+            smax[b] = max;
+            (guess0[b], guess1[b]) = match axis {
+                Axis::X => planes.columns_guess(min, max),
+                Axis::Y => planes.rows_guess(min, max),
+            };
         }
         for b in 0..n {
-            if self.alive[b] {
-                match planes.rows_exact(
-                    self.smin[b],
-                    self.smax[b],
-                    (self.guess0[b], self.guess1[b]),
-                ) {
-                    Some((first, last)) => {
-                        self.j0[b] = first;
-                        self.j1[b] = last;
-                    }
-                    None => self.alive[b] = false,
+            if alive[b] {
+                let guess = (guess0[b], guess1[b]);
+                let tiles = match axis {
+                    Axis::X => planes.columns_exact(smin[b], smax[b], guess),
+                    Axis::Y => planes.rows_exact(smin[b], smax[b], guess),
+                };
+                match tiles {
+                    Some((f, l)) => (first[b], last[b]) = (f, l),
+                    None => alive[b] = false,
                 }
             }
         }
     }
+}
+
+/// A screen axis of the x and y phases.
+#[derive(Clone, Copy)]
+enum Axis {
+    X,
+    Y,
 }
 
 #[cfg(test)]

@@ -121,22 +121,6 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
-    fn random_cell(rng: &mut impl Rng) -> Cell {
-        let mut pair = |lo: f64, hi: f64| {
-            let a = rng.random_range(lo..hi);
-            let b = rng.random_range(lo..hi);
-            [a.min(b), a.max(b) + 1e-3]
-        };
-        let x = pair(-2.0, 2.0);
-        let y = pair(-1.5, 1.5);
-        let d = pair(0.05, 20.0);
-        Cell {
-            x_slopes: x,
-            y_slopes: y,
-            depths: d,
-        }
-    }
-
     /// A point of the cell from three unit parameters (x slope, y slope, depth).
     fn cell_point(cell: &Cell, u: f64, v: f64, w: f64) -> DVec3 {
         let d = cell.depths[0] + (cell.depths[1] - cell.depths[0]) * w;
@@ -150,7 +134,7 @@ mod tests {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
         const N: usize = 48;
         for _ in 0..60 {
-            let cell = random_cell(&mut rng);
+            let cell = crate::oracle::random_cell(&mut rng, 1.0);
             // Dense samples on the six faces (the closest point of a convex set to an outside point
             // is on its boundary).
             let mut samples = Vec::new();
@@ -208,7 +192,7 @@ mod tests {
     fn interior_points_have_zero_distance_and_spheres_touching_faces_intersect() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
         for _ in 0..200 {
-            let cell = random_cell(&mut rng);
+            let cell = crate::oracle::random_cell(&mut rng, 1.0);
             let p = cell_point(
                 &cell,
                 rng.random_range(0.0..1.0),

@@ -18,3 +18,21 @@ mod spot;
 
 pub use cell::{Cell, distance_to_cell, sphere_intersects_cell};
 pub use spot::{SpotVolume, spot_intersects_cell};
+
+/// Random cells for the oracle's tests (shared by `cell.rs` and `spot.rs`).
+#[cfg(test)]
+pub(crate) fn random_cell(rng: &mut impl rand::Rng, scale: f64) -> Cell {
+    let mut pair = |lo: f64, hi: f64| {
+        let a = rng.random_range(lo..hi);
+        let b = rng.random_range(lo..hi);
+        [a.min(b), a.max(b) + 1e-3]
+    };
+    let x = pair(-2.0, 2.0);
+    let y = pair(-1.5, 1.5);
+    let d = pair(0.05, 20.0);
+    Cell {
+        x_slopes: x,
+        y_slopes: y,
+        depths: [d[0] * scale, d[1] * scale],
+    }
+}

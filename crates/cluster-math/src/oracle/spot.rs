@@ -632,27 +632,10 @@ fn project_origin(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::oracle::sphere_intersects_cell;
+    use crate::oracle::{random_cell, sphere_intersects_cell};
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
     use std::f64::consts::{PI, TAU};
-
-    /// A random cell (as in `cell.rs`'s tests), its depths multiplied by `scale`.
-    fn random_cell(rng: &mut impl Rng, scale: f64) -> Cell {
-        let mut pair = |lo: f64, hi: f64| {
-            let a = rng.random_range(lo..hi);
-            let b = rng.random_range(lo..hi);
-            [a.min(b), a.max(b) + 1e-3]
-        };
-        let x = pair(-2.0, 2.0);
-        let y = pair(-1.5, 1.5);
-        let d = pair(0.05, 20.0);
-        Cell {
-            x_slopes: x,
-            y_slopes: y,
-            depths: [d[0] * scale, d[1] * scale],
-        }
-    }
 
     /// A point of the cell from three unit parameters (x slope, y slope, depth); parameters outside
     /// `[0, 1]` give points outside it.
