@@ -30,7 +30,7 @@ fn check_scene(scene: &Scene, spots: bool, context: &str) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     #[test]
     fn every_method_covers_the_oracle(
@@ -46,7 +46,7 @@ proptest! {
     ) {
         let params = SceneParams {
             seed, fov_deg, aspect, near, far_ratio, eye_scale,
-            dims: UVec3::new(dx, dy, dz), slicing, lights: 40, spots,
+            dims: UVec3::new(dx, dy, dz), slicing, lights: 60, spots,
         };
         let scene = make_scene(&params);
         check_scene(&scene, spots, &format!("seed {seed} fov {fov_deg} aspect {aspect} near {near} far x{far_ratio} eye {eye_scale}"));
