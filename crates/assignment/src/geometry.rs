@@ -179,6 +179,8 @@ pub(crate) fn refine_slice(
         return;
     };
     let (j0, j1) = (j0.max(b.j0), j1.min(b.j1));
+    // Rows whose y-band holds the centre see the full cross-section: one search serves them all.
+    let mut full_width = None;
     for j in j0..=j1 {
         let top = sets.y_slopes[j as usize];
         let bottom = sets.y_slopes[j as usize + 1];
@@ -188,9 +190,17 @@ pub(crate) fn refine_slice(
         if dy > rk {
             continue;
         }
-        let w = ((rk - dy) * (rk + dy)).sqrt();
-        let (sx0, sx1) = slopes(cx - w, cx + w);
-        if let Some((i0, i1)) = planes.columns(sx0, sx1) {
+        let columns = if dy == 0.0 {
+            *full_width.get_or_insert_with(|| {
+                let (sx0, sx1) = slopes(cx - rk, cx + rk);
+                planes.columns(sx0, sx1)
+            })
+        } else {
+            let w = ((rk - dy) * (rk + dy)).sqrt();
+            let (sx0, sx1) = slopes(cx - w, cx + w);
+            planes.columns(sx0, sx1)
+        };
+        if let Some((i0, i1)) = columns {
             let (i0, i1) = (i0.max(b.i0), i1.min(b.i1));
             if i0 <= i1 {
                 row(j, i0, i1);
