@@ -154,19 +154,27 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
             }
         }
         // Phase 0c: the early frustum cull, then compaction of the survivors into the block's
-        // columns (branch-free: every light is written, only survivors advance the cursor).
+        // columns, walking the set bits of a survivor mask (cheap whether few or most survive).
         for b in 0..n {
             inside[b] = valid[b] & ctx.may_touch_frustum(vx[b], vy[b], vd[b], vr[b]);
         }
         let mut alive = 0;
-        for b in 0..n {
-            block.cx[alive] = vx[b];
-            block.cy[alive] = vy[b];
-            block.dc[alive] = vd[b];
-            block.rad[alive] = vr[b];
-            block.alive[alive] = true;
-            block.source[alive] = b as u32;
-            alive += inside[b] as usize;
+        for (word, flags) in inside[..n].chunks(64).enumerate() {
+            let mut mask = flags
+                .iter()
+                .enumerate()
+                .fold(0u64, |m, (i, &f)| m | ((f as u64) << i));
+            while mask != 0 {
+                let b = word * 64 + mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                block.cx[alive] = vx[b];
+                block.cy[alive] = vy[b];
+                block.dc[alive] = vd[b];
+                block.rad[alive] = vr[b];
+                block.alive[alive] = true;
+                block.source[alive] = b as u32;
+                alive += 1;
+            }
         }
         let rejected = valid[..n].iter().filter(|&&v| !v).count();
         out.rejected += rejected as u32;
