@@ -232,24 +232,11 @@ fn emit(
     let mut push_row = |j: u32, k: u32, i0: u32, i1: u32| {
         let first = grid.cluster_id(i0, j, k);
         let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
+        let len = i1 - i0 + 1;
         if spot.active {
-            push_filtered(spans, light, first, i1 - i0 + 1, |c| {
-                let s = ctx.cluster_spheres[c as usize];
-                geometry::cone_may_touch_sphere(
-                    spot.apex,
-                    spot.axis,
-                    spot.cos_sin,
-                    spot.range,
-                    s.truncate(),
-                    s.w,
-                )
-            });
+            push_spot_row(ctx, spot, spans, light, first, len);
         } else {
-            spans.push(Span {
-                light,
-                first,
-                len: i1 - i0 + 1,
-            });
+            spans.push(Span { light, first, len });
         }
     };
     let refine = ctx.method == Method::Refined
@@ -277,6 +264,30 @@ fn emit(
         Method::Exact => emit_exact(ctx, light, bx, buckets),
         Method::Linear => unreachable!("the linear method has its own serial path"),
     }
+}
+
+/// A spot light's row, cut to the clusters its cone may touch (kept out of line: the point-light
+/// path through `emit` stays small enough to inline).
+#[inline(never)]
+fn push_spot_row(
+    ctx: &FrameContext<'_>,
+    spot: &SpotView,
+    spans: &mut Vec<Span>,
+    light: u32,
+    first: u32,
+    len: u32,
+) {
+    push_filtered(spans, light, first, len, |c| {
+        let s = ctx.cluster_spheres[c as usize];
+        geometry::cone_may_touch_sphere(
+            spot.apex,
+            spot.axis,
+            spot.cos_sin,
+            spot.range,
+            s.truncate(),
+            s.w,
+        )
+    });
 }
 
 /// Pushes the maximal runs of `first .. first + len` whose clusters pass `keep`.
