@@ -1,8 +1,10 @@
 //! Subcommands of the `myriad` tool, one file each.
 
 mod assign;
+mod atrium;
 mod bench;
 mod check;
+mod info;
 mod scene;
 mod source;
 mod validate;
@@ -23,8 +25,12 @@ pub struct Cli {
 enum Command {
     /// Check a scene file and list every problem in it.
     Validate(validate::Args),
-    /// Write a standard benchmark scene (paper, uniform, sphere) as a scene file.
+    /// Write a scene file: a standard preset, or a light field placed in a glTF model.
     Scene(scene::Args),
+    /// Describe a glTF file: meshes, instances, triangles, materials, lights, cameras, bounds.
+    Info(info::Args),
+    /// Write the generated default scene (the atrium) as a .glb file.
+    Atrium(atrium::Args),
     /// Assign a scene's lights to clusters and write the assignment dump.
     Assign(assign::Args),
     /// Verify an assignment dump against the exact oracle.
@@ -38,6 +44,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Some(Command::Validate(args)) => validate::run(args),
         Some(Command::Scene(args)) => scene::run(args),
+        Some(Command::Info(args)) => info::run(args),
+        Some(Command::Atrium(args)) => atrium::run(args),
         Some(Command::Assign(args)) => assign::run(args),
         Some(Command::Check(args)) => check::run(args),
         Some(Command::Bench(args)) => bench::run(args),

@@ -1,15 +1,75 @@
-//! `myriad scene --preset P --lights N --seed K --out S`: a reproducible benchmark scene file.
+//! `myriad scene`: a reproducible scene file, either a standard preset
+//! (`--preset P --lights N --seed K --out S`) or a light field placed in a glTF model
+//! (`--gltf M --field F --lights N --seed K --out S`).
 
 use super::source::parse_preset;
-use anyhow::Result;
+use anyhow::{Context, Result, bail};
+use myriad::cluster_math::glam::{UVec3, Vec3};
+use myriad::scene::{
+    Aabb, Camera, ClusterGrid, DepthSlicing, LightField, LoadOptions, Model, Placement, RadiusRule,
+    Scene, SpotRule, SurfaceSampler,
+};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// The light fields `--field` accepts.
+const FIELDS: [&str; 5] = ["surfaces", "box", "frustum", "clumps", "sphere"];
+
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// paper, uniform or sphere.
+    /// A standard scene: paper, uniform or sphere.
+    #[arg(long, required_unless_present = "gltf", conflicts_with = "gltf")]
+    preset: Option<String>,
+    /// Place a light field in this glTF model (.gltf or .glb), e.g. assets/atrium.glb.
     #[arg(long)]
-    preset: String,
+    gltf: Option<PathBuf>,
+    /// The light field: surfaces (on the model's triangles, area-weighted), box (uniform in the
+    /// model's bounds), frustum (uniform in the camera's view volume), clumps (balls around
+    /// random points of the bounds) or sphere (on the bounds' circumscribed sphere)
+    /// [default: surfaces].
+    #[arg(long, conflicts_with = "preset")]
+    field: Option<String>,
+    /// The model's camera to use, by name [default: its first camera; with none, a view down
+    /// the bounds' long axis].
+    #[arg(long, conflicts_with = "preset")]
+    camera: Option<String>,
+    /// Render width in pixels [default: 1536].
+    #[arg(long, conflicts_with = "preset")]
+    width: Option<u32>,
+    /// Render height in pixels [default: 768].
+    #[arg(long, conflicts_with = "preset")]
+    height: Option<u32>,
+    /// Cluster grid as XxYxZ [default: 24x12x16].
+    #[arg(long, conflicts_with = "preset")]
+    grid: Option<String>,
+    /// Depth slicing: log or linear [default: log].
+    #[arg(long, conflicts_with = "preset")]
+    depth: Option<String>,
+    /// Light radii, uniform in MIN..MAX metres [default: 0.5..3].
+    #[arg(long, conflicts_with_all = ["preset", "cutoff"])]
+    radii: Option<String>,
+    /// Instead of --radii: each radius from its intensity, where intensity·max(colour)/d²
+    /// falls to this cut-off.
+    #[arg(long, conflicts_with = "preset")]
+    cutoff: Option<f32>,
+    /// Light intensities, uniform in MIN..MAX (one number: constant) [default: 1].
+    #[arg(long, conflicts_with = "preset")]
+    intensity: Option<String>,
+    /// Fraction of the lights that are spot lights, 0 to 1 [default: 0].
+    #[arg(long, conflicts_with = "preset")]
+    spots: Option<f32>,
+    /// Spot outer half angles in degrees, MIN..MAX [default: 20..45].
+    #[arg(long, conflicts_with = "preset")]
+    spot_angles: Option<String>,
+    /// surfaces: distance of the lights from the surface in metres [default: 0.2].
+    #[arg(long, conflicts_with = "preset")]
+    offset: Option<f32>,
+    /// clumps: number of clumps [default: 16].
+    #[arg(long, conflicts_with = "preset")]
+    clumps: Option<usize>,
+    /// clumps: radius of each clump in metres [default: 1].
+    #[arg(long, conflicts_with = "preset")]
+    spread: Option<f32>,
     /// Number of lights.
     #[arg(long, default_value_t = 1000)]
     lights: usize,
@@ -21,16 +81,205 @@ pub struct Args {
     out: PathBuf,
 }
 
-pub fn run(args: Args) -> Result<ExitCode> {
-    let preset = parse_preset(&args.preset)?;
-    let scene = preset.generate(args.lights, args.seed);
-    scene.save(&args.out)?;
-    println!(
-        "wrote {} ({} preset, {} lights, seed {})",
-        args.out.display(),
-        preset.name(),
+/// `"a..b"` as `[a, b]`, or `"a"` as `[a, a]`.
+fn parse_range(text: &str, what: &str) -> Result<[f32; 2]> {
+    let parse = |s: &str| {
+        s.trim()
+            .parse::<f32>()
+            .with_context(|| format!("{what}: {s:?} is not a number (expected MIN..MAX)"))
+    };
+    match text.split_once("..") {
+        Some((a, b)) => Ok([parse(a)?, parse(b)?]),
+        None => {
+            let v = parse(text)?;
+            Ok([v, v])
+        }
+    }
+}
+
+/// `"24x12x16"` as grid dimensions.
+fn parse_grid(text: &str) -> Result<UVec3> {
+    let parts: Vec<&str> = text.split('x').collect();
+    let dims: Option<Vec<u32>> = parts.iter().map(|p| p.parse().ok()).collect();
+    match dims.as_deref() {
+        Some(&[x, y, z])
+            if x >= 1
+                && y >= 1
+                && z >= 1
+                && (x as u64 * y as u64 * z as u64) <= u32::MAX as u64 =>
+        {
+            Ok(UVec3::new(x, y, z))
+        }
+        _ => bail!("--grid {text:?}: expected XxYxZ with each dimension >= 1, e.g. 24x12x16"),
+    }
+}
+
+/// A camera for a model without one: from just inside one end of the bounds' longer
+/// horizontal axis, at a sixth of the height, looking down that axis slightly upwards (the
+/// `paper` preset's view of its courtyard).
+fn camera_for_bounds(b: Aabb, width: u32, height: u32) -> Camera {
+    let size = b.size();
+    let c = b.center();
+    let eye_y = b.min.y + size.y / 6.0;
+    let (position, target) = if size.x >= size.z {
+        (
+            Vec3::new(b.min.x + 0.05 * size.x, eye_y, c.z),
+            Vec3::new(b.max.x, eye_y + 0.1 * size.y, c.z),
+        )
+    } else {
+        (
+            Vec3::new(c.x, eye_y, b.min.z + 0.05 * size.z),
+            Vec3::new(c.x, eye_y + 0.1 * size.y, b.max.z),
+        )
+    };
+    let far = (1.1 * size.length()).max(1.0);
+    Camera::new(position, target, Vec3::Y, 60.0, width, height, 0.1, far)
+}
+
+fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
+    let (width, height) = (args.width.unwrap_or(1536), args.height.unwrap_or(768));
+    let field_name = args.field.as_deref().unwrap_or("surfaces");
+    let model = Model::load(path, &LoadOptions::without_images())?;
+    let bounds = model.bounds();
+    if bounds.is_empty() {
+        bail!(
+            "{}: draws no triangles, so there is nothing to place lights in",
+            path.display()
+        );
+    }
+    let (camera, camera_name) = match &args.camera {
+        Some(name) => {
+            let index = model.camera_index(name).with_context(|| {
+                let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
+                format!(
+                    "{}: no camera named {name:?}; it has {}",
+                    path.display(),
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                )
+            })?;
+            let camera = model.camera(index, width, height).with_context(|| {
+                format!("camera {name:?} is orthographic; a perspective one is needed")
+            })?;
+            (camera, name.clone())
+        }
+        None => match model.camera(0, width, height) {
+            Some(camera) => (camera, model.cameras[0].name.clone()),
+            None => (
+                camera_for_bounds(bounds, width, height),
+                "a view down the long axis (the model has no perspective camera 0)".to_string(),
+            ),
+        },
+    };
+    let slicing = match args.depth.as_deref().unwrap_or("log") {
+        "log" => DepthSlicing::Log,
+        "linear" => DepthSlicing::Linear,
+        other => bail!("unknown depth slicing {other:?}; expected log or linear"),
+    };
+    let grid = ClusterGrid::new(
+        parse_grid(args.grid.as_deref().unwrap_or("24x12x16"))?,
+        slicing,
+        camera.near,
+        camera.far,
+    );
+    let placement = match field_name {
+        "surfaces" => Placement::Surfaces {
+            surfaces: SurfaceSampler::new(&model),
+            offset: args.offset.unwrap_or(0.2),
+        },
+        "box" => Placement::Box(bounds),
+        "frustum" => Placement::Frustum(camera),
+        "clumps" => Placement::Clumps {
+            within: bounds,
+            clumps: args.clumps.unwrap_or(16),
+            spread: args.spread.unwrap_or(1.0),
+        },
+        "sphere" => Placement::Sphere {
+            center: bounds.center(),
+            radius: 0.5 * bounds.size().length(),
+        },
+        other => bail!(
+            "unknown light field {other:?}; expected one of {}",
+            FIELDS.join(", ")
+        ),
+    };
+    let radius = match args.cutoff {
+        Some(cutoff) => RadiusRule::FromIntensity { cutoff },
+        None => {
+            let [min, max] = parse_range(args.radii.as_deref().unwrap_or("0.5..3"), "--radii")?;
+            RadiusRule::Uniform { min, max }
+        }
+    };
+    let [i0, i1] = parse_range(args.intensity.as_deref().unwrap_or("1"), "--intensity")?;
+    let mut field = LightField::new(placement)
+        .with_radius(radius)
+        .with_intensity(i0, i1);
+    // `--spots 0` means no spots (and draws nothing), the same as leaving it out.
+    if let Some(fraction) = args.spots.filter(|&f| f != 0.0) {
+        let angles = args.spot_angles.as_deref().unwrap_or("20..45");
+        field = field.with_spots(SpotRule {
+            fraction,
+            angle_deg: parse_range(angles, "--spot-angles")?,
+        });
+    }
+    if let Some(problem) = field.problem() {
+        bail!("invalid light field: {problem}");
+    }
+    let lights = field.generate(args.lights, args.seed);
+    let what = format!(
+        "{} lights, field {} in {}, camera {camera_name}, seed {}",
         args.lights,
+        field_name,
+        path.display(),
         args.seed
     );
+    Ok((Scene::new(camera, grid, lights), what))
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let (scene, what) = match (&args.preset, &args.gltf) {
+        (Some(name), _) => {
+            let preset = parse_preset(name)?;
+            let what = format!(
+                "{} preset, {} lights, seed {}",
+                preset.name(),
+                args.lights,
+                args.seed
+            );
+            (preset.generate(args.lights, args.seed), what)
+        }
+        (None, Some(path)) => gltf_scene(&args, path)?,
+        (None, None) => bail!("give --preset P or --gltf FILE"),
+    };
+    scene.save(&args.out)?;
+    println!("wrote {} ({what})", args.out.display());
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_and_grids_parse() {
+        assert_eq!(parse_range("0.5..3", "r").unwrap(), [0.5, 3.0]);
+        assert_eq!(parse_range("2", "r").unwrap(), [2.0, 2.0]);
+        assert!(parse_range("a..3", "r").is_err());
+        assert_eq!(parse_grid("24x12x16").unwrap(), UVec3::new(24, 12, 16));
+        for bad in ["24x12", "0x1x1", "axbxc", "65536x65536x2"] {
+            assert!(parse_grid(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn fallback_camera_looks_down_the_long_axis() {
+        let b = Aabb::new(Vec3::new(-15.0, 0.0, -7.5), Vec3::new(15.0, 12.0, 7.5));
+        let c = camera_for_bounds(b, 800, 400);
+        assert!(b.contains(c.position));
+        assert!(c.target.x > c.position.x + 20.0);
+        assert!(c.far > b.size().length());
+    }
 }

@@ -49,6 +49,34 @@ pub enum Error {
         /// How many further problems the scene has (0 when this was the only one).
         more: usize,
     },
+    /// A glTF file (`.gltf` or `.glb`) could not be read from disk. The operating system's
+    /// reason is the error's [`source`](std::error::Error::source), not repeated in the message.
+    #[error("cannot read glTF file {}", path.display())]
+    GltfRead {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// A glTF file could not be written. The reason is the error's source.
+    #[error("cannot write glTF file {}", path.display())]
+    GltfWrite {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// A glTF file is broken or uses something this crate cannot load (syntax or schema errors,
+    /// indices or byte ranges out of bounds, non-finite values, node cycles, missing buffers, an
+    /// undecodable image), or a model cannot be written as glTF. `message` says where in the
+    /// document (`meshes[2] "Roof" primitives[0]: …`) and what is wrong.
+    #[error("{origin}: {message}")]
+    Gltf {
+        /// File path or caller-given origin name.
+        origin: String,
+        /// Where in the document, and what is wrong.
+        message: String,
+    },
 }
 
 fn more_problems(more: usize) -> String {

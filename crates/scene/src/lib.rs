@@ -1,18 +1,33 @@
 //! # myriad-scene — scenes, and the scene file every tool agrees on
 //!
-//! A scene is a camera, a cluster grid and lights. This crate reads and writes the JSON scene file
-//! (the shared contract of the CLI, the benches and the tests, see DESIGN.md), and holds lights the
-//! way the rest of myriad consumes them: as structure-of-arrays columns ([`Lights`]). glTF loading,
-//! procedural light fields and the ECS-style frame systems (animate, cull, to-view) will live here
-//! too, as modules of their own beside the ones below.
+//! A scene, for the assignment, is a camera, a cluster grid and lights; for the renderer it is
+//! also geometry. This crate reads and writes the JSON scene file (the shared contract of the
+//! CLI, the benches and the tests, see DESIGN.md), holds lights the way the rest of myriad
+//! consumes them — as structure-of-arrays columns ([`Lights`]) — loads glTF 2.0 models
+//! ([`Model`]), generates the project's default scene (the atrium) and seeded light fields, and
+//! runs the per-frame ECS-style systems on light columns (animate, cull, to view space).
 //!
 //! ## Modules
 //! * [`Lights`] / [`LightRecord`] (`lights.rs`): SoA light columns and their row type. Spot columns
 //!   exist only when some light is a spot; point lights then have a zero direction and angle π.
 //! * [`Scene`], [`LightPolicy`], [`SkippedLight`] (`scene_file.rs`): reading and writing files.
 //! * [`validate_file`], [`ValidationReport`] (`validate.rs`): every problem in a file at once.
+//! * [`Model`] and its parts (`model.rs`): meshes of triangle primitives, instances with world
+//!   transforms, PBR materials, images, cameras, punctual lights as [`Lights`] columns.
+//! * [`Model::load`], [`LoadOptions`] (`gltf_load.rs`): the glTF 2.0 loader (`.gltf`, `.glb`,
+//!   `KHR_lights_punctual`), with bounds-checked accessor reads (`gltf_accessors.rs`) and
+//!   generated flat normals and tangents (`tangents.rs`). [`Model::to_glb`] (`glb_write.rs`)
+//!   writes untextured models back as reproducible GLB.
+//! * [`atrium`], [`ATRIUM_FILE`] (`atrium.rs`): the generated default scene, shipped as
+//!   `assets/atrium.glb`.
+//! * [`LightField`], [`Placement`], [`SurfaceSampler`] (`light_fields.rs`): seeded lights in a
+//!   box, the frustum, on surfaces, in clumps, on a sphere, with radii from a range or from
+//!   intensity ([`radius_from_intensity`]).
 //! * [`Preset`] (`presets.rs`): the seeded standard benchmark scenes (`paper`, `uniform`,
-//!   `sphere`).
+//!   `sphere`), each a light field with a camera and grid.
+//! * [`systems`]: the frame systems — [`systems::animate_orbits`], [`systems::animate_wander`],
+//!   [`systems::cull_lights`], [`systems::lights_to_view`] — plain functions over column slices,
+//!   parallel with rayon above a few thousand lights.
 //! * [`Error`], [`Problem`], [`Result`] (`error.rs`): one error enum for the crate.
 //! * Private: `json.rs` (a JSON tree that keeps duplicate keys and integer kinds, and typed field
 //!   readers), `read.rs` (the streaming reader), `checks.rs` (value checks shared by reader and
@@ -82,20 +97,45 @@
 //! It does not guess: no clamping of negative colours, no default camera or grid, no repair of a
 //! degenerate camera, no dropping of lights without a record. It does not fix up a scene built in
 //! code either; it reports ([`Scene::problems`]) and refuses to write it.
+//!
+//! The same stance holds for glTF files: the loader ([`Model::load`]) never panics on any input
+//! and reports broken files as [`Error::Gltf`] naming the file, the place in the document and the
+//! problem. What it leaves out of a valid file (lines and points, skins, animations, extra UV
+//! sets) it lists in [`Model::warnings`], never silently. It does not render, and it does not
+//! pick light radii by guesswork: glTF lights without a `range` get the documented
+//! inverse-square cut-off ([`LoadOptions::light_cutoff`]).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod atrium;
 mod checks;
 mod error;
+mod glb_write;
+mod gltf_accessors;
+mod gltf_load;
 mod json;
+mod light_fields;
 mod lights;
+mod model;
 mod presets;
 mod read;
 mod scene_file;
+pub mod systems;
+mod tangents;
 mod validate;
 
+pub use atrium::{ATRIUM_FILE, atrium, atrium_glb};
 pub use error::{Error, Problem, Result};
+pub use gltf_load::{DEFAULT_LIGHT_CUTOFF, ImageLoading, LoadOptions};
+pub use light_fields::{
+    ColorRule, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler, radius_from_intensity,
+};
 pub use lights::{LightRecord, Lights};
+pub use model::{
+    Aabb, AlphaMode, DirectionalLight, Image, ImagePixels, ImageSource, Instance, Material, Mesh,
+    Model, ModelCamera, ModelSummary, PixelFormat, PlacedLight, Primitive, Projection,
+    PunctualKind, TangentSource, TextureRef,
+};
 pub use presets::Preset;
 pub use scene_file::{LightPolicy, Scene, SkippedLight};
 pub use validate::{ValidationReport, validate_file, validate_json_slice, validate_json_str};

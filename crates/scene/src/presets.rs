@@ -11,11 +11,15 @@
 //! courtyard's long axis from 1.5 m inside one end, slightly upwards, with a far plane just beyond
 //! the box's diagonal (36 m). `sphere` uses a bevy-like 16×9×24 grid, the configuration of the
 //! engine it is compared with. Colours are random hues, intensity 1.
+//!
+//! Each preset is a [`LightField`] ([`Preset::field`]) plus a camera and grid, so the presets and
+//! the general light fields share one sampler and one random stream layout.
 
-use crate::{LightRecord, Lights, Scene};
+use crate::Scene;
+use crate::light_fields::{LightField, Placement, RadiusRule};
+use crate::model::Aabb;
 use glam::{UVec3, Vec3};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
-use rand::{Rng, SeedableRng};
 
 /// A standard scene family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -93,72 +97,29 @@ impl Preset {
         (camera, grid)
     }
 
+    /// The preset's light field (see the table above): what [`Preset::generate`] draws from.
+    pub fn field(self) -> LightField {
+        let (camera, _) = self.view();
+        match self {
+            Preset::Paper => LightField::new(Placement::Box(Aabb::new(
+                Vec3::new(-15.0, 0.0, -7.5),
+                Vec3::new(15.0, 13.0, 7.5),
+            ))),
+            Preset::Uniform => LightField::new(Placement::Frustum(camera))
+                .with_radius(RadiusRule::Uniform { min: 0.2, max: 1.5 }),
+            Preset::Sphere => LightField::new(Placement::Sphere {
+                center: camera.position,
+                radius: 50.0,
+            })
+            .with_radius(RadiusRule::Uniform { min: 0.3, max: 0.3 }),
+        }
+    }
+
     /// The preset with `lights` lights drawn from `seed`.
     pub fn generate(self, lights: usize, seed: u64) -> Scene {
         let (camera, grid) = self.view();
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-        let mut columns = Lights::with_capacity(lights);
-        for index in 0..lights {
-            let (position, radius) = match self {
-                Preset::Paper => (
-                    Vec3::new(
-                        rng.random_range(-15.0..15.0),
-                        rng.random_range(0.0..13.0),
-                        rng.random_range(-7.5..7.5),
-                    ),
-                    rng.random_range(0.5..3.0),
-                ),
-                Preset::Uniform => (
-                    uniform_in_frustum(&camera, &mut rng),
-                    rng.random_range(0.2..1.5),
-                ),
-                Preset::Sphere => (camera.position + unit_vector(&mut rng) * 50.0, 0.3),
-            };
-            let hue = rng.random_range(0.0f32..1.0);
-            columns.push(
-                LightRecord::point(position, radius)
-                    .with_color(hue_to_rgb(hue))
-                    .with_source_index(index as u32),
-            );
-        }
-        Scene::new(camera, grid, columns)
+        Scene::new(camera, grid, self.field().generate(lights, seed))
     }
-}
-
-/// A point uniform by volume in the frustum between near and far (depth density ∝ d²).
-fn uniform_in_frustum(camera: &Camera, rng: &mut impl Rng) -> Vec3 {
-    let (n3, f3) = (camera.near.powi(3), camera.far.powi(3));
-    let depth = (n3 + rng.random_range(0.0f32..1.0) * (f3 - n3)).cbrt();
-    let t = camera.tan_half_fov();
-    let view = Vec3::new(
-        rng.random_range(-1.0f32..1.0) * t.x * depth,
-        rng.random_range(-1.0f32..1.0) * t.y * depth,
-        -depth,
-    );
-    let (right, up, forward) = camera.basis_f64();
-    camera.position + right.as_vec3() * view.x + up.as_vec3() * view.y - forward.as_vec3() * view.z
-}
-
-/// A uniformly distributed unit vector (normalised Gaussian-free rejection sampling).
-fn unit_vector(rng: &mut impl Rng) -> Vec3 {
-    loop {
-        let v = Vec3::new(
-            rng.random_range(-1.0f32..1.0),
-            rng.random_range(-1.0f32..1.0),
-            rng.random_range(-1.0f32..1.0),
-        );
-        let len2 = v.length_squared();
-        if len2 > 1e-4 && len2 <= 1.0 {
-            return v / len2.sqrt();
-        }
-    }
-}
-
-/// A saturated colour of hue `h` in [0, 1).
-fn hue_to_rgb(h: f32) -> Vec3 {
-    let x = h * 6.0;
-    let channel = |offset: f32| (((x + offset) % 6.0 - 3.0).abs() - 1.0).clamp(0.0, 1.0);
-    Vec3::new(channel(0.0), channel(4.0), channel(2.0))
 }
 
 #[cfg(test)]

@@ -1,0 +1,1200 @@
+//! Loading glTF 2.0 files (`.gltf` with its buffers and images, or `.glb`) into a [`Model`].
+//!
+//! Why this module exists: the `gltf` crate parses and schema-validates the JSON (and splits
+//! GLB chunks), but its convenience layer trusts the data after that — accessor reads, image
+//! sources, cameras without a projection object and node hierarchies with cycles can all panic
+//! or recurse forever. Files are untrusted input, so this loader uses the crate only for parsing,
+//! validation and resource fetching (buffers, image decoding) and reads everything else from the
+//! validated JSON itself, checking each index, byte range and float. **No input makes it panic**;
+//! every failure is an [`Error::Gltf`] naming the file, where in the document and what is wrong
+//! (`Sponza.gltf: meshes[3] "Roof" primitives[0]: index 912 is out of range (POSITION has 900
+//! vertices)`). The test `tests/gltf_robustness.rs` runs it over every file of Debian's
+//! `assimp-testmodels`.
+//!
+//! ## Loading, step by step
+//! 1. **Container.** A file starting with `glTF` is GLB: its header is checked (version 2, a
+//!    declared length within the file) before the `gltf` crate splits the chunks. Then
+//!    `gltf::Gltf::from_slice` parses and validates the JSON (unknown required extensions,
+//!    bad enum values and out-of-range indices are errors there).
+//! 2. **Buffers.** Each buffer is fetched (GLB chunk, `data:` URI, or a file relative to the
+//!    glTF file) and must hold its declared `byteLength`; every buffer view must lie inside its
+//!    buffer.
+//! 3. **Materials**, then **meshes**: each triangle primitive's accessors are read with bounds
+//!    checks (`gltf_accessors.rs`); strips and fans become lists; indices are checked against the
+//!    vertex count; missing normals become flat normals; tangents are generated when the
+//!    material has a normal map and the file has none (`tangents.rs`). Points and lines, and
+//!    primitives without positions, are left out with a warning.
+//! 4. **Images**: always recorded as references; decoded to pixels only with
+//!    [`ImageLoading::Decode`] (decoding Sponza's 46 textures takes seconds in a debug build).
+//! 5. **Nodes**: the default scene (or scene 0; with no scenes, every node without a parent)
+//!    is walked iteratively, composing world transforms (`matrix`, or translation · rotation ·
+//!    scale). A node that is its own ancestor is an error; a node reached along several paths is
+//!    drawn once per path (instancing). Nodes with meshes become [`Instance`]s, with cameras
+//!    [`ModelCamera`]s, with `KHR_lights_punctual` lights rows of [`Model::lights`].
+//!
+//! ## Decisions
+//! * **Light radius.** glTF lights may have no `range` (inverse-square falloff forever), but a
+//!   clustered light needs a finite one. Without `range`, the radius is where the illuminance of
+//!   the brightest channel, `intensity · max(color) / d²`, falls to [`LoadOptions::light_cutoff`]
+//!   (see [`radius_from_intensity`]). A light with zero intensity and no range lights nothing and
+//!   is left out with a warning.
+//! * **Left out, with a warning:** skins (meshes are drawn at their node's transform),
+//!   morph targets, animations, UV sets other than `TEXCOORD_0`, vertex colours.
+//! * **Normals** that are not unit length are normalised (with a warning naming the primitive);
+//!   a trailing incomplete triangle of a list is dropped (with a warning).
+
+use crate::error::{Error, Result};
+use crate::gltf_accessors::BufferData;
+use crate::light_fields::radius_from_intensity;
+use crate::lights::LightRecord;
+use crate::model::{
+    Aabb, AlphaMode, DirectionalLight, Image, ImagePixels, ImageSource, Instance, Material, Mesh,
+    Model, ModelCamera, PixelFormat, PlacedLight, Primitive, Projection, PunctualKind,
+    TangentSource, TextureRef,
+};
+use crate::tangents::{flat_normals, generate_tangents};
+use glam::{Mat4, Quat, Vec3, Vec4};
+use gltf::json::{self, validation::Checked};
+use std::path::Path;
+
+/// How many node visits a hierarchy may expand to (a node reached along several paths counts
+/// once per path): a guard against files whose shared children multiply exponentially.
+const MAX_NODE_VISITS: usize = 1 << 22;
+
+/// Whether images are decoded when a model is loaded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ImageLoading {
+    /// Decode every image to pixels ([`Image::pixels`] is `Some`).
+    #[default]
+    Decode,
+    /// Record where each image is, decode nothing ([`Image::pixels`] is `None`). Much faster;
+    /// what tools that only need geometry and lights use.
+    ReferencesOnly,
+}
+
+/// Illuminance (lux) at which a light without a `range` is cut off by default: 0.1 lux, so a
+/// 1 cd white light reaches about 3.2 m and a 100 cd one about 32 m.
+pub const DEFAULT_LIGHT_CUTOFF: f32 = 0.1;
+
+/// Options for [`Model::load`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadOptions {
+    /// Whether to decode images.
+    pub images: ImageLoading,
+    /// Illuminance below which a light without `range` is cut off (> 0); see the module docs.
+    pub light_cutoff: f32,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            images: ImageLoading::Decode,
+            light_cutoff: DEFAULT_LIGHT_CUTOFF,
+        }
+    }
+}
+
+impl LoadOptions {
+    /// The defaults, but with images only referenced, not decoded.
+    pub fn without_images() -> Self {
+        Self {
+            images: ImageLoading::ReferencesOnly,
+            ..Self::default()
+        }
+    }
+}
+
+impl Model {
+    /// Loads a `.gltf` or `.glb` file; buffers and images it references are read relative to
+    /// the file's folder. Every problem is an [`Error`] naming the file.
+    pub fn load(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Model> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| Error::GltfRead {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let base = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        Self::from_gltf_slice(&bytes, &path.display().to_string(), Some(base), options)
+    }
+
+    /// Loads glTF or GLB bytes. `origin` names the data in errors and becomes
+    /// [`Model::origin`]; external files (buffers, images) are resolved against `base_dir`, and
+    /// are an error when it is `None` (`data:` URIs and GLB chunks always work).
+    pub fn from_gltf_slice(
+        bytes: &[u8],
+        origin: &str,
+        base_dir: Option<&Path>,
+        options: &LoadOptions,
+    ) -> Result<Model> {
+        load(bytes, origin, base_dir, options).map_err(|message| Error::Gltf {
+            origin: origin.to_string(),
+            message,
+        })
+    }
+}
+
+/// Step 1's GLB header check: what the `gltf` crate's own parsing assumes.
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if bytes.len() < 20 {
+        return Err(format!(
+            "truncated GLB: {} bytes, a header and a chunk header need 20",
+            bytes.len()
+        ));
+    }
+    let word =
+        |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let version = word(4);
+    if version != 2 {
+        return Err(format!(
+            "GLB version {version}; only version 2 is supported"
+        ));
+    }
+    let length = word(8) as usize;
+    if length < 20 || length > bytes.len() {
+        return Err(format!(
+            "GLB header declares {length} bytes, but the file has {}",
+            bytes.len()
+        ));
+    }
+    Ok(())
+}
+
+/// The `gltf` crate's error, made readable (validation errors listed, at most 5).
+fn describe(e: gltf::Error) -> String {
+    match e {
+        gltf::Error::Validation(errors) => {
+            let mut shown: Vec<String> = errors
+                .iter()
+                .map(|(path, error)| format!("{path}: {error}"))
+                .collect();
+            // An unsupported required extension (Draco, say) explains the errors it causes
+            // elsewhere (accessors without buffer views): list it first.
+            shown.sort_by_key(|s| !s.starts_with("extensionsRequired"));
+            shown.truncate(5);
+            let more = match errors.len().saturating_sub(5) {
+                0 => String::new(),
+                n => format!(" (and {n} more)"),
+            };
+            format!("invalid glTF: {}{more}", shown.join("; "))
+        }
+        gltf::Error::Deserialize(e) => format!("not valid glTF JSON: {e}"),
+        other => other.to_string(),
+    }
+}
+
+fn load(
+    bytes: &[u8],
+    origin: &str,
+    base: Option<&Path>,
+    options: &LoadOptions,
+) -> Result<Model, String> {
+    if !(options.light_cutoff > 0.0 && options.light_cutoff.is_finite()) {
+        return Err(format!(
+            "light cut-off must be finite and > 0, got {}",
+            options.light_cutoff
+        ));
+    }
+    if bytes.starts_with(b"glTF") {
+        check_glb_header(bytes)?;
+    }
+    let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(bytes).map_err(describe)?;
+    let root = document.as_json();
+
+    // 2. Buffers.
+    let mut buffers = Vec::with_capacity(root.buffers.len());
+    for (i, buffer) in document.buffers().enumerate() {
+        let declared = &root.buffers[i];
+        let name = match &declared.uri {
+            Some(uri) if uri.starts_with("data:") => " (data URI)".to_string(),
+            Some(uri) => format!(" \"{uri}\""),
+            None => " (GLB binary chunk)".to_string(),
+        };
+        if base.is_none()
+            && declared
+                .uri
+                .as_ref()
+                .is_some_and(|u| !u.starts_with("data:"))
+        {
+            return Err(format!(
+                "buffers[{i}]{name}: an external file cannot be read without a base folder"
+            ));
+        }
+        let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)
+            .map_err(|e| format!("buffers[{i}]{name}: {}", describe(e)))?;
+        if (data.0.len() as u64) < declared.byte_length.0 {
+            return Err(format!(
+                "buffers[{i}]{name}: declares {} bytes but holds {}",
+                declared.byte_length.0,
+                data.0.len()
+            ));
+        }
+        buffers.push(data);
+    }
+    let data = BufferData {
+        root,
+        buffers: &buffers,
+    };
+    data.check_views()?;
+
+    let mut loader = Loader {
+        root,
+        data,
+        model: Model::new(origin),
+        options,
+    };
+    // 3. Materials and meshes.
+    for (i, m) in root.materials.iter().enumerate() {
+        let material = loader
+            .material(i, m)
+            .map_err(|e| format!("materials[{i}]{}: {e}", quoted(&m.name)))?;
+        loader.model.materials.push(material);
+    }
+    for (i, mesh) in root.meshes.iter().enumerate() {
+        let mut primitives = Vec::with_capacity(mesh.primitives.len());
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let at = format!("meshes[{i}]{} primitives[{p}]", quoted(&mesh.name));
+            if let Some(primitive) = loader.primitive(primitive, &at)? {
+                primitives.push(primitive);
+            }
+        }
+        loader.model.meshes.push(Mesh {
+            name: mesh.name.clone(),
+            primitives,
+        });
+    }
+    // 4. Images.
+    for (i, image) in root.images.iter().enumerate() {
+        let image = loader
+            .image(image, &document, base)
+            .map_err(|e| format!("images[{i}]{}: {e}", quoted(&image.name)))?;
+        loader.model.images.push(image);
+    }
+    // 5. Nodes.
+    loader.walk_nodes()?;
+    let ignored = [
+        (
+            root.skins.len(),
+            "skin(s): skinned meshes are drawn at their node's transform",
+        ),
+        (
+            root.animations.len(),
+            "animation(s): the static pose is loaded",
+        ),
+    ];
+    for (n, what) in ignored {
+        if n > 0 {
+            loader.model.warnings.push(format!("ignored {n} {what}"));
+        }
+    }
+    Ok(loader.model)
+}
+
+/// A triangle strip as a list. glTF: triangle `i` is `(i, i + 1 + i % 2, i + 2 − i % 2)`, so every
+/// triangle keeps the first one's winding.
+fn strip_to_list(stream: &[u32]) -> Vec<u32> {
+    (0..stream.len().saturating_sub(2))
+        .flat_map(|i| {
+            let odd = i % 2;
+            [stream[i], stream[i + 1 + odd], stream[i + 2 - odd]]
+        })
+        .collect()
+}
+
+/// A triangle fan as a list. glTF: triangle `i` is `(i + 1, i + 2, 0)`.
+fn fan_to_list(stream: &[u32]) -> Vec<u32> {
+    (0..stream.len().saturating_sub(2))
+        .flat_map(|i| [stream[i + 1], stream[i + 2], stream[0]])
+        .collect()
+}
+
+/// ` "name"` for messages, or nothing.
+fn quoted(name: &Option<String>) -> String {
+    name.as_ref().map_or(String::new(), |n| format!(" \"{n}\""))
+}
+
+fn finite_vec3(v: [f32; 3], what: &str) -> Result<Vec3, String> {
+    let v = Vec3::from_array(v);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{what} is not finite: {v}"))
+    }
+}
+
+struct Loader<'a> {
+    root: &'a json::Root,
+    data: BufferData<'a>,
+    model: Model,
+    options: &'a LoadOptions,
+}
+
+impl Loader<'_> {
+    fn texture(&self, index: usize, tex_coord: u32) -> Result<TextureRef, String> {
+        let texture = self
+            .root
+            .textures
+            .get(index)
+            .ok_or_else(|| format!("texture {index} does not exist"))?;
+        let image = texture.source.value();
+        if image >= self.root.images.len() {
+            return Err(format!("textures[{index}]: image {image} does not exist"));
+        }
+        // A set other than 0 is kept as written (and warned about by the caller): only
+        // TEXCOORD_0 is loaded, and a renderer can tell from `tex_coord`.
+        Ok(TextureRef { image, tex_coord })
+    }
+
+    fn material(&mut self, i: usize, m: &json::Material) -> Result<Material, String> {
+        let pbr = &m.pbr_metallic_roughness;
+        let tex = |info: &Option<json::texture::Info>| {
+            info.as_ref()
+                .map(|i| self.texture(i.index.value(), i.tex_coord))
+                .transpose()
+        };
+        let base_color_texture = tex(&pbr.base_color_texture)?;
+        let metallic_roughness_texture = tex(&pbr.metallic_roughness_texture)?;
+        let emissive_texture = tex(&m.emissive_texture)?;
+        let normal_texture = m
+            .normal_texture
+            .as_ref()
+            .map(|n| self.texture(n.index.value(), n.tex_coord))
+            .transpose()?;
+        let base_color_factor = Vec4::from_array(pbr.base_color_factor.0);
+        let factors = [
+            pbr.metallic_factor.0,
+            pbr.roughness_factor.0,
+            m.normal_texture.as_ref().map_or(1.0, |n| n.scale),
+        ];
+        if !base_color_factor.is_finite() || factors.iter().any(|f| !f.is_finite()) {
+            return Err("a factor is not finite".into());
+        }
+        let strength = m
+            .extensions
+            .as_ref()
+            .and_then(|e| e.emissive_strength.as_ref())
+            .map_or(1.0, |s| s.emissive_strength.0);
+        let emissive_factor = finite_vec3(m.emissive_factor.0, "emissiveFactor")? * strength;
+        if !emissive_factor.is_finite() {
+            return Err("emissive strength is not finite".into());
+        }
+        let alpha_mode = match m.alpha_mode {
+            Checked::Valid(json::material::AlphaMode::Opaque) => AlphaMode::Opaque,
+            Checked::Valid(json::material::AlphaMode::Mask) => AlphaMode::Mask {
+                cutoff: m.alpha_cutoff.as_ref().map_or(0.5, |c| c.0),
+            },
+            Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
+            Checked::Invalid => return Err("invalid alphaMode".into()),
+        };
+        let textures = [
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            emissive_texture,
+        ];
+        if textures.iter().flatten().any(|t| t.tex_coord != 0) {
+            self.model.warnings.push(format!(
+                "materials[{i}]{}: samples a UV set other than TEXCOORD_0, which is not loaded",
+                quoted(&m.name)
+            ));
+        }
+        Ok(Material {
+            name: m.name.clone(),
+            base_color_factor,
+            base_color_texture,
+            metallic_factor: factors[0],
+            roughness_factor: factors[1],
+            metallic_roughness_texture,
+            normal_texture,
+            normal_scale: factors[2],
+            emissive_factor,
+            emissive_texture,
+            alpha_mode,
+            double_sided: m.double_sided,
+        })
+    }
+
+    fn attribute(
+        &self,
+        p: &json::mesh::Primitive,
+        semantic: json::mesh::Semantic,
+    ) -> Option<usize> {
+        p.attributes
+            .get(&Checked::Valid(semantic))
+            .map(|index| index.value())
+    }
+
+    /// One primitive as a triangle list, or `None` (with a warning) when it draws no triangles.
+    fn primitive(
+        &mut self,
+        p: &json::mesh::Primitive,
+        at: &str,
+    ) -> Result<Option<Primitive>, String> {
+        use json::mesh::{Mode, Semantic};
+        let Checked::Valid(mode) = p.mode else {
+            return Err(format!("{at}: invalid mode"));
+        };
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            self.model
+                .warnings
+                .push(format!("{at}: mode {mode:?} draws no triangles; left out"));
+            return Ok(None);
+        }
+        let Some(position_accessor) = self.attribute(p, Semantic::Positions) else {
+            self.model
+                .warnings
+                .push(format!("{at}: no POSITION attribute; left out"));
+            return Ok(None);
+        };
+        fn read<T>(at: &str, what: &str, r: Result<T, String>) -> Result<T, String> {
+            r.map_err(|e| format!("{at} {what}: {e}"))
+        }
+        let positions = read(at, "POSITION", self.data.vec3(position_accessor))?;
+        let n = positions.len();
+        let same_count = |what: &str, len: usize| {
+            if len == n {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{at}: {what} has {len} elements but POSITION has {n}"
+                ))
+            }
+        };
+        let mut normals = match self.attribute(p, Semantic::Normals) {
+            Some(a) => Some(read(at, "NORMAL", self.data.vec3(a))?),
+            None => None,
+        };
+        let mut tex_coords = match self.attribute(p, Semantic::TexCoords(0)) {
+            Some(a) => read(at, "TEXCOORD_0", self.data.tex_coords(a))?,
+            None => Vec::new(),
+        };
+        let mut tangents = match self.attribute(p, Semantic::Tangents) {
+            Some(a) => read(at, "TANGENT", self.data.vec4(a))?,
+            None => Vec::new(),
+        };
+        if let Some(normals) = &normals {
+            same_count("NORMAL", normals.len())?;
+        }
+        if !tex_coords.is_empty() {
+            same_count("TEXCOORD_0", tex_coords.len())?;
+        }
+        if !tangents.is_empty() {
+            same_count("TANGENT", tangents.len())?;
+        }
+        let stream: Vec<u32> = match p.indices {
+            Some(a) => read(at, "indices", self.data.indices(a.value()))?,
+            None => {
+                let n32 = u32::try_from(n)
+                    .map_err(|_| format!("{at}: {n} vertices without indices are too many"))?;
+                (0..n32).collect()
+            }
+        };
+        if let Some((e, &bad)) = stream.iter().enumerate().find(|&(_, &i)| i as usize >= n) {
+            return Err(format!(
+                "{at}: index {bad} (element {e} of the indices) is out of range (POSITION has {n} vertices)"
+            ));
+        }
+        let mut indices = match mode {
+            Mode::Triangles => {
+                if !stream.len().is_multiple_of(3) {
+                    self.model.warnings.push(format!(
+                        "{at}: {} indices are not whole triangles; the last {} dropped",
+                        stream.len(),
+                        stream.len() % 3
+                    ));
+                }
+                let whole = stream.len() - stream.len() % 3;
+                let mut s = stream;
+                s.truncate(whole);
+                s
+            }
+            Mode::TriangleStrip => strip_to_list(&stream),
+            // Mode::TriangleFan, the only remaining triangle mode.
+            _ => fan_to_list(&stream),
+        };
+        let mut positions = positions;
+        match &mut normals {
+            Some(normals) => {
+                let mut fixed = 0;
+                for v in normals.iter_mut() {
+                    if (v.length_squared() - 1.0).abs() > 2e-3 {
+                        *v = v.normalize_or(Vec3::Z);
+                        fixed += 1;
+                    }
+                }
+                if fixed > 0 {
+                    self.model.warnings.push(format!(
+                        "{at}: {fixed} normal(s) were not unit length and were normalised"
+                    ));
+                }
+            }
+            None => {
+                // glTF: without normals, flat normals; tangents are then ignored.
+                let (p, nr, t, i) = flat_normals(&positions, &tex_coords, &indices);
+                positions = p;
+                normals = Some(nr);
+                tex_coords = t;
+                indices = i;
+                tangents.clear();
+            }
+        }
+        let normals = normals.unwrap_or_default();
+        let material = p.material.map(|m| m.value());
+        let wants_tangents = material
+            .and_then(|m| self.model.materials.get(m))
+            .is_some_and(|m| m.normal_texture.is_some());
+        let tangent_source = if !tangents.is_empty() {
+            TangentSource::File
+        } else if wants_tangents && !tex_coords.is_empty() {
+            tangents = generate_tangents(&positions, &normals, &tex_coords, &indices);
+            TangentSource::Generated
+        } else {
+            if wants_tangents {
+                self.model.warnings.push(format!(
+                    "{at}: the material has a normal map but the primitive has no TEXCOORD_0; no tangents"
+                ));
+            }
+            TangentSource::None
+        };
+        if p.targets.as_ref().is_some_and(|t| !t.is_empty()) {
+            self.model
+                .warnings
+                .push(format!("{at}: morph targets ignored"));
+        }
+        Ok(Some(Primitive {
+            bounds: Aabb::from_points(positions.iter().copied()),
+            positions,
+            normals,
+            tex_coords,
+            tangents,
+            tangent_source,
+            indices,
+            material,
+        }))
+    }
+
+    fn image(
+        &self,
+        image: &json::Image,
+        document: &gltf::Document,
+        base: Option<&Path>,
+    ) -> Result<Image, String> {
+        let mime = image.mime_type.as_ref().map(|m| m.0.clone());
+        let source = match (&image.buffer_view, &image.uri) {
+            (Some(view), _) => ImageSource::BufferView {
+                view: view.value(),
+                mime_type: mime.ok_or("a bufferView image needs a mimeType")?,
+            },
+            (None, Some(uri)) if uri.starts_with("data:") => ImageSource::DataUri {
+                mime_type: uri["data:".len()..]
+                    .split([';', ','])
+                    .next()
+                    .filter(|m| !m.is_empty())
+                    .map(str::to_string),
+                len: uri.len(),
+            },
+            (None, Some(uri)) => ImageSource::Uri {
+                uri: uri.clone(),
+                mime_type: mime,
+            },
+            (None, None) => return Err("has neither uri nor bufferView".into()),
+        };
+        let pixels = match self.options.images {
+            ImageLoading::ReferencesOnly => None,
+            ImageLoading::Decode => Some(self.decode(&source, image, document, base)?),
+        };
+        Ok(Image {
+            name: image.name.clone(),
+            source,
+            pixels,
+        })
+    }
+
+    fn decode(
+        &self,
+        source: &ImageSource,
+        image: &json::Image,
+        document: &gltf::Document,
+        base: Option<&Path>,
+    ) -> Result<ImagePixels, String> {
+        let gltf_source = match source {
+            ImageSource::BufferView { view, mime_type } => {
+                // The crate's decoder slices the buffer with the view's range unchecked: the
+                // view must lie inside its buffer (step 2 checked every view; this keeps the
+                // guarantee next to the code that needs it).
+                self.data.view_bytes(*view)?;
+                let view = document
+                    .views()
+                    .nth(*view)
+                    .ok_or_else(|| format!("bufferViews[{view}] does not exist"))?;
+                gltf::image::Source::View { view, mime_type }
+            }
+            ImageSource::Uri { .. } | ImageSource::DataUri { .. } => {
+                let uri = image.uri.as_deref().unwrap_or_default();
+                if base.is_none() && matches!(source, ImageSource::Uri { .. }) {
+                    return Err(format!(
+                        "external file \"{uri}\" cannot be read without a base folder"
+                    ));
+                }
+                gltf::image::Source::Uri {
+                    uri,
+                    mime_type: image.mime_type.as_ref().map(|m| m.0.as_str()),
+                }
+            }
+        };
+        // Data URIs need no folder, but the crate wants one to accept a URI at all.
+        let base = base.unwrap_or(Path::new("."));
+        let data = gltf::image::Data::from_source(gltf_source, Some(base), self.data.buffers)
+            .map_err(|e| format!("cannot decode: {}", describe(e)))?;
+        use gltf::image::Format as F;
+        let format = match data.format {
+            F::R8 => PixelFormat::R8,
+            F::R8G8 => PixelFormat::R8G8,
+            F::R8G8B8 => PixelFormat::R8G8B8,
+            F::R8G8B8A8 => PixelFormat::R8G8B8A8,
+            F::R16 => PixelFormat::R16,
+            F::R16G16 => PixelFormat::R16G16,
+            F::R16G16B16 => PixelFormat::R16G16B16,
+            F::R16G16B16A16 => PixelFormat::R16G16B16A16,
+            F::R32G32B32FLOAT => PixelFormat::R32G32B32Float,
+            F::R32G32B32A32FLOAT => PixelFormat::R32G32B32A32Float,
+        };
+        Ok(ImagePixels {
+            width: data.width,
+            height: data.height,
+            format,
+            data: data.pixels,
+        })
+    }
+
+    /// A node's own transform, checked to be finite.
+    fn local_transform(node: &json::Node) -> Result<Mat4, String> {
+        let m = match node.matrix {
+            Some(m) => Mat4::from_cols_array(&m),
+            None => {
+                let t = Vec3::from_array(node.translation.unwrap_or([0.0; 3]));
+                let s = Vec3::from_array(node.scale.unwrap_or([1.0; 3]));
+                let q = node.rotation.as_ref().map_or([0.0, 0.0, 0.0, 1.0], |r| r.0);
+                let q = Quat::from_array(q);
+                let len = q.length();
+                if !(len > 0.0 && len.is_finite()) {
+                    return Err(format!("rotation {q} is not a unit quaternion"));
+                }
+                Mat4::from_scale_rotation_translation(s, q / len, t)
+            }
+        };
+        if m.is_finite() {
+            Ok(m)
+        } else {
+            Err("transform is not finite".into())
+        }
+    }
+
+    /// Step 5: the iterative walk of the node hierarchy.
+    fn walk_nodes(&mut self) -> Result<(), String> {
+        let nodes = &self.root.nodes;
+        let locals = nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                Self::local_transform(n).map_err(|e| format!("nodes[{i}]{}: {e}", quoted(&n.name)))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let scene = self
+            .root
+            .scene
+            .map(|s| s.value())
+            .or((!self.root.scenes.is_empty()).then_some(0));
+        let roots: Vec<usize> = match scene {
+            Some(s) => self
+                .root
+                .scenes
+                .get(s)
+                .ok_or_else(|| format!("scene {s} does not exist"))?
+                .nodes
+                .iter()
+                .map(|n| n.value())
+                .collect(),
+            None => {
+                let mut has_parent = vec![false; nodes.len()];
+                for child in nodes.iter().flat_map(|n| n.children.iter().flatten()) {
+                    if let Some(flag) = has_parent.get_mut(child.value()) {
+                        *flag = true;
+                    }
+                }
+                let roots: Vec<usize> = (0..nodes.len()).filter(|&i| !has_parent[i]).collect();
+                if !nodes.is_empty() {
+                    self.model.warnings.push(format!(
+                        "no scene: drawing the {} node(s) without a parent",
+                        roots.len()
+                    ));
+                }
+                roots
+            }
+        };
+        enum Step {
+            Enter(usize, Mat4),
+            Leave(usize),
+        }
+        let mut on_path = vec![false; nodes.len()];
+        let mut stack: Vec<Step> = roots
+            .iter()
+            .rev()
+            .map(|&n| Step::Enter(n, Mat4::IDENTITY))
+            .collect();
+        let mut visits = 0usize;
+        while let Some(step) = stack.pop() {
+            let (n, parent) = match step {
+                Step::Leave(n) => {
+                    on_path[n] = false;
+                    continue;
+                }
+                Step::Enter(n, parent) => (n, parent),
+            };
+            let node = nodes
+                .get(n)
+                .ok_or_else(|| format!("node {n} does not exist"))?;
+            let at = format!("nodes[{n}]{}", quoted(&node.name));
+            if on_path[n] {
+                return Err(format!(
+                    "{at} is its own ancestor (a cycle in the node hierarchy)"
+                ));
+            }
+            visits += 1;
+            if visits > MAX_NODE_VISITS {
+                return Err(format!(
+                    "the node hierarchy expands to more than {MAX_NODE_VISITS} node instances"
+                ));
+            }
+            let world = parent * locals[n];
+            if !world.is_finite() {
+                return Err(format!("{at}: world transform is not finite"));
+            }
+            if let Some(mesh) = node.mesh {
+                let mesh = mesh.value();
+                if mesh >= self.model.meshes.len() {
+                    return Err(format!("{at}: mesh {mesh} does not exist"));
+                }
+                self.model.instances.push(Instance {
+                    mesh,
+                    world_from_local: world,
+                    node: n,
+                    name: node.name.clone(),
+                });
+            }
+            if let Some(camera) = node.camera {
+                self.camera(camera.value(), n, node, world)
+                    .map_err(|e| format!("{at}: {e}"))?;
+            }
+            if let Some(light) = node
+                .extensions
+                .as_ref()
+                .and_then(|e| e.khr_lights_punctual.as_ref())
+            {
+                self.light(light.light.value(), n, node, world)
+                    .map_err(|e| format!("{at}: {e}"))?;
+            }
+            on_path[n] = true;
+            stack.push(Step::Leave(n));
+            for child in node.children.iter().flatten().rev() {
+                stack.push(Step::Enter(child.value(), world));
+            }
+        }
+        Ok(())
+    }
+
+    fn camera(
+        &mut self,
+        index: usize,
+        node: usize,
+        n: &json::Node,
+        world: Mat4,
+    ) -> Result<(), String> {
+        let c = self
+            .root
+            .cameras
+            .get(index)
+            .ok_or_else(|| format!("camera {index} does not exist"))?;
+        let at = format!("cameras[{index}]{}", quoted(&c.name));
+        let projection = match c.type_ {
+            Checked::Valid(json::camera::Type::Perspective) => {
+                let p = c.perspective.as_ref().ok_or_else(|| {
+                    format!("{at}: type perspective without a perspective object")
+                })?;
+                if !(p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
+                    return Err(format!("{at}: yfov {} is not in (0, π)", p.yfov));
+                }
+                if !(p.znear > 0.0 && p.znear.is_finite()) {
+                    return Err(format!("{at}: znear {} is not finite and > 0", p.znear));
+                }
+                if let Some(f) = p.zfar
+                    && !(f > p.znear && f.is_finite())
+                {
+                    return Err(format!(
+                        "{at}: zfar {f} is not finite and > znear {}",
+                        p.znear
+                    ));
+                }
+                Projection::Perspective {
+                    yfov: p.yfov,
+                    znear: p.znear,
+                    zfar: p.zfar,
+                    aspect_ratio: p.aspect_ratio.filter(|a| *a > 0.0 && a.is_finite()),
+                }
+            }
+            Checked::Valid(json::camera::Type::Orthographic) => {
+                let o = c.orthographic.as_ref().ok_or_else(|| {
+                    format!("{at}: type orthographic without an orthographic object")
+                })?;
+                let ok = o.xmag.is_finite()
+                    && o.xmag != 0.0
+                    && o.ymag.is_finite()
+                    && o.ymag != 0.0
+                    && o.znear >= 0.0
+                    && o.zfar > o.znear
+                    && o.zfar.is_finite();
+                if !ok {
+                    return Err(format!(
+                        "{at}: orthographic xmag {}, ymag {}, znear {}, zfar {} are not valid",
+                        o.xmag, o.ymag, o.znear, o.zfar
+                    ));
+                }
+                Projection::Orthographic {
+                    xmag: o.xmag,
+                    ymag: o.ymag,
+                    znear: o.znear,
+                    zfar: o.zfar,
+                }
+            }
+            Checked::Invalid => return Err(format!("{at}: invalid type")),
+        };
+        let position = world.transform_point3(Vec3::ZERO);
+        let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let up = world.transform_vector3(Vec3::Y);
+        let up = (up - forward * forward.dot(up)).normalize_or_zero();
+        if forward == Vec3::ZERO || up == Vec3::ZERO {
+            self.model.warnings.push(format!(
+                "{at}: its node's transform is degenerate (no view direction); left out"
+            ));
+            return Ok(());
+        }
+        let name = c
+            .name
+            .clone()
+            .or_else(|| n.name.clone())
+            .unwrap_or_else(|| format!("camera {index}"));
+        self.model.cameras.push(ModelCamera {
+            name,
+            node,
+            position,
+            forward,
+            up,
+            projection,
+        });
+        Ok(())
+    }
+
+    fn light(
+        &mut self,
+        index: usize,
+        node: usize,
+        n: &json::Node,
+        world: Mat4,
+    ) -> Result<(), String> {
+        use json::extensions::scene::khr_lights_punctual::Type;
+        let light = self
+            .root
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .and_then(|l| l.lights.get(index))
+            .ok_or_else(|| format!("KHR_lights_punctual light {index} does not exist"))?;
+        let at = format!("KHR_lights_punctual lights[{index}]{}", quoted(&light.name));
+        let color = finite_vec3(light.color, "color").map_err(|e| format!("{at}: {e}"))?;
+        if color.min_element() < 0.0 || !(light.intensity >= 0.0 && light.intensity.is_finite()) {
+            return Err(format!(
+                "{at}: color {color} and intensity {} must be finite and >= 0",
+                light.intensity
+            ));
+        }
+        let name = light.name.clone().or_else(|| n.name.clone());
+        let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let kind = match light.type_ {
+            Checked::Valid(Type::Directional) => {
+                if direction == Vec3::ZERO {
+                    self.model.warnings.push(format!(
+                        "{at}: its node's transform is degenerate (no direction); left out"
+                    ));
+                } else {
+                    self.model.directional_lights.push(DirectionalLight {
+                        name,
+                        direction,
+                        color,
+                        intensity: light.intensity,
+                    });
+                }
+                return Ok(());
+            }
+            Checked::Valid(Type::Point) => PunctualKind::Point,
+            Checked::Valid(Type::Spot) => {
+                let spot = light
+                    .spot
+                    .as_ref()
+                    .ok_or_else(|| format!("{at}: type spot without a spot object"))?;
+                let outer = spot.outer_cone_angle;
+                if !(outer > 0.0 && outer <= std::f32::consts::PI) {
+                    return Err(format!("{at}: outerConeAngle {outer} is not in (0, π]"));
+                }
+                PunctualKind::Spot {
+                    inner_cone_angle: spot.inner_cone_angle,
+                    outer_cone_angle: outer,
+                }
+            }
+            Checked::Invalid => return Err(format!("{at}: invalid type")),
+        };
+        let range = match light.range {
+            Some(r) if r > 0.0 && r.is_finite() => Some(r),
+            Some(r) => return Err(format!("{at}: range {r} is not finite and > 0")),
+            None => None,
+        };
+        let radius = range.unwrap_or_else(|| {
+            radius_from_intensity(
+                light.intensity * color.max_element(),
+                self.options.light_cutoff,
+            )
+        });
+        if !(radius > 0.0 && radius.is_finite()) {
+            self.model.warnings.push(format!(
+                "{at}: no range, and its intensity gives the radius {radius} (lights nothing, \
+                 or everything); left out"
+            ));
+            return Ok(());
+        }
+        let position = world.transform_point3(Vec3::ZERO);
+        let mut record = LightRecord::point(position, radius)
+            .with_color(color)
+            .with_intensity(light.intensity)
+            .with_source_index(self.model.lights.len() as u32);
+        if let PunctualKind::Spot {
+            outer_cone_angle, ..
+        } = kind
+        {
+            if direction == Vec3::ZERO {
+                self.model.warnings.push(format!(
+                    "{at}: its node's transform is degenerate (no direction); left out"
+                ));
+                return Ok(());
+            }
+            record = record.with_spot(direction, outer_cone_angle);
+        }
+        self.model.lights.push(record);
+        self.model.placed_lights.push(PlacedLight {
+            name,
+            node,
+            light: index,
+            kind,
+            range,
+        });
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle glTF with an embedded buffer; `extra` is spliced into the root object.
+    fn triangle_gltf(indices: [u16; 3], extra: &str) -> String {
+        let mut bytes: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+        bytes.extend([0, 0]);
+        let uri = format!("data:application/octet-stream;base64,{}", base64(&bytes));
+        format!(
+            r#"{{"asset": {{"version": "2.0"}},
+  "buffers": [{{"byteLength": {}, "uri": "{uri}"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]}},
+                {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}],
+  "meshes": [{{"name": "tri", "primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}]
+  {extra}}}"#,
+            bytes.len()
+        )
+    }
+
+    /// Standard base64 (test helper; the loader uses the `gltf` crate's decoder).
+    fn base64(bytes: &[u8]) -> String {
+        const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut out = String::new();
+        for chunk in bytes.chunks(3) {
+            let b = [
+                chunk[0],
+                *chunk.get(1).unwrap_or(&0),
+                *chunk.get(2).unwrap_or(&0),
+            ];
+            let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+            for k in 0..4 {
+                if k <= chunk.len() {
+                    out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+                } else {
+                    out.push('=');
+                }
+            }
+        }
+        out
+    }
+
+    fn load_str(text: &str) -> Result<Model> {
+        Model::from_gltf_slice(text.as_bytes(), "t.gltf", None, &LoadOptions::default())
+    }
+
+    #[test]
+    fn loads_a_triangle_with_instances_cameras_and_lights() {
+        let extra = r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+      {"type": "point", "intensity": 40, "color": [1, 0.5, 0.5]},
+      {"type": "spot", "intensity": 5, "range": 7, "spot": {"outerConeAngle": 0.5}},
+      {"type": "directional", "intensity": 3},
+      {"type": "point", "intensity": 0}]}},
+  "cameras": [{"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1}}],
+  "scenes": [{"nodes": [0, 3, 8]}],
+  "nodes": [{"translation": [10, 0, 0], "children": [1, 2]},
+            {"mesh": 0},
+            {"mesh": 0, "translation": [0, 5, 0], "name": "up"},
+            {"children": [4, 5, 6, 7]},
+            {"camera": 0, "name": "Eye", "translation": [0, 0, 5]},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [1, 2, 3]},
+            {"extensions": {"KHR_lights_punctual": {"light": 1}}, "rotation": [-0.7071068, 0, 0, 0.7071068]},
+            {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+            {"extensions": {"KHR_lights_punctual": {"light": 3}}, "name": "dark"}]"#;
+        let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+        assert_eq!(model.meshes.len(), 1);
+        assert_eq!(model.instances.len(), 2);
+        assert_eq!(model.triangle_count(), 2);
+        let b = model.bounds();
+        assert_eq!(b.min, Vec3::new(10.0, 0.0, 0.0));
+        assert_eq!(b.max, Vec3::new(11.0, 6.0, 0.0));
+        // No normals in the file: flat normals, facing +Z.
+        assert_eq!(model.meshes[0].primitives[0].normals, [Vec3::Z; 3]);
+        assert_eq!(model.cameras.len(), 1);
+        assert_eq!(model.cameras[0].name, "Eye");
+        assert_eq!(model.cameras[0].position, Vec3::new(0.0, 0.0, 5.0));
+        let camera = model.camera(0, 800, 600).unwrap();
+        assert_eq!((camera.width, camera.near), (800, 0.1));
+        assert_eq!(model.lights.len(), 2);
+        // Point light: radius from intensity 40 × max colour 1 at the default cut-off.
+        let expected = (40.0f32 / DEFAULT_LIGHT_CUTOFF).sqrt();
+        assert!((model.lights.radius[0] - expected).abs() < 1e-4);
+        assert_eq!(model.lights.get(0).position, Vec3::new(1.0, 2.0, 3.0));
+        // Spot light: range kept, axis = node's -Z rotated -90° about X = straight down.
+        let spot = model.lights.get(1);
+        assert_eq!(spot.radius, 7.0);
+        let cone = spot.spot.unwrap();
+        assert!(
+            (cone.direction - Vec3::NEG_Y).length() < 1e-5,
+            "{}",
+            cone.direction
+        );
+        assert_eq!(cone.angle, 0.5);
+        assert!(model.lights.problems().is_empty());
+        assert_eq!(model.placed_lights[1].range, Some(7.0));
+        assert_eq!(model.directional_lights.len(), 1);
+        assert_eq!(model.directional_lights[0].direction, Vec3::NEG_Z);
+        // A light of intensity 0 without range lights nothing: left out, with a warning.
+        assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+        assert!(
+            model.warnings[0].starts_with("KHR_lights_punctual lights[3]: no range"),
+            "{:?}",
+            model.warnings
+        );
+    }
+
+    #[test]
+    fn strips_and_fans_become_lists() {
+        assert_eq!(
+            strip_to_list(&[10, 11, 12, 13, 14]),
+            [10, 11, 12, 11, 13, 12, 12, 13, 14]
+        );
+        assert_eq!(fan_to_list(&[10, 11, 12, 13]), [11, 12, 10, 12, 13, 10]);
+        assert!(strip_to_list(&[1, 2]).is_empty() && fan_to_list(&[]).is_empty());
+        // Through the loader: one triangle either way, winding kept.
+        for mode in [5, 6] {
+            let text = triangle_gltf([0, 1, 2], "").replace(
+                r#""indices": 1}"#,
+                &format!(r#""indices": 1, "mode": {mode}}}"#),
+            );
+            let text = text.replace(
+                r#""meshes""#,
+                r#""nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "meshes""#,
+            );
+            let model = load_str(&text).unwrap();
+            let p = &model.meshes[0].primitives[0];
+            assert_eq!(p.triangle_count(), 1, "mode {mode}");
+            // Winding kept: flat normal still +Z.
+            assert_eq!(p.normals[0], Vec3::Z, "mode {mode}");
+        }
+    }
+
+    #[test]
+    fn broken_documents_are_errors_naming_the_problem() {
+        let cycle = triangle_gltf(
+            [0, 1, 2],
+            r#", "scenes": [{"nodes": [0]}], "nodes": [{"children": [1]}, {"children": [0]}]"#,
+        );
+        let out_of_range = triangle_gltf([0, 1, 7], r#", "nodes": [{"mesh": 0}]"#);
+        let cases = [
+            (cycle, "nodes[0] is its own ancestor"),
+            (
+                out_of_range,
+                "meshes[0] \"tri\" primitives[0]: index 7 (element 2 of the indices) is out of range",
+            ),
+            ("{".to_string(), "not valid glTF JSON"),
+            (
+                r#"{"asset": {"version": "2.0"}, "nodes": [{"mesh": 3}]}"#.to_string(),
+                "invalid glTF: nodes[0].mesh",
+            ),
+            (
+                r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4, "uri": "missing.bin"}]}"#
+                    .to_string(),
+                "buffers[0] \"missing.bin\": an external file cannot be read without a base folder",
+            ),
+            (
+                r#"{"asset": {"version": "2.0"}, "cameras": [{"type": "perspective"}], "nodes": [{"camera": 0}]}"#
+                    .to_string(),
+                "invalid glTF: cameras[0]: Missing data",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = load_str(&text).unwrap_err().to_string();
+            assert!(e.starts_with("t.gltf: "), "{e}");
+            assert!(e.contains(expected), "expected {expected:?} in {e}");
+        }
+        for glb in [
+            &b"glTF"[..],
+            b"glTF\x01\0\0\0\x14\0\0\0\0\0\0\0\0\0\0\0",
+            b"glTF\x02\0\0\0\xff\xff\0\0\0\0\0\0\0\0\0\0",
+        ] {
+            let e = Model::from_gltf_slice(glb, "x.glb", None, &LoadOptions::default())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("x.glb: ") && e.contains("GLB"), "{e}");
+        }
+    }
+
+    #[test]
+    fn missing_files_name_the_path() {
+        let e = Model::load("/no/such/model.gltf", &LoadOptions::default()).unwrap_err();
+        assert_eq!(e.to_string(), "cannot read glTF file /no/such/model.gltf");
+        let source = std::error::Error::source(&e).expect("the OS error is the source");
+        assert!(source.to_string().contains("No such file"), "{source}");
+    }
+}

@@ -1,0 +1,654 @@
+//! Light fields: seeded, reproducible sets of many lights placed by a rule — uniform in a box or
+//! in the view frustum, on a model's surfaces, in clumps, or on a sphere — with colours,
+//! intensities, radii and optionally spot cones.
+//!
+//! Why: every benchmark and stress configuration must be a file anyone can regenerate
+//! (`myriad scene --gltf M --field F --lights N --seed K`), and the distributions matter for
+//! assignment cost: lights spread through a box touch few clusters each, lights hugging
+//! surfaces crowd where the geometry is, clumps overload a few clusters, a sphere around the
+//! camera is mostly culled. The standard presets (`presets.rs`) are light fields too.
+//!
+//! ## Reproducibility
+//! A field, a count and a seed always give the same lights, bit for bit, on any machine: one
+//! PCG-64 stream, consumed light by light in a fixed order — position, then (only where a range
+//! is non-empty) radius, hue, intensity, then the spot draws. A constant (a range with
+//! `min == max`) draws nothing, so adding a constant parameter never shifts the stream.
+//!
+//! ## Radii
+//! Either uniform in a range, or derived from the light's brightness with
+//! [`radius_from_intensity`]: the distance at which inverse-square illuminance of the brightest
+//! channel, `intensity · max(color) / d²`, falls to a cut-off. The glTF loader uses the same rule
+//! for lights without a `range`.
+//!
+//! ## Surfaces
+//! [`SurfaceSampler`] holds every drawn triangle of a [`Model`] in world space with a cumulative
+//! area table: a triangle is picked with probability proportional to its area (binary search),
+//! a point uniformly inside it (square-root barycentrics), and the light is lifted off the
+//! surface along the triangle's geometric normal (the counter-clockwise front side) by an offset.
+//! Spot lights on surfaces point along that normal.
+
+use crate::lights::{LightRecord, Lights};
+use crate::model::{Aabb, Model};
+use glam::Vec3;
+use myriad_cluster_math::Camera;
+use rand::{Rng, SeedableRng};
+
+/// The range of a light whose brightest channel has intensity `intensity` (candela, or the
+/// field's unit) when illuminance below `cutoff` is treated as nothing: `sqrt(intensity /
+/// cutoff)`, from `intensity / d² = cutoff`. Zero for zero intensity.
+pub fn radius_from_intensity(intensity: f32, cutoff: f32) -> f32 {
+    (intensity / cutoff).sqrt()
+}
+
+/// Every drawn triangle of a model in world space, ready for area-weighted sampling.
+#[derive(Clone, Debug)]
+pub struct SurfaceSampler {
+    corners: Vec<[Vec3; 3]>,
+    /// Unit geometric normals (counter-clockwise front side).
+    normals: Vec<Vec3>,
+    /// `cumulative[t]` = total area of triangles `0..=t` (f64 so a million small triangles do
+    /// not lose the last ones to rounding).
+    cumulative: Vec<f64>,
+}
+
+impl SurfaceSampler {
+    /// The drawn triangles of `model` (every instance), leaving out degenerate ones.
+    pub fn new(model: &Model) -> Self {
+        Self::from_triangles(model.world_triangles().map(|(t, _)| t))
+    }
+
+    /// From triangles given directly (world space), leaving out degenerate ones.
+    pub fn from_triangles(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> Self {
+        let mut s = Self {
+            corners: Vec::new(),
+            normals: Vec::new(),
+            cumulative: Vec::new(),
+        };
+        let mut total = 0.0f64;
+        for t in triangles {
+            let cross = (t[1] - t[0]).cross(t[2] - t[0]);
+            let area = 0.5 * cross.as_dvec3().length();
+            if !(area > 0.0 && area.is_finite()) {
+                continue;
+            }
+            total += area;
+            s.corners.push(t);
+            s.normals.push(cross.normalize_or(Vec3::Y));
+            s.cumulative.push(total);
+        }
+        s
+    }
+
+    /// Number of (non-degenerate) triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.corners.len()
+    }
+
+    /// Total area in square metres.
+    pub fn total_area(&self) -> f64 {
+        self.cumulative.last().copied().unwrap_or(0.0)
+    }
+
+    /// A point uniform over the surface and the unit normal there, or `None` without triangles.
+    pub fn sample(&self, rng: &mut impl Rng) -> Option<(Vec3, Vec3)> {
+        let total = self.total_area();
+        if self.corners.is_empty() {
+            return None;
+        }
+        let u = rng.random_range(0.0..total);
+        let t = self
+            .cumulative
+            .partition_point(|&c| c <= u)
+            .min(self.corners.len() - 1);
+        let [a, b, c] = self.corners[t];
+        let r1 = rng.random_range(0.0f32..1.0).sqrt();
+        let r2 = rng.random_range(0.0f32..1.0);
+        let p = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+        Some((p, self.normals[t]))
+    }
+}
+
+/// Where a light field's lights go.
+#[derive(Clone, Debug)]
+pub enum Placement {
+    /// Uniform in a box.
+    Box(Aabb),
+    /// Uniform by volume in the camera's view frustum between its near and far planes.
+    Frustum(Camera),
+    /// On a model's surfaces (area-weighted), lifted by `offset` along the surface normal.
+    Surfaces {
+        /// The triangles.
+        surfaces: SurfaceSampler,
+        /// Distance from the surface along its normal (metres, >= 0).
+        offset: f32,
+    },
+    /// In `clumps` balls of radius `spread` whose centres are uniform in `within`; each light
+    /// picks a clump uniformly and a point uniform in its ball.
+    Clumps {
+        /// Where the clump centres lie.
+        within: Aabb,
+        /// Number of clumps (>= 1).
+        clumps: usize,
+        /// Radius of each clump (>= 0).
+        spread: f32,
+    },
+    /// Uniform on the surface of a sphere.
+    Sphere {
+        /// The sphere's centre.
+        center: Vec3,
+        /// The sphere's radius (>= 0).
+        radius: f32,
+    },
+}
+
+/// How a light field's radii are chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RadiusRule {
+    /// Uniform in `[min, max)` (`min == max`: constant).
+    Uniform {
+        /// Smallest radius (> 0).
+        min: f32,
+        /// Largest radius (>= min).
+        max: f32,
+    },
+    /// From the light's intensity and colour: [`radius_from_intensity`]`(intensity ·
+    /// max(color), cutoff)`.
+    FromIntensity {
+        /// Illuminance treated as nothing (> 0).
+        cutoff: f32,
+    },
+}
+
+/// How a light field's colours are chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ColorRule {
+    /// A saturated colour of uniformly random hue (one draw).
+    RandomHue,
+    /// The same colour for every light (no draw).
+    Fixed(Vec3),
+}
+
+/// Which lights are spots, and their cones.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotRule {
+    /// Probability that a light is a spot, in [0, 1].
+    pub fraction: f32,
+    /// Outer half angle range in degrees, within (0, 180].
+    pub angle_deg: [f32; 2],
+}
+
+/// A rule for generating lights; see the module docs.
+#[derive(Clone, Debug)]
+pub struct LightField {
+    /// Where the lights go.
+    pub placement: Placement,
+    /// Their radii.
+    pub radius: RadiusRule,
+    /// Their colours.
+    pub color: ColorRule,
+    /// Intensity range `[min, max)` (`min == max`: constant), min >= 0.
+    pub intensity: [f32; 2],
+    /// Spot lights, if any.
+    pub spots: Option<SpotRule>,
+}
+
+impl LightField {
+    /// A field with the `paper` preset's light parameters: radii uniform in 0.5–3 m, random
+    /// hues, intensity 1, no spots.
+    pub fn new(placement: Placement) -> Self {
+        Self {
+            placement,
+            radius: RadiusRule::Uniform { min: 0.5, max: 3.0 },
+            color: ColorRule::RandomHue,
+            intensity: [1.0, 1.0],
+            spots: None,
+        }
+    }
+
+    /// The same field with radius rule `radius`.
+    pub fn with_radius(self, radius: RadiusRule) -> Self {
+        Self { radius, ..self }
+    }
+
+    /// The same field with colour rule `color`.
+    pub fn with_color(self, color: ColorRule) -> Self {
+        Self { color, ..self }
+    }
+
+    /// The same field with intensities uniform in `[min, max)`.
+    pub fn with_intensity(self, min: f32, max: f32) -> Self {
+        Self {
+            intensity: [min, max],
+            ..self
+        }
+    }
+
+    /// The same field with spot lights.
+    pub fn with_spots(self, spots: SpotRule) -> Self {
+        Self {
+            spots: Some(spots),
+            ..self
+        }
+    }
+
+    /// The first thing that keeps this field from generating valid lights, or `None`. Command
+    /// lines check it to report bad options; [`LightField::generate`] asserts it.
+    pub fn problem(&self) -> Option<String> {
+        let range_ok = |[min, max]: [f32; 2]| min.is_finite() && max.is_finite() && min <= max;
+        match &self.placement {
+            Placement::Box(b) if !(b.min.is_finite() && b.max.is_finite() && !b.is_empty()) => {
+                return Some(format!("box {} .. {} is empty or not finite", b.min, b.max));
+            }
+            Placement::Surfaces { surfaces, offset } => {
+                if surfaces.triangle_count() == 0 {
+                    return Some("no surfaces to place lights on (no drawn triangles)".into());
+                }
+                if !(*offset >= 0.0 && offset.is_finite()) {
+                    return Some(format!(
+                        "surface offset must be finite and >= 0, got {offset}"
+                    ));
+                }
+            }
+            Placement::Clumps {
+                within,
+                clumps,
+                spread,
+            } if *clumps == 0 || !(*spread >= 0.0 && spread.is_finite()) || within.is_empty() => {
+                return Some(format!(
+                    "clumps need >= 1 clump, a finite spread >= 0 and a non-empty box, got \
+                     {clumps} clumps, spread {spread}"
+                ));
+            }
+            Placement::Sphere { center, radius }
+                if !(center.is_finite() && *radius >= 0.0 && radius.is_finite()) =>
+            {
+                return Some(format!(
+                    "sphere centre {center}, radius {radius} are not valid"
+                ));
+            }
+            _ => {}
+        }
+        match self.radius {
+            RadiusRule::Uniform { min, max } if !(min > 0.0 && range_ok([min, max])) => {
+                return Some(format!(
+                    "radii must satisfy 0 < min <= max, got {min}..{max}"
+                ));
+            }
+            RadiusRule::FromIntensity { cutoff } if !(cutoff > 0.0 && cutoff.is_finite()) => {
+                return Some(format!("cut-off must be finite and > 0, got {cutoff}"));
+            }
+            _ => {}
+        }
+        if let ColorRule::Fixed(c) = self.color
+            && !(c.is_finite() && c.min_element() >= 0.0)
+        {
+            return Some(format!("colour must be finite and >= 0, got {c}"));
+        }
+        let [i0, i1] = self.intensity;
+        if !(i0 >= 0.0 && range_ok(self.intensity)) {
+            return Some(format!(
+                "intensities must satisfy 0 <= min <= max, got {i0}..{i1}"
+            ));
+        }
+        if let RadiusRule::FromIntensity { .. } = self.radius {
+            let dark = match self.color {
+                ColorRule::Fixed(c) => c.max_element() == 0.0,
+                ColorRule::RandomHue => false,
+            };
+            if i0 == 0.0 || dark {
+                return Some(
+                    "radii from intensity need intensities and colours > 0 (a zero radius is \
+                     not a light)"
+                        .into(),
+                );
+            }
+        }
+        if let Some(s) = self.spots {
+            let [a0, a1] = s.angle_deg;
+            if !((0.0..=1.0).contains(&s.fraction) && a0 > 0.0 && a1 <= 180.0 && range_ok([a0, a1]))
+            {
+                return Some(format!(
+                    "spots need a fraction in [0, 1] and angles 0 < min <= max <= 180, got {} and \
+                     {a0}..{a1}",
+                    s.fraction
+                ));
+            }
+        }
+        None
+    }
+
+    /// `count` lights from `seed`, with `source_index` 0, 1, …. Panics if
+    /// [`LightField::problem`] finds one.
+    pub fn generate(&self, count: usize, seed: u64) -> Lights {
+        if let Some(problem) = self.problem() {
+            panic!("invalid light field: {problem}");
+        }
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let clump_centres: Vec<Vec3> = match &self.placement {
+            Placement::Clumps { within, clumps, .. } => (0..*clumps)
+                .map(|_| uniform_in_box(within, &mut rng))
+                .collect(),
+            _ => Vec::new(),
+        };
+        let mut lights = Lights::with_capacity(count);
+        for index in 0..count {
+            let (position, normal) = match &self.placement {
+                Placement::Box(b) => (uniform_in_box(b, &mut rng), None),
+                Placement::Frustum(camera) => (uniform_in_frustum(camera, &mut rng), None),
+                Placement::Surfaces { surfaces, offset } => {
+                    // problem() guarantees triangles.
+                    let (p, n) = surfaces.sample(&mut rng).unwrap_or((Vec3::ZERO, Vec3::Y));
+                    (p + n * *offset, Some(n))
+                }
+                Placement::Clumps { spread, .. } => {
+                    let c = clump_centres[rng.random_range(0..clump_centres.len())];
+                    (c + in_unit_ball(&mut rng) * *spread, None)
+                }
+                Placement::Sphere { center, radius } => {
+                    (*center + unit_vector(&mut rng) * *radius, None)
+                }
+            };
+            let uniform_radius = match self.radius {
+                RadiusRule::Uniform { min, max } => Some(draw(&mut rng, min, max)),
+                RadiusRule::FromIntensity { .. } => None,
+            };
+            let color = match self.color {
+                ColorRule::RandomHue => hue_to_rgb(rng.random_range(0.0f32..1.0)),
+                ColorRule::Fixed(c) => c,
+            };
+            let intensity = draw(&mut rng, self.intensity[0], self.intensity[1]);
+            let radius = match self.radius {
+                RadiusRule::FromIntensity { cutoff } => {
+                    radius_from_intensity(intensity * color.max_element(), cutoff)
+                }
+                RadiusRule::Uniform { .. } => uniform_radius.unwrap_or(1.0),
+            };
+            let mut light = LightRecord::point(position, radius)
+                .with_color(color)
+                .with_intensity(intensity)
+                .with_source_index(index as u32);
+            if let Some(s) = self.spots
+                && rng.random_range(0.0f32..1.0) < s.fraction
+            {
+                let angle = draw(&mut rng, s.angle_deg[0], s.angle_deg[1]).to_radians();
+                let direction = normal.unwrap_or_else(|| unit_vector(&mut rng));
+                light = light.with_spot(direction, angle.min(std::f32::consts::PI));
+            }
+            lights.push(light);
+        }
+        lights
+    }
+}
+
+/// Uniform in `[min, max)`; `min` itself, with no draw, when the range is empty.
+fn draw(rng: &mut impl Rng, min: f32, max: f32) -> f32 {
+    if min < max {
+        rng.random_range(min..max)
+    } else {
+        min
+    }
+}
+
+/// A point uniform in a box (three draws: x, y, z).
+pub(crate) fn uniform_in_box(b: &Aabb, rng: &mut impl Rng) -> Vec3 {
+    Vec3::new(
+        draw(rng, b.min.x, b.max.x),
+        draw(rng, b.min.y, b.max.y),
+        draw(rng, b.min.z, b.max.z),
+    )
+}
+
+/// A point uniform by volume in the frustum between near and far (depth density ∝ d²).
+pub(crate) fn uniform_in_frustum(camera: &Camera, rng: &mut impl Rng) -> Vec3 {
+    let (n3, f3) = (camera.near.powi(3), camera.far.powi(3));
+    let depth = (n3 + rng.random_range(0.0f32..1.0) * (f3 - n3)).cbrt();
+    let t = camera.tan_half_fov();
+    let view = Vec3::new(
+        rng.random_range(-1.0f32..1.0) * t.x * depth,
+        rng.random_range(-1.0f32..1.0) * t.y * depth,
+        -depth,
+    );
+    let (right, up, forward) = camera.basis_f64();
+    camera.position + right.as_vec3() * view.x + up.as_vec3() * view.y - forward.as_vec3() * view.z
+}
+
+/// A point uniform in the unit ball (rejection sampling).
+fn in_unit_ball(rng: &mut impl Rng) -> Vec3 {
+    loop {
+        let v = Vec3::new(
+            rng.random_range(-1.0f32..1.0),
+            rng.random_range(-1.0f32..1.0),
+            rng.random_range(-1.0f32..1.0),
+        );
+        if v.length_squared() <= 1.0 {
+            return v;
+        }
+    }
+}
+
+/// A uniformly distributed unit vector (rejection sampling in the ball, then normalised).
+pub(crate) fn unit_vector(rng: &mut impl Rng) -> Vec3 {
+    loop {
+        let v = Vec3::new(
+            rng.random_range(-1.0f32..1.0),
+            rng.random_range(-1.0f32..1.0),
+            rng.random_range(-1.0f32..1.0),
+        );
+        let len2 = v.length_squared();
+        if len2 > 1e-4 && len2 <= 1.0 {
+            return v / len2.sqrt();
+        }
+    }
+}
+
+/// A saturated colour of hue `h` in [0, 1).
+pub(crate) fn hue_to_rgb(h: f32) -> Vec3 {
+    let x = h * 6.0;
+    let channel = |offset: f32| (((x + offset) % 6.0 - 3.0).abs() - 1.0).clamp(0.0, 1.0);
+    Vec3::new(channel(0.0), channel(4.0), channel(2.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box() -> Aabb {
+        Aabb::new(Vec3::ZERO, Vec3::ONE)
+    }
+
+    #[test]
+    fn radius_from_intensity_inverts_inverse_square() {
+        let r = radius_from_intensity(50.0, 0.5);
+        assert!((50.0 / (r * r) - 0.5).abs() < 1e-5);
+        assert_eq!(radius_from_intensity(0.0, 0.1), 0.0);
+    }
+
+    #[test]
+    fn fields_are_reproducible_valid_and_where_they_should_be() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 800, 600, 0.5, 30.0);
+        let fields = [
+            LightField::new(Placement::Box(Aabb::new(
+                Vec3::splat(-2.0),
+                Vec3::splat(3.0),
+            ))),
+            LightField::new(Placement::Frustum(camera)),
+            LightField::new(Placement::Sphere {
+                center: Vec3::new(1.0, 2.0, 3.0),
+                radius: 4.0,
+            }),
+            LightField::new(Placement::Clumps {
+                within: unit_box(),
+                clumps: 3,
+                spread: 0.25,
+            }),
+        ];
+        for field in &fields {
+            let a = field.generate(400, 5);
+            assert_eq!(a, field.generate(400, 5));
+            assert_ne!(a, field.generate(400, 6));
+            assert_eq!(a.len(), 400);
+            assert!(a.problems().is_empty(), "{:?}", a.problems());
+            assert_eq!(a.source_index, (0..400).collect::<Vec<u32>>());
+            for l in a.iter() {
+                assert!((0.5..3.0).contains(&l.radius));
+                let p = l.position;
+                let ok = match &field.placement {
+                    Placement::Box(b) => b.contains(p),
+                    Placement::Frustum(c) => {
+                        let v = c.view_from_world_point(p);
+                        let t = c.tan_half_fov();
+                        let d = -v.z;
+                        (0.5 - 1e-4..=30.0 + 1e-3).contains(&d)
+                            && v.x.abs() <= t.x * d * 1.0001
+                            && v.y.abs() <= t.y * d * 1.0001
+                    }
+                    Placement::Sphere { center, radius } => {
+                        ((p - *center).length() - radius).abs() < 1e-4
+                    }
+                    Placement::Clumps { within, spread, .. } => {
+                        let grown = Aabb::new(within.min - *spread, within.max + *spread);
+                        grown.contains(p)
+                    }
+                    Placement::Surfaces { .. } => unreachable!(),
+                };
+                assert!(ok, "{p} outside {:?}", field.placement);
+            }
+        }
+    }
+
+    #[test]
+    fn clumps_concentrate_lights() {
+        let field = LightField::new(Placement::Clumps {
+            within: Aabb::new(Vec3::splat(-50.0), Vec3::splat(50.0)),
+            clumps: 4,
+            spread: 1.0,
+        });
+        let lights = field.generate(1000, 2);
+        // Every light is within 1 m of one of at most 4 centres: cluster them greedily.
+        let mut centres: Vec<Vec3> = Vec::new();
+        for l in lights.iter() {
+            if !centres.iter().any(|c| (*c - l.position).length() <= 2.0) {
+                centres.push(l.position);
+            }
+        }
+        assert!(centres.len() <= 4, "{} groups", centres.len());
+    }
+
+    #[test]
+    fn surfaces_are_sampled_by_area_and_offset_along_the_normal() {
+        // A 1×1 floor quad facing +Y and a 3×1 wall quad facing +Z: the wall has 3/4 of the area.
+        let floor = [
+            [
+                Vec3::ZERO,
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+            ],
+            [
+                Vec3::ZERO,
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 0.0),
+            ],
+        ];
+        let wall = [
+            [
+                Vec3::new(10.0, 0.0, 0.0),
+                Vec3::new(13.0, 0.0, 0.0),
+                Vec3::new(13.0, 1.0, 0.0),
+            ],
+            [
+                Vec3::new(10.0, 0.0, 0.0),
+                Vec3::new(13.0, 1.0, 0.0),
+                Vec3::new(10.0, 1.0, 0.0),
+            ],
+        ];
+        let degenerate = [[Vec3::ONE, Vec3::ONE, Vec3::ONE]];
+        let surfaces =
+            SurfaceSampler::from_triangles(floor.into_iter().chain(wall).chain(degenerate));
+        assert_eq!(surfaces.triangle_count(), 4);
+        assert!((surfaces.total_area() - 4.0).abs() < 1e-9);
+        let field = LightField::new(Placement::Surfaces {
+            surfaces,
+            offset: 0.1,
+        })
+        .with_spots(SpotRule {
+            fraction: 1.0,
+            angle_deg: [30.0, 30.0],
+        });
+        let lights = field.generate(4000, 3);
+        assert!(lights.problems().is_empty());
+        let mut on_wall = 0;
+        for l in lights.iter() {
+            let p = l.position;
+            let cone = l.spot.unwrap();
+            if p.x >= 10.0 {
+                on_wall += 1;
+                assert!(
+                    (p.z - 0.1).abs() < 1e-6 && (0.0..=1.0).contains(&p.y),
+                    "{p}"
+                );
+                assert!(p.x <= 13.0);
+                assert_eq!(cone.direction, Vec3::Z);
+            } else {
+                assert!(
+                    (p.y - 0.1).abs() < 1e-6 && (0.0..=1.0).contains(&p.x),
+                    "{p}"
+                );
+                assert_eq!(cone.direction, Vec3::Y);
+            }
+            assert!((cone.angle - 30f32.to_radians()).abs() < 1e-6);
+        }
+        // Expect 3000 on the wall; 4000 draws give a standard deviation of about 27.
+        assert!((2850..3150).contains(&on_wall), "{on_wall}");
+    }
+
+    #[test]
+    fn radii_from_intensity_and_fixed_colours() {
+        let field = LightField::new(Placement::Box(unit_box()))
+            .with_radius(RadiusRule::FromIntensity { cutoff: 0.25 })
+            .with_color(ColorRule::Fixed(Vec3::new(0.5, 1.0, 0.25)))
+            .with_intensity(1.0, 16.0);
+        let lights = field.generate(200, 1);
+        for l in lights.iter() {
+            assert!((1.0..16.0).contains(&l.intensity));
+            assert_eq!(l.color, Vec3::new(0.5, 1.0, 0.25));
+            assert!((l.radius - (l.intensity / 0.25).sqrt()).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn bad_fields_are_reported() {
+        let b = LightField::new(Placement::Box(unit_box()));
+        assert!(b.problem().is_none());
+        let cases = [
+            b.clone()
+                .with_radius(RadiusRule::Uniform { min: 0.0, max: 1.0 }),
+            b.clone()
+                .with_radius(RadiusRule::FromIntensity { cutoff: 0.0 }),
+            b.clone().with_intensity(2.0, 1.0),
+            b.clone()
+                .with_radius(RadiusRule::FromIntensity { cutoff: 1.0 })
+                .with_intensity(0.0, 1.0),
+            b.clone().with_spots(SpotRule {
+                fraction: 0.5,
+                angle_deg: [0.0, 10.0],
+            }),
+            LightField::new(Placement::Surfaces {
+                surfaces: SurfaceSampler::from_triangles([]),
+                offset: 0.0,
+            }),
+            LightField::new(Placement::Box(Aabb::EMPTY)),
+        ];
+        for field in cases {
+            assert!(field.problem().is_some(), "{field:?}");
+        }
+    }
+
+    #[test]
+    fn hues_are_saturated() {
+        for k in 0..60 {
+            let c = hue_to_rgb(k as f32 / 60.0);
+            assert_eq!(c.max_element(), 1.0, "{c}");
+            assert_eq!(c.min_element(), 0.0, "{c}");
+        }
+    }
+}

@@ -1,0 +1,447 @@
+//! Animation systems: lights orbiting a vertical axis, and lights wandering inside a box.
+//!
+//! Both move positions in place and are deterministic per light, so they parallelise without
+//! changing results. Orbits are a closed-form function of absolute time (no drift, any frame
+//! can be computed directly); wandering is a random walk integrated frame by frame, its random
+//! steps drawn from a hash of (seed, frame, light index) instead of a shared generator.
+
+use super::{BLOCK, PARALLEL_MIN, fast_sin_cos};
+use crate::model::Aabb;
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+
+/// Orbit components, one row per light: light `i` circles the vertical axis through
+/// `(center_x[i], ·, center_z[i])` at distance `orbit_radius[i]`, at `angular_speed[i]` rad/s
+/// (negative: clockwise seen from above), at angle `phase[i]` at time 0. Its height is not
+/// touched.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Orbits {
+    /// Axis x.
+    pub center_x: Vec<f32>,
+    /// Axis z.
+    pub center_z: Vec<f32>,
+    /// Distance from the axis.
+    pub orbit_radius: Vec<f32>,
+    /// Radians per second.
+    pub angular_speed: Vec<f32>,
+    /// Angle at time 0 (radians, measured from +X towards +Z).
+    pub phase: Vec<f32>,
+}
+
+impl Orbits {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.center_x.len()
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.center_x.is_empty()
+    }
+
+    /// Orbits about the vertical axis through `center` that pass through each light's current
+    /// position (so time 0 leaves the lights where they are), with speeds uniform in
+    /// `[min, max)` rad/s and a random direction, drawn from `seed`.
+    pub fn around(center: Vec3, x: &[f32], z: &[f32], speed: [f32; 2], seed: u64) -> Self {
+        assert_eq!(x.len(), z.len());
+        assert!(speed[0] <= speed[1]);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let mut o = Self::default();
+        for (&x, &z) in x.iter().zip(z) {
+            let (dx, dz) = (x - center.x, z - center.z);
+            let s = if speed[0] < speed[1] {
+                rng.random_range(speed[0]..speed[1])
+            } else {
+                speed[0]
+            };
+            let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            o.center_x.push(center.x);
+            o.center_z.push(center.z);
+            o.orbit_radius.push((dx * dx + dz * dz).sqrt());
+            o.angular_speed.push(sign * s);
+            o.phase.push(dz.atan2(dx));
+        }
+        o
+    }
+}
+
+/// One light's orbit position `(x, z)` at `time`: the kernel of [`animate_orbits`].
+#[inline]
+fn orbit_point(cx: f32, cz: f32, radius: f32, speed: f32, phase: f32, time: f32) -> (f32, f32) {
+    let (s, c) = fast_sin_cos(phase + speed * time);
+    (cx + radius * c, cz + radius * s)
+}
+
+/// Sets each light's `x` and `z` to its orbit position at `time` (seconds). f32 angles: keep
+/// `|angular_speed · time|` below about 10⁴ (wrap `time` for long runs) to stay within a
+/// millimetre on a 10 m orbit.
+pub fn animate_orbits(orbits: &Orbits, time: f32, x: &mut [f32], z: &mut [f32]) {
+    let n = orbits.len();
+    assert!(x.len() == n && z.len() == n, "one orbit per light");
+    assert!(
+        orbits.center_z.len() == n
+            && orbits.orbit_radius.len() == n
+            && orbits.angular_speed.len() == n
+            && orbits.phase.len() == n
+    );
+    let block = |start: usize, x: &mut [f32], z: &mut [f32]| {
+        let end = start + x.len();
+        let (cx, cz) = (&orbits.center_x[start..end], &orbits.center_z[start..end]);
+        let (radius, speed) = (
+            &orbits.orbit_radius[start..end],
+            &orbits.angular_speed[start..end],
+        );
+        let (phase, z) = (&orbits.phase[start..end], &mut z[..x.len()]);
+        // Re-sliced columns: the loop has no bounds checks and vectorises.
+        for k in 0..x.len() {
+            (x[k], z[k]) = orbit_point(cx[k], cz[k], radius[k], speed[k], phase[k], time);
+        }
+    };
+    if n < PARALLEL_MIN {
+        block(0, x, z);
+    } else {
+        (x.par_chunks_mut(BLOCK), z.par_chunks_mut(BLOCK))
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(b, (x, z))| block(b * BLOCK, x, z));
+    }
+}
+
+/// Wander components: a velocity per light, and the box all lights stay in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wander {
+    /// Velocity x (m/s).
+    pub vx: Vec<f32>,
+    /// Velocity y (m/s).
+    pub vy: Vec<f32>,
+    /// Velocity z (m/s).
+    pub vz: Vec<f32>,
+    /// The box lights bounce off (they must start inside it).
+    pub bounds: Aabb,
+    /// Speed limit (m/s, > 0).
+    pub max_speed: f32,
+    /// Largest random acceleration per axis (m/s²).
+    pub acceleration: f32,
+    /// Seed of the random steps.
+    pub seed: u64,
+}
+
+impl Wander {
+    /// `n` lights with random initial velocities of at most `max_speed`, drawn from `seed`.
+    pub fn new(n: usize, bounds: Aabb, max_speed: f32, acceleration: f32, seed: u64) -> Self {
+        assert!(max_speed > 0.0 && acceleration >= 0.0 && !bounds.is_empty());
+        let mut w = Self {
+            vx: Vec::with_capacity(n),
+            vy: Vec::with_capacity(n),
+            vz: Vec::with_capacity(n),
+            bounds,
+            max_speed,
+            acceleration,
+            seed,
+        };
+        for i in 0..n {
+            let v = random_unit_cube(frame_key(seed, u64::MAX), i) * (max_speed / 3f32.sqrt());
+            w.vx.push(v.x);
+            w.vy.push(v.y);
+            w.vz.push(v.z);
+        }
+        w
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.vx.len()
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.vx.is_empty()
+    }
+}
+
+/// A well-mixed 32-bit hash (two multiply–xorshift rounds; Chris Wellons' "lowbias32"
+/// constants). 32-bit so the per-light loop vectorises.
+#[inline]
+fn hash32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
+/// The per-frame key of the random steps: a hash of the seed and the frame number.
+fn frame_key(seed: u64, frame: u64) -> u32 {
+    let fold = |v: u64| (v as u32) ^ hash32((v >> 32) as u32);
+    hash32(fold(seed) ^ hash32(fold(frame)))
+}
+
+/// A point in `[−1, 1)³` determined by the frame key and the light: one hash per axis, its top
+/// 24 bits as a fraction.
+#[inline]
+fn random_unit_cube(key: u32, light: usize) -> Vec3 {
+    let base = (light as u32).wrapping_mul(3);
+    let unit = |k: u32| {
+        let h = hash32(key ^ base.wrapping_add(k));
+        (h >> 8) as i32 as f32 * (1.0 / (1u32 << 23) as f32) - 1.0
+    };
+    Vec3::new(unit(0), unit(1), unit(2))
+}
+
+/// The fixed parameters of a [`Wander`], apart from its velocity columns.
+#[derive(Clone, Copy)]
+struct WanderParams {
+    bounds: Aabb,
+    max_speed: f32,
+    acceleration: f32,
+    seed: u64,
+}
+
+impl Wander {
+    fn params(&self) -> WanderParams {
+        WanderParams {
+            bounds: self.bounds,
+            max_speed: self.max_speed,
+            acceleration: self.acceleration,
+            seed: self.seed,
+        }
+    }
+}
+
+/// One light's step: the kernel of [`animate_wander`], branch-free (selects only) so the loop
+/// vectorises. `key` is [`frame_key`] of the wander's seed and the frame. Returns the new
+/// position and velocity.
+#[inline]
+fn wander_step(w: WanderParams, key: u32, dt: f32, i: usize, p: Vec3, v: Vec3) -> (Vec3, Vec3) {
+    let v = v + random_unit_cube(key, i) * (w.acceleration * dt);
+    let speed = v.length();
+    let v = v * if speed > w.max_speed {
+        w.max_speed / speed
+    } else {
+        1.0
+    };
+    let p = p + v * dt;
+    let (lo, hi) = (w.bounds.min, w.bounds.max);
+    // Reflect off the walls, then clamp (a step longer than the box stays inside).
+    let reflect = |p: f32, v: f32, lo: f32, hi: f32| {
+        let (below, above) = (p < lo, p > hi);
+        let p = if below {
+            2.0 * lo - p
+        } else if above {
+            2.0 * hi - p
+        } else {
+            p
+        };
+        let v = if below {
+            v.abs()
+        } else if above {
+            -v.abs()
+        } else {
+            v
+        };
+        (p.max(lo).min(hi), v)
+    };
+    let (px, vx) = reflect(p.x, v.x, lo.x, hi.x);
+    let (py, vy) = reflect(p.y, v.y, lo.y, hi.y);
+    let (pz, vz) = reflect(p.z, v.z, lo.z, hi.z);
+    (Vec3::new(px, py, pz), Vec3::new(vx, vy, vz))
+}
+
+/// Position and velocity columns of one block of lights.
+type WanderBlock<'a> = (
+    &'a mut [f32],
+    &'a mut [f32],
+    &'a mut [f32],
+    &'a mut [f32],
+    &'a mut [f32],
+    &'a mut [f32],
+);
+
+/// Advances every light by one frame of `dt` seconds: a random acceleration (from the hash of
+/// seed, `frame` and index), the speed limit, the move, and a bounce off the box. Frames must
+/// be numbered by the caller (0, 1, 2, …) for the walk to be reproducible.
+pub fn animate_wander(
+    wander: &mut Wander,
+    frame: u64,
+    dt: f32,
+    x: &mut [f32],
+    y: &mut [f32],
+    z: &mut [f32],
+) {
+    let n = wander.len();
+    assert!(
+        x.len() == n && y.len() == n && z.len() == n,
+        "one wanderer per light"
+    );
+    assert!(wander.vy.len() == n && wander.vz.len() == n);
+    let params = wander.params();
+    let key = frame_key(params.seed, frame);
+    let block = |start: usize, (x, y, z, vx, vy, vz): WanderBlock<'_>| {
+        let n = x.len();
+        let (y, z, vx, vy, vz) = (
+            &mut y[..n],
+            &mut z[..n],
+            &mut vx[..n],
+            &mut vy[..n],
+            &mut vz[..n],
+        );
+        for k in 0..n {
+            let (p, v) = wander_step(
+                params,
+                key,
+                dt,
+                start + k,
+                Vec3::new(x[k], y[k], z[k]),
+                Vec3::new(vx[k], vy[k], vz[k]),
+            );
+            (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+            (vx[k], vy[k], vz[k]) = (v.x, v.y, v.z);
+        }
+    };
+    let (vx, vy, vz) = (&mut wander.vx, &mut wander.vy, &mut wander.vz);
+    if n < PARALLEL_MIN {
+        block(0, (x, y, z, vx, vy, vz));
+    } else {
+        (
+            x.par_chunks_mut(BLOCK),
+            y.par_chunks_mut(BLOCK),
+            z.par_chunks_mut(BLOCK),
+            vx.par_chunks_mut(BLOCK),
+            vy.par_chunks_mut(BLOCK),
+            vz.par_chunks_mut(BLOCK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(b, cols)| block(b * BLOCK, cols));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orbits_start_in_place_and_keep_their_radius() {
+        let center = Vec3::new(1.0, 0.0, -2.0);
+        let x0: Vec<f32> = (0..20_000).map(|i| (i % 97) as f32 * 0.1 - 3.0).collect();
+        let z0: Vec<f32> = (0..20_000).map(|i| (i % 89) as f32 * 0.1 - 4.0).collect();
+        let orbits = Orbits::around(center, &x0, &z0, [0.5, 1.5], 3);
+        let (mut x, mut z) = (x0.clone(), z0.clone());
+        animate_orbits(&orbits, 0.0, &mut x, &mut z);
+        for i in 0..x.len() {
+            assert!((x[i] - x0[i]).abs() < 1e-5 && (z[i] - z0[i]).abs() < 1e-5);
+        }
+        animate_orbits(&orbits, 2.5, &mut x, &mut z);
+        let mut moved = 0;
+        for i in 0..x.len() {
+            let r = ((x[i] - center.x).powi(2) + (z[i] - center.z).powi(2)).sqrt();
+            assert!((r - orbits.orbit_radius[i]).abs() < 1e-4);
+            // Parallel driver = serial kernel.
+            let o = &orbits;
+            let serial = orbit_point(
+                o.center_x[i],
+                o.center_z[i],
+                o.orbit_radius[i],
+                o.angular_speed[i],
+                o.phase[i],
+                2.5,
+            );
+            assert_eq!((x[i], z[i]), serial);
+            moved += ((x[i] - x0[i]).abs() > 1e-3) as usize;
+        }
+        assert!(moved > 19_000, "{moved}");
+        assert!(orbits.angular_speed.iter().any(|&s| s < 0.0));
+        assert!(
+            orbits
+                .angular_speed
+                .iter()
+                .all(|&s| (0.5..1.5).contains(&s.abs()))
+        );
+    }
+
+    #[test]
+    fn orbit_quarter_turn() {
+        let orbits = Orbits {
+            center_x: vec![0.0],
+            center_z: vec![0.0],
+            orbit_radius: vec![2.0],
+            angular_speed: vec![std::f32::consts::FRAC_PI_2],
+            phase: vec![0.0],
+        };
+        let (mut x, mut z) = ([2.0], [0.0]);
+        animate_orbits(&orbits, 1.0, &mut x, &mut z);
+        assert!(x[0].abs() < 1e-6 && (z[0] - 2.0).abs() < 1e-6);
+    }
+
+    fn wander_frames(n: usize, threads: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>, Wander) {
+        let bounds = Aabb::new(Vec3::new(-5.0, 0.0, -3.0), Vec3::new(5.0, 4.0, 3.0));
+        let mut w = Wander::new(n, bounds, 2.0, 8.0, 11);
+        let mut x: Vec<f32> = (0..n).map(|i| (i % 10) as f32 - 4.5).collect();
+        let mut y = vec![2.0; n];
+        let mut z = vec![0.0; n];
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            for frame in 0..50 {
+                animate_wander(&mut w, frame, 0.1, &mut x, &mut y, &mut z);
+            }
+        });
+        (x, y, z, w)
+    }
+
+    #[test]
+    fn wanderers_stay_in_the_box_respect_the_speed_limit_and_are_reproducible() {
+        let n = 3 * BLOCK + 17;
+        let (x, y, z, w) = wander_frames(n, 1);
+        let (x2, y2, z2, w2) = wander_frames(n, 3);
+        assert_eq!(
+            (&x, &y, &z, &w),
+            (&x2, &y2, &z2, &w2),
+            "thread count changed the walk"
+        );
+        let mut moved = 0;
+        for i in 0..n {
+            let p = Vec3::new(x[i], y[i], z[i]);
+            assert!(w.bounds.contains(p), "{p}");
+            let v = Vec3::new(w.vx[i], w.vy[i], w.vz[i]);
+            assert!(v.length() <= 2.0 * (1.0 + 1e-6), "{v}");
+            moved += (p - Vec3::new((i % 10) as f32 - 4.5, 2.0, 0.0))
+                .length()
+                .min(1.0) as usize;
+        }
+        assert!(moved > n / 2, "{moved} of {n} moved a metre");
+        // The serial kernel reproduces one more parallel step.
+        let (mut x3, mut y3, mut z3, mut w3) = (x.clone(), y.clone(), z.clone(), w.clone());
+        animate_wander(&mut w3, 50, 0.1, &mut x3, &mut y3, &mut z3);
+        for i in [0, BLOCK, n - 1] {
+            let (p, v) = wander_step(
+                w.params(),
+                frame_key(w.seed, 50),
+                0.1,
+                i,
+                Vec3::new(x[i], y[i], z[i]),
+                Vec3::new(w.vx[i], w.vy[i], w.vz[i]),
+            );
+            assert_eq!(p, Vec3::new(x3[i], y3[i], z3[i]));
+            assert_eq!(v, Vec3::new(w3.vx[i], w3.vy[i], w3.vz[i]));
+        }
+    }
+
+    #[test]
+    fn random_steps_are_spread_over_the_cube() {
+        let mut sum = Vec3::ZERO;
+        let (mut lo, mut hi) = (Vec3::splat(1.0), Vec3::splat(-1.0));
+        for i in 0..10_000 {
+            let r = random_unit_cube(frame_key(5, 7), i);
+            assert!(r.cmpge(Vec3::splat(-1.0)).all() && r.cmplt(Vec3::splat(1.0)).all());
+            sum += r;
+            lo = lo.min(r);
+            hi = hi.max(r);
+        }
+        assert!((sum / 10_000.0).abs().max_element() < 0.03, "{sum}");
+        assert!(lo.max_element() < -0.99 && hi.min_element() > 0.99);
+    }
+}

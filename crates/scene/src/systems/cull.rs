@@ -1,0 +1,382 @@
+//! Frustum culling of lights: which lights' volumes can touch the view frustum.
+//!
+//! Why before assignment: a light entirely outside the frustum lights no visible pixel, and the
+//! cheapest work is the work not done (DESIGN.md, "skip what the scene does not need"). The
+//! test is **conservative**: it may keep a light that misses the frustum (near the frustum's
+//! edges and corners, where six plane tests cannot see that a sphere passes outside), never
+//! drop one that touches it.
+//!
+//! ## The test, per light
+//! 1. The centre goes to view space camera-relative: `R · (p − eye)`.
+//! 2. Six planes with outward unit normals `n` and offsets `d` (a point is outside when
+//!    `n·x > d`): near `(0, 0, 1)`, `−near`; far `(0, 0, −1)`, `far`; the four sides through the
+//!    eye, `(±1, 0, tx)/√(1+tx²)` and `(0, ±1, ty)/√(1+ty²)`, offset 0, where `tx`, `ty` are the
+//!    tangents of the half fields of view.
+//!
+//! Per block of lights, the sphere test runs first over every light in a branch-free loop the
+//! compiler vectorises; only spots that pass it get the (scalar) cone test, which can only
+//! tighten the answer since the cone lies inside its sphere.
+//! 3. A light is culled when its volume lies entirely outside one plane: the smallest value of
+//!    `n·x` over the volume exceeds `d`. For a sphere that is `n·c − r > d`. For a spot light —
+//!    the sector of points within range `r` of the apex `a` and within angle `θ` of the axis
+//!    `u` — it is `n·a − r·m > d` with `m = max(0, cos(max(0, α − θ)))`, where `α` is the
+//!    angle between `−n` and `u`: the farthest the sector reaches against `n` is along the cone
+//!    direction closest to `−n`, and not behind the apex. This is exact per plane, so a spot
+//!    pointing away from the frustum is culled even when its range sphere reaches in. A point
+//!    light in a mixed set (angle π) gets `m = 1`, the sphere test.
+
+use super::{BLOCK, LightSlices, PARALLEL_MIN, fast_sin_cos};
+use glam::{Mat3, Vec3};
+use myriad_cluster_math::Camera;
+use rayon::prelude::*;
+
+/// The output of [`cull_lights`], reused frame to frame.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Visibility {
+    /// `mask[i]`: whether light `i` may touch the frustum.
+    pub mask: Vec<bool>,
+    /// Indices of the visible lights, ascending.
+    pub indices: Vec<u32>,
+    /// Visible lights per block (scratch of the compaction).
+    counts: Vec<u32>,
+}
+
+impl Visibility {
+    /// Empty outputs.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// The camera's planes in view space.
+#[derive(Clone, Copy, Debug)]
+struct Frustum {
+    eye: Vec3,
+    view_from_world: Mat3,
+    near: f32,
+    far: f32,
+    /// Tangents of the half fields of view.
+    tan_x: f32,
+    tan_y: f32,
+    /// `√(1 + tan²)`: the side planes' normal lengths before normalising.
+    len_x: f32,
+    len_y: f32,
+    /// Outward unit normals of the right, left, top and bottom planes (all through the eye).
+    sides: [Vec3; 4],
+}
+
+impl Frustum {
+    fn new(camera: &Camera) -> Self {
+        let t = camera.tan_half_fov();
+        let (len_x, len_y) = ((1.0 + t.x * t.x).sqrt(), (1.0 + t.y * t.y).sqrt());
+        Self {
+            eye: camera.position,
+            view_from_world: camera.view_rotation(),
+            near: camera.near,
+            far: camera.far,
+            tan_x: t.x,
+            tan_y: t.y,
+            len_x,
+            len_y,
+            sides: [
+                Vec3::new(1.0, 0.0, t.x) / len_x,
+                Vec3::new(-1.0, 0.0, t.x) / len_x,
+                Vec3::new(0.0, 1.0, t.y) / len_y,
+                Vec3::new(0.0, -1.0, t.y) / len_y,
+            ],
+        }
+    }
+
+    /// Step 3 for the light's range sphere, centre `p` (world), radius `r`: selects and
+    /// comparisons only, so the block loop vectorises. The side planes are tested without
+    /// normalising: `|x| − tan·depth ≤ r·√(1 + tan²)`.
+    #[inline]
+    fn sphere_visible(&self, p: Vec3, r: f32) -> bool {
+        let c = self.view_from_world * (p - self.eye);
+        let depth = -c.z;
+        (depth + r >= self.near)
+            & (depth - r <= self.far)
+            & (c.x.abs() - self.tan_x * depth <= r * self.len_x)
+            & (c.y.abs() - self.tan_y * depth <= r * self.len_y)
+    }
+
+    /// Step 3 for a spot cone with apex `p`, range `r`, unit axis `axis` and half angle
+    /// `angle`: the sector's exact reach against each plane. Branch-free (selects only), so a
+    /// loop over a block vectorises. Meaningful for `angle < π`; callers treat `angle >= π` as
+    /// a point light.
+    #[inline]
+    fn cone_visible(&self, p: Vec3, r: f32, axis: Vec3, angle: f32) -> bool {
+        let c = self.view_from_world * (p - self.eye);
+        let axis = self.view_from_world * axis;
+        let (sin_t, cos_t) = fast_sin_cos(angle);
+        // Whether the sector lies entirely outside the plane with outward unit normal n and
+        // offset d; its reach against n is r, or r·cos(α − θ) (≥ 0) when α > θ.
+        let outside = |n: Vec3, d: f32| {
+            let cos_a = -n.dot(axis);
+            let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+            let tilted = r * (cos_a * cos_t + sin_a * sin_t).max(0.0);
+            let reach = if cos_a >= cos_t { r } else { tilted };
+            n.dot(c) - reach > d
+        };
+        let [right, left, top, bottom] = self.sides;
+        !(outside(Vec3::Z, -self.near)
+            | outside(Vec3::NEG_Z, self.far)
+            | outside(right, 0.0)
+            | outside(left, 0.0)
+            | outside(top, 0.0)
+            | outside(bottom, 0.0))
+    }
+
+    /// The per-light kernel, the slow twin of the block passes in [`cull_lights`] (the tests
+    /// hold them equal): whether light `i` may touch the frustum. Its sphere must pass, and a
+    /// spot's cone too (the cone lies inside the sphere, so this only tightens).
+    #[cfg(test)]
+    fn visible(&self, lights: &LightSlices<'_>, i: usize) -> bool {
+        let p = Vec3::new(lights.x[i], lights.y[i], lights.z[i]);
+        let r = lights.radius[i];
+        self.sphere_visible(p, r)
+            && lights.spot.as_ref().is_none_or(|s| {
+                s.angle[i] >= std::f32::consts::PI
+                    || self.cone_visible(
+                        p,
+                        r,
+                        Vec3::new(s.dir_x[i], s.dir_y[i], s.dir_z[i]),
+                        s.angle[i],
+                    )
+            })
+    }
+}
+
+/// Culls `lights` against `camera`'s frustum into `out`: `out.mask[i]` for every light and
+/// `out.indices`, the visible ones ascending. Returns how many are visible. Parallel in blocks
+/// above [`super::PARALLEL_MIN`] lights; the result does not depend on the thread count.
+pub fn cull_lights(camera: &Camera, lights: LightSlices<'_>, out: &mut Visibility) -> usize {
+    lights.assert_consistent();
+    let n = lights.len();
+    let frustum = Frustum::new(camera);
+    let blocks = n.div_ceil(BLOCK);
+    out.mask.resize(n, false);
+    out.indices.resize(n, 0);
+    out.counts.resize(blocks, 0);
+    // One block, in three passes: the sphere test over every light (vectorised), the cone
+    // test for the spots that passed it, then the block's visible indices written at the start
+    // of its own region of `indices`, and counted.
+    let block = |b: usize, mask: &mut [bool], indices: &mut [u32], count: &mut u32| {
+        let start = b * BLOCK;
+        let end = start + mask.len();
+        let (x, y, z, r) = (
+            &lights.x[start..end],
+            &lights.y[start..end],
+            &lights.z[start..end],
+            &lights.radius[start..end],
+        );
+        for j in 0..mask.len() {
+            mask[j] = frustum.sphere_visible(Vec3::new(x[j], y[j], z[j]), r[j]);
+        }
+        if let Some(s) = &lights.spot {
+            let (dx, dy, dz, angle) = (
+                &s.dir_x[start..end],
+                &s.dir_y[start..end],
+                &s.dir_z[start..end],
+                &s.angle[start..end],
+            );
+            // Over every light of the block (vectorised), not just the spots: cheaper than a
+            // branch per light when spots are mixed in.
+            for j in 0..mask.len() {
+                let axis = Vec3::new(dx[j], dy[j], dz[j]);
+                let p = Vec3::new(x[j], y[j], z[j]);
+                let cone = frustum.cone_visible(p, r[j], axis, angle[j]);
+                mask[j] &= (angle[j] >= std::f32::consts::PI) | cone;
+            }
+        }
+        let mut k = 0;
+        for (j, &m) in mask.iter().enumerate() {
+            indices[k] = (start + j) as u32;
+            k += m as usize;
+        }
+        *count = k as u32;
+    };
+    if n < PARALLEL_MIN {
+        for (b, ((mask, indices), count)) in out
+            .mask
+            .chunks_mut(BLOCK)
+            .zip(out.indices.chunks_mut(BLOCK))
+            .zip(out.counts.iter_mut())
+            .enumerate()
+        {
+            block(b, mask, indices, count);
+        }
+    } else {
+        (
+            out.mask.par_chunks_mut(BLOCK),
+            out.indices.par_chunks_mut(BLOCK),
+            out.counts.par_iter_mut(),
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(b, (mask, indices, count))| block(b, mask, indices, count));
+    }
+    // Compaction: move each block's run down to the write cursor (never past its own start).
+    let mut cursor = 0;
+    for (b, &count) in out.counts.iter().enumerate() {
+        let start = b * BLOCK;
+        out.indices
+            .copy_within(start..start + count as usize, cursor);
+        cursor += count as usize;
+    }
+    out.indices.truncate(cursor);
+    cursor
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lights::{LightRecord, Lights};
+    use rand::{Rng, SeedableRng};
+
+    fn camera() -> Camera {
+        Camera::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(4.0, 1.0, -20.0),
+            Vec3::Y,
+            60.0,
+            1600,
+            900,
+            0.5,
+            40.0,
+        )
+    }
+
+    /// Whether `p` is strictly inside the frustum (the definition the cull must respect).
+    fn inside(camera: &Camera, p: Vec3) -> bool {
+        let v = camera.view_from_world_point(p);
+        let t = camera.tan_half_fov();
+        let d = -v.z;
+        d > camera.near && d < camera.far && v.x.abs() < t.x * d && v.y.abs() < t.y * d
+    }
+
+    fn random_lights(n: usize, seed: u64, spots: bool) -> Lights {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        (0..n)
+            .map(|i| {
+                let p = Vec3::new(
+                    rng.random_range(-60.0..60.0),
+                    rng.random_range(-40.0..40.0),
+                    rng.random_range(-70.0..30.0),
+                );
+                let light =
+                    LightRecord::point(p, rng.random_range(0.1..12.0)).with_source_index(i as u32);
+                if spots && rng.random_bool(0.7) {
+                    let d = Vec3::new(
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                    )
+                    .normalize_or(Vec3::X);
+                    light.with_spot(d, rng.random_range(0.05..3.0))
+                } else {
+                    light
+                }
+            })
+            .collect()
+    }
+
+    /// A point of the light's volume: sphere, or spot sector.
+    fn sample_volume(light: &LightRecord, rng: &mut impl Rng) -> Option<Vec3> {
+        let v = Vec3::new(
+            rng.random_range(-1.0f32..1.0),
+            rng.random_range(-1.0f32..1.0),
+            rng.random_range(-1.0f32..1.0),
+        );
+        if v.length() > 1.0 {
+            return None;
+        }
+        if let Some(cone) = light.spot
+            && v.length() > 0.0
+            && v.normalize().dot(cone.direction) < cone.angle.cos()
+        {
+            return None;
+        }
+        Some(light.position + v * light.radius)
+    }
+
+    #[test]
+    fn conservative_against_sampled_volumes() {
+        let camera = camera();
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(99);
+        for spots in [false, true] {
+            let lights = random_lights(3000, 5, spots);
+            let mut vis = Visibility::new();
+            let visible = cull_lights(&camera, lights.slices(), &mut vis);
+            assert!(visible > 50 && visible < 2900, "{visible}");
+            for (i, light) in lights.iter().enumerate() {
+                if vis.mask[i] {
+                    continue;
+                }
+                for _ in 0..400 {
+                    if let Some(p) = sample_volume(&light, &mut rng) {
+                        assert!(!inside(&camera, p), "light {i} culled but {p} is visible");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn parallel_equals_serial_kernel_and_compaction_is_ordered() {
+        let camera = camera();
+        let lights = random_lights(5 * BLOCK + 123, 8, true);
+        let mut vis = Visibility::new();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let visible = pool.install(|| cull_lights(&camera, lights.slices(), &mut vis));
+        let frustum = Frustum::new(&camera);
+        let serial: Vec<u32> = (0..lights.len())
+            .filter(|&i| frustum.visible(&lights.slices(), i))
+            .map(|i| i as u32)
+            .collect();
+        assert_eq!(vis.indices, serial);
+        assert_eq!(visible, serial.len());
+        assert_eq!(vis.mask.iter().filter(|&&m| m).count(), visible);
+        // Reuse with fewer lights: outputs shrink, nothing stale remains.
+        let few = random_lights(10, 8, false);
+        let v2 = cull_lights(&camera, few.slices(), &mut vis);
+        assert_eq!((vis.mask.len(), vis.indices.len()), (10, v2));
+    }
+
+    #[test]
+    fn exact_cases_spheres_and_cones() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 90.0, 100, 100, 1.0, 10.0);
+        let point = |z: f32, r: f32| LightRecord::point(Vec3::new(0.0, 0.0, z), r);
+        let lights: Lights = [
+            point(-0.5, 0.49),  // in front of the near plane (depth 1), not reaching it
+            point(-0.5, 0.51),  // reaches across the near plane
+            point(-10.5, 0.49), // beyond far
+            point(-10.5, 0.51),
+            // Behind the camera, range 5 reaches into the frustum, but pointing backwards.
+            LightRecord::point(Vec3::new(0.0, 0.0, 2.0), 5.0).with_spot(Vec3::Z, 0.3),
+            // The same spot pointing forwards.
+            LightRecord::point(Vec3::new(0.0, 0.0, 2.0), 5.0).with_spot(Vec3::NEG_Z, 0.3),
+            // Off to the right (x = 8 at depth 5, side plane at x = 5), pointing away/towards.
+            LightRecord::point(Vec3::new(8.0, 0.0, -5.0), 4.0).with_spot(Vec3::X, 0.5),
+            LightRecord::point(Vec3::new(8.0, 0.0, -5.0), 4.0).with_spot(Vec3::NEG_X, 0.5),
+        ]
+        .into_iter()
+        .collect();
+        let mut vis = Visibility::new();
+        cull_lights(&camera, lights.slices(), &mut vis);
+        assert_eq!(
+            vis.mask,
+            [false, true, false, true, false, true, false, true]
+        );
+        // Without the spot columns the cones are spheres: the backward spot is kept.
+        let spheres = LightSlices {
+            spot: None,
+            ..lights.slices()
+        };
+        cull_lights(&camera, spheres, &mut vis);
+        assert!(vis.mask[4]);
+    }
+}

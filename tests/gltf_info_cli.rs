@@ -1,0 +1,149 @@
+//! `myriad info --gltf FILE [--json]` end to end: the numbers it prints are the loader's, it
+//! exits 0 on good files and 1 with a message naming the file on bad ones.
+
+use myriad::scene::{LoadOptions, Model};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn myriad(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(args)
+        .output()
+        .expect("cannot run the myriad binary")
+}
+
+fn work_dir(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("gltf_info")
+        .join(test);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn atrium_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb")
+}
+
+fn info_json(path: &Path) -> Value {
+    let out = myriad(&[
+        "info".as_ref(),
+        "--gltf".as_ref(),
+        path.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+#[test]
+fn info_reports_what_the_loader_sees() {
+    let path = atrium_path();
+    let model = Model::load(&path, &LoadOptions::without_images()).unwrap();
+    let s = model.summary();
+    let v = info_json(&path);
+    assert_eq!(v["meshes"], s.meshes);
+    assert_eq!(v["instances"], s.instances);
+    assert_eq!(v["triangles"], s.triangles);
+    assert_eq!(v["stored_triangles"], s.stored_triangles);
+    assert_eq!(v["materials"], s.materials);
+    assert_eq!(v["blended_materials"], s.blended_materials);
+    assert_eq!(v["lights"]["point"], s.point_lights);
+    assert_eq!(v["lights"]["spot"], s.spot_lights);
+    let names: Vec<&str> = v["cameras"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, s.cameras);
+    for (k, bound) in [("min", s.bounds.min), ("max", s.bounds.max)] {
+        // Written as the f32's shortest decimal: it reads back to the same f32.
+        let shown: Vec<f32> = v["bounds"][k]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap() as f32)
+            .collect();
+        assert_eq!(shown, bound.to_array());
+    }
+    // The table shows the same counts.
+    let out = myriad(&["info".as_ref(), "--gltf".as_ref(), path.as_os_str()]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains(&format!("instances   {}", s.instances)),
+        "{text}"
+    );
+    assert!(
+        text.contains("cameras     4: Main, Gallery, Overview, Courtyard"),
+        "{text}"
+    );
+    assert!(
+        text.contains("[-15.000, -0.200, -7.500] .. [15.000, 13.000, 7.500]"),
+        "{text}"
+    );
+}
+
+#[test]
+fn info_on_sponza_counts_instanced_triangles() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/sponza/Sponza.gltf");
+    if !path.exists() {
+        eprintln!(
+            "NOTE: {} is absent; `myriad info` is checked on the shipped atrium only",
+            path.display()
+        );
+        let v = info_json(&atrium_path());
+        assert!(v["triangles"].as_u64().unwrap() > v["stored_triangles"].as_u64().unwrap());
+        return;
+    }
+    let v = info_json(&path);
+    assert_eq!(v["triangles"], 262_087);
+    assert_eq!(v["instances"], 170);
+    assert_eq!(v["meshes"], 44);
+    assert_eq!(v["cameras"][0]["name"], "CameraMain");
+    let out = myriad(&["info".as_ref(), "--gltf".as_ref(), path.as_os_str()]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("262,087 as rendered"));
+}
+
+#[test]
+fn bad_input_exits_1_naming_the_file() {
+    let dir = work_dir("bad_input");
+    let truncated = dir.join("truncated.glb");
+    let bytes = std::fs::read(atrium_path()).unwrap();
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    let cycle = dir.join("cycle.gltf");
+    std::fs::write(
+        &cycle,
+        r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}],
+            "nodes": [{"children": [1]}, {"children": [0]}]}"#,
+    )
+    .unwrap();
+    let not_json = dir.join("garbage.gltf");
+    std::fs::write(&not_json, b"\x00\x01binary garbage").unwrap();
+    let missing = dir.join("missing.glb");
+    for (path, expected) in [
+        (&truncated, "GLB header declares"),
+        (&cycle, "is its own ancestor"),
+        (&not_json, "not valid glTF JSON"),
+        (&missing, "cannot read glTF file"),
+    ] {
+        for json in [false, true] {
+            let mut args = vec!["info".as_ref(), "--gltf".as_ref(), path.as_os_str()];
+            if json {
+                args.push("--json".as_ref());
+            }
+            let out = myriad(&args);
+            assert_eq!(out.status.code(), Some(1), "{}", path.display());
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(err.starts_with("error: "), "{err}");
+            assert!(err.contains(&path.display().to_string()), "{err}");
+            assert!(err.contains(expected), "{err}");
+            assert!(out.stdout.is_empty());
+        }
+    }
+}
