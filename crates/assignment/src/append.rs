@@ -72,6 +72,7 @@ pub(crate) fn append(
         total <= u32::MAX as u64,
         "{total} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
     );
+    // Every entry is about to be written: only growth needs filling (`resize` leaves the rest).
     indices.resize(total as usize, 0);
     cursors.clear();
     cursors.extend_from_slice(offsets);

@@ -196,7 +196,7 @@ impl Assigner {
                     jobs::run_task(&ctx, begin, end, task);
                 };
                 for_each_task(&mut self.tasks[..tasks], parallel, gather);
-                out.reset(clusters);
+                out.resize_for(clusters);
                 append::append(
                     &self.tasks[..tasks],
                     parts,

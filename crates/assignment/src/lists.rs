@@ -50,6 +50,14 @@ impl LightLists {
         self.indices.clear();
     }
 
+    /// Sizes `offsets` and `counts` for `clusters` without clearing anything: for writers that
+    /// overwrite every entry, and that size `indices` themselves (a steady-state frame then
+    /// writes no memory twice).
+    pub(crate) fn resize_for(&mut self, clusters: usize) {
+        self.offsets.resize(clusters, 0);
+        self.counts.resize(clusters, 0);
+    }
+
     /// Checks the CSR invariants; used by tests and debug builds.
     pub fn assert_well_formed(&self, light_count: usize) {
         assert_eq!(self.offsets.len(), self.counts.len());

@@ -154,3 +154,44 @@ fn both_append_strategies_give_identical_lists() {
         }
     }
 }
+
+#[test]
+fn reused_lists_and_assigner_hold_nothing_from_the_previous_frame() {
+    let make = |seed, lights, dims| {
+        make_scene(&SceneParams {
+            seed,
+            fov_deg: 65.0,
+            aspect: 1.7,
+            near: 0.1,
+            far_ratio: 800.0,
+            eye_scale: 2.0,
+            dims,
+            slicing: 1,
+            lights,
+            spots: seed % 2 == 0,
+        })
+    };
+    // Big then small then different grid, each compared with a fresh assignment.
+    let frames = [
+        make(1, 30_000, UVec3::new(16, 9, 24)),
+        make(2, 3_000, UVec3::new(16, 9, 24)),
+        make(3, 8_000, UVec3::new(8, 8, 8)),
+        make(4, 0, UVec3::new(8, 8, 8)),
+        make(5, 20_000, UVec3::new(24, 12, 16)),
+    ];
+    for method in [Method::Binary, Method::Refined, Method::Linear] {
+        let mut assigner = Assigner::new();
+        let mut lists = LightLists::new();
+        for (f, scene) in frames.iter().enumerate() {
+            let spots = f % 2 == 1;
+            let input = scene.lights.input(spots);
+            assigner.assign(method, &input, &scene.camera, &scene.grid, &mut lists);
+            let mut fresh = LightLists::new();
+            Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut fresh);
+            assert!(
+                lists == fresh,
+                "{method}: frame {f} differs from a fresh assignment"
+            );
+        }
+    }
+}
