@@ -89,11 +89,13 @@ impl AssignStats {
     }
 }
 
-/// Below this many lights the frame runs as one task on the calling thread: waking the pool and
-/// splitting the work would cost about as much as the assignment itself. (On the `paper` preset,
-/// 1000 lights on two threads, 256 lights per task timed better than 512 or 1024 with
-/// `myriad bench`; the threshold matches that granularity.)
-pub const SERIAL_LIGHTS: usize = 256;
+/// Below this many lights the frame runs as one task on the calling thread. A parallel frame
+/// opens three pool regions (phases, count, fill), and when the pool's workers have gone to sleep
+/// between frames each costs a wake-up: measured with `myriad bench` on the 2-core CI machine,
+/// 1000 `uniform` lights took 33–55 µs in parallel (depending on whether the workers were awake)
+/// and a steady 45 µs serially; 3000 lights took 65 µs in parallel and 103 µs serially. Serial
+/// below 2048 keeps small frames fast *and* predictable.
+pub const SERIAL_LIGHTS: usize = 2048;
 /// Lights per task at least, so a task's fixed costs (its bucket set, a rayon job) stay small next
 /// to the lights' work.
 const LIGHTS_PER_TASK: usize = 256;
