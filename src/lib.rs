@@ -8,7 +8,7 @@
 //! | --- | --- | --- |
 //! | `myriad-cluster-math` | [`cluster_math`] | camera, cluster grid, mappings, plane sets, the f64 oracle |
 //! | `myriad-assignment` | [`assignment`] | light → cluster assignment into CSR lists |
-//! | `myriad-scene` | [`scene`] | scene files, (later) glTF, light fields, frame systems |
+//! | `myriad-scene` | [`scene`] | scene files, glTF loading, the generated atrium, light fields, frame systems |
 //! | `myriad-gpu` | [`gpu`] | the wgpu renderer |
 //!
 //! Glue between them lives here and only here: the crates never depend on each other beyond

@@ -541,3 +541,33 @@ fn no_arguments_runs_the_main_job() {
         assert_eq!(columns[5], "0", "misses of {method}: {row}");
     }
 }
+
+#[test]
+fn preset_options_without_a_preset_are_rejected() {
+    let dir = work_dir("preset_options");
+    let scene = dir.join("s.json");
+    let out = myriad(&[
+        "scene",
+        "--preset",
+        "paper",
+        "--lights",
+        "10",
+        "--out",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let out = myriad(&[
+        "assign",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--lights",
+        "5",
+        "--out",
+        dir.join("d.json").to_str().unwrap(),
+    ]);
+    assert!(
+        !out.status.success(),
+        "--lights without --preset must be an error"
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--preset"));
+}

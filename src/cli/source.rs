@@ -1,6 +1,6 @@
 //! Where a command's scene comes from: a scene file or a generated preset; and thread pools.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, bail, ensure};
 use myriad::scene::{LightPolicy, Preset, Scene};
 use std::path::PathBuf;
 
@@ -13,12 +13,12 @@ pub struct SceneSource {
     /// Generate a standard scene instead: paper, uniform or sphere.
     #[arg(long)]
     pub preset: Option<String>,
-    /// Lights in the generated scene.
-    #[arg(long, default_value_t = 1000, requires = "preset")]
-    pub lights: usize,
-    /// Seed of the generated scene.
-    #[arg(long, default_value_t = 1, requires = "preset")]
-    pub seed: u64,
+    /// Lights in the generated scene [default: 1000].
+    #[arg(long, requires = "preset")]
+    pub lights: Option<usize>,
+    /// Seed of the generated scene [default: 1].
+    #[arg(long, requires = "preset")]
+    pub seed: Option<u64>,
 }
 
 impl SceneSource {
@@ -26,20 +26,23 @@ impl SceneSource {
     pub fn load(&self) -> Result<(Scene, String)> {
         match (&self.scene, &self.preset) {
             (Some(path), _) => {
+                // clap does not enforce `requires = "preset"` once `--scene` (which conflicts with
+                // `--preset`) is given, so say it here rather than ignore the options.
+                ensure!(
+                    self.lights.is_none() && self.seed.is_none(),
+                    "--lights and --seed only apply to --preset, not to --scene {}",
+                    path.display()
+                );
                 let scene = Scene::load(path, LightPolicy::SkipInvalid)?;
                 report_skipped(&scene);
                 Ok((scene, path.display().to_string()))
             }
             (None, Some(name)) => {
                 let preset = parse_preset(name)?;
+                let (lights, seed) = (self.lights.unwrap_or(1000), self.seed.unwrap_or(1));
                 Ok((
-                    preset.generate(self.lights, self.seed),
-                    format!(
-                        "preset {} ({} lights, seed {})",
-                        preset.name(),
-                        self.lights,
-                        self.seed
-                    ),
+                    preset.generate(lights, seed),
+                    format!("preset {} ({lights} lights, seed {seed})", preset.name()),
                 ))
             }
             (None, None) => bail!("give a scene: --scene FILE or --preset paper|uniform|sphere"),
