@@ -175,6 +175,7 @@ impl Assigner {
         let parts = plan_parts(grid, tasks);
         let ctx = FrameContext {
             method,
+            exact: jobs::ExactFrame::new(camera),
             parts: parts.count,
             slices_per_part: (parts.clusters / (grid.dims.x * grid.dims.y) as usize) as u32,
             lights: *lights,

@@ -28,6 +28,8 @@ pub(crate) struct FrameContext<'a> {
     pub view_from_world: Mat3,
     /// View-space bounding spheres of the clusters (for spot cone tests); empty without spots.
     pub cluster_spheres: &'a [Vec4],
+    /// The f64 view transform and projection of the `exact` method, computed once per frame.
+    pub exact: ExactFrame,
     /// Number of parts (groups of consecutive slices) the spans are bucketed by.
     pub parts: usize,
     /// Slices per part (the last part may have fewer).
@@ -50,6 +52,21 @@ impl FrameContext<'_> {
             & (bottom.dot(c) >= -r)
             & (depth + r >= self.planes.sets.z_depths[0])
             & (depth - r <= self.planes.sets.z_depths[self.planes.sets.z_depths.len() - 1])
+    }
+}
+
+/// What the `exact` method needs of the camera, in f64.
+pub(crate) struct ExactFrame {
+    pub view_from_world: glam::DMat3,
+    pub tan_half_fov: (f64, f64),
+}
+
+impl ExactFrame {
+    pub fn new(camera: &Camera) -> Self {
+        Self {
+            view_from_world: camera.view_rotation_f64(),
+            tan_half_fov: camera.tan_half_fov_f64(),
+        }
     }
 }
 
@@ -327,11 +344,11 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
     let g = light as usize;
     let l = &ctx.lights;
     let world = DVec3::new(l.x[g] as f64, l.y[g] as f64, l.z[g] as f64);
-    let centre = ctx.camera.view_from_world_point_f64(world);
+    let centre = ctx.exact.view_from_world * (world - ctx.camera.position.as_dvec3());
     let range = l.radius[g] as f64;
     let spot = l.spot.as_ref().and_then(|s| {
         let angle = s.angle[g] as f64;
-        let axis = ctx.camera.view_rotation_f64()
+        let axis = ctx.exact.view_from_world
             * DVec3::new(s.dir_x[g] as f64, s.dir_y[g] as f64, s.dir_z[g] as f64);
         let axis = axis.normalize_or_zero();
         (angle.is_finite()
@@ -346,14 +363,16 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
             })
     });
     let grid = ctx.grid;
-    let camera = ctx.camera;
+    let z = &ctx.planes.sets.z_depths;
     for k in bx.z.k0..=bx.z.k1 {
+        let depths = [z[k as usize], z[k as usize + 1]];
         for j in bx.j0..=bx.j1 {
             let first = grid.cluster_id(bx.i0, j, k);
             let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
             push_filtered(spans, light, first, bx.i1 - bx.i0 + 1, |c| {
                 let i = bx.i0 + (c - first);
-                let cell = Cell::of_cluster(camera, grid, i, j, k);
+                let (x, y) = (grid.dims.x, grid.dims.y);
+                let cell = Cell::of_tile(ctx.exact.tan_half_fov, x, y, i, j, depths);
                 match &spot {
                     Some(s) => oracle::spot_intersects_cell(s, &cell),
                     None => oracle::sphere_intersects_cell(centre, range, &cell),

@@ -18,15 +18,35 @@ pub struct Cell {
 impl Cell {
     /// The cell of cluster `(i, j, k)` of `grid` seen through `camera`.
     pub fn of_cluster(camera: &Camera, grid: &ClusterGrid, i: u32, j: u32, k: u32) -> Self {
-        let (tx, ty) = camera.tan_half_fov_f64();
-        let ndc = |e: u32, n: u32| (2.0 * e as f64 - n as f64) / n as f64;
-        let (x, y) = (grid.dims.x, grid.dims.y);
         let (d0, d1) = grid.slice_depth_range(k);
+        Self::of_tile(
+            camera.tan_half_fov_f64(),
+            grid.dims.x,
+            grid.dims.y,
+            i,
+            j,
+            [d0, d1],
+        )
+    }
+
+    /// The cell of tile `(i, j)` of an `x × y` tiling with `tan_half_fov = (tx, ty)` (from
+    /// [`Camera::tan_half_fov_f64`]) between the slice edges `depths` — [`Self::of_cluster`] with
+    /// the per-frame values hoisted out, for callers that build many cells.
+    pub fn of_tile(
+        tan_half_fov: (f64, f64),
+        x: u32,
+        y: u32,
+        i: u32,
+        j: u32,
+        depths: [f32; 2],
+    ) -> Self {
+        let (tx, ty) = tan_half_fov;
+        let ndc = |e: u32, n: u32| (2.0 * e as f64 - n as f64) / n as f64;
         Self {
             x_slopes: [ndc(i, x) * tx, ndc(i + 1, x) * tx],
             // Row j counts from the top: its top edge is NDC 1 − 2j/Y.
             y_slopes: [-ndc(j + 1, y) * ty, -ndc(j, y) * ty],
-            depths: [d0 as f64, d1 as f64],
+            depths: [depths[0] as f64, depths[1] as f64],
         }
     }
 
