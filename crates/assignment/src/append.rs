@@ -40,17 +40,14 @@ pub(crate) struct Parts {
     pub clusters: usize,
 }
 
-/// Steps 1–3: the tasks' bucketed spans → `counts`, `offsets`, `indices`; returns the pair count.
-/// `cursors` is reused scratch.
-pub(crate) fn append(
+/// Step 1: counts every part's spans into `counts`; returns the total number of pairs, so the
+/// caller can check it against its budget before anything is written.
+pub(crate) fn count_all(
     tasks: &[TaskOutput],
     parts: Parts,
     parallel: bool,
     counts: &mut [u32],
-    offsets: &mut [u32],
-    indices: &mut Vec<u32>,
-    cursors: &mut Vec<u32>,
-) -> usize {
+) -> u64 {
     let count_part = |(p, counts): (usize, &mut [u32])| count(tasks, p, p * parts.clusters, counts);
     if parallel {
         counts
@@ -63,15 +60,31 @@ pub(crate) fn append(
             .enumerate()
             .for_each(count_part);
     }
-    let mut total = 0u64;
-    for (offset, &n) in offsets.iter_mut().zip(counts.iter()) {
-        *offset = total as u32;
-        total += n as u64;
-    }
+    counts.iter().map(|&n| n as u64).sum()
+}
+
+/// Steps 2–3: `offsets` from `counts`, then every part's fill. `total` (from [`count_all`]) must
+/// fit u32 offsets. `cursors` is reused scratch.
+#[allow(clippy::too_many_arguments)] // The output's three arrays, the scratch and the plan.
+pub(crate) fn fill_all(
+    tasks: &[TaskOutput],
+    parts: Parts,
+    parallel: bool,
+    total: u64,
+    counts: &[u32],
+    offsets: &mut [u32],
+    indices: &mut Vec<u32>,
+    cursors: &mut Vec<u32>,
+) {
     assert!(
         total <= u32::MAX as u64,
-        "{total} cluster-light pairs do not fit u32 offsets; use a coarser grid or a memory budget"
+        "{total} pairs do not fit u32 offsets"
     );
+    let mut running = 0u32;
+    for (offset, &n) in offsets.iter_mut().zip(counts) {
+        *offset = running;
+        running += n;
+    }
     // Every entry is about to be written: only growth needs filling (`resize` leaves the rest).
     indices.resize(total as usize, 0);
     cursors.clear();
@@ -83,7 +96,6 @@ pub(crate) fn append(
         parallel,
     };
     job.fill(0..parts.count, indices, 0, cursors);
-    total as usize
 }
 
 /// Step 1 for one part: count its spans into its chunk of `counts` (clusters from `base`).
@@ -165,14 +177,16 @@ pub(crate) struct AtomicCounters {
 }
 
 impl AtomicCounters {
-    /// Counts, scans, fills and sorts the tasks' spans into `out`; returns the pair count.
+    /// Counts, scans, fills and sorts the tasks' spans into `out`; returns the pair count, or
+    /// `Err(pairs)` without writing when they exceed `budget`.
     pub fn assign(
         &mut self,
         tasks: &[crate::jobs::TaskOutput],
         clusters: usize,
         parallel: bool,
+        budget: u64,
         out: &mut crate::LightLists,
-    ) -> usize {
+    ) -> Result<usize, u64> {
         if self.counters.len() < clusters {
             self.counters.resize_with(clusters, || AtomicU32::new(0));
         }
@@ -189,6 +203,10 @@ impl AtomicCounters {
             tasks.par_iter().for_each(count);
         } else {
             tasks.iter().for_each(count);
+        }
+        let total: u64 = counters.iter().map(|c| c.load(Relaxed) as u64).sum();
+        if total > budget {
+            return Err(total);
         }
         out.reset(clusters);
         let mut running = 0u64;
@@ -221,7 +239,7 @@ impl AtomicCounters {
             tasks.iter().for_each(fill);
         }
         sort_lists(&mut out.indices, &out.offsets, 0, 0..clusters, parallel);
-        running as usize
+        Ok(running as usize)
     }
 }
 

@@ -80,6 +80,14 @@ pub struct AssignStats {
     pub pairs: u64,
     /// Parallel tasks the lights were split into (1 = serial).
     pub tasks: u32,
+    /// Dimensions of the grid the lists were built for: the requested grid's, unless the pair
+    /// budget forced a coarser one (see [`Assigner::with_pair_budget`]).
+    pub grid_dims: [u32; 3],
+    /// How many times the grid was coarsened ([`coarser_grid`]) to fit the pair budget.
+    pub coarsened: u32,
+    /// The pairs exceed the budget even on a 1×1×1 grid; the lists were written anyway (one
+    /// cluster holding every visible light), because no light is ever dropped.
+    pub over_budget: bool,
 }
 
 impl AssignStats {
@@ -113,6 +121,7 @@ pub struct Assigner {
     linear: LinearScratch,
     append: AppendStrategy,
     atomic: append::AtomicCounters,
+    pair_budget: Option<u64>,
 }
 
 impl Assigner {
@@ -127,7 +136,19 @@ impl Assigner {
         self
     }
 
+    /// Caps the lists at `pairs` cluster–light pairs (`8·clusters + 4·pairs` bytes of CSR). A
+    /// frame that would exceed it is assigned again on [`coarser_grid`]s until it fits — fewer,
+    /// bigger clusters, so more false positives but never a missed light — and
+    /// [`AssignStats::grid_dims`] / [`AssignStats::coarsened`] say so. Deterministic: the same
+    /// input always degrades the same way. Without a budget the limit is what u32 offsets hold.
+    pub fn with_pair_budget(mut self, pairs: u64) -> Self {
+        self.pair_budget = Some(pairs);
+        self
+    }
+
     /// Assigns `lights` to the clusters of `grid` seen by `camera` with `method`, refilling `out`.
+    /// The lists are for `grid`, or for a coarser grid when the pair budget demands it: check
+    /// [`AssignStats::coarsened`] (and rebuild that grid with [`coarser_grid`]).
     pub fn assign(
         &mut self,
         method: Method,
@@ -136,6 +157,37 @@ impl Assigner {
         grid: &ClusterGrid,
         out: &mut LightLists,
     ) -> AssignStats {
+        let budget = self
+            .pair_budget
+            .unwrap_or(u32::MAX as u64)
+            .min(u32::MAX as u64);
+        let mut grid = *grid;
+        let mut coarsened = 0;
+        loop {
+            // One cluster holds at most every light (< 2³² by `assert_consistent`): always fits.
+            let last_resort = grid.dims == glam::UVec3::ONE;
+            let limit = if last_resort { u32::MAX as u64 } else { budget };
+            if let Ok(mut stats) = self.assign_once(method, lights, camera, &grid, limit, out) {
+                stats.grid_dims = grid.dims.to_array();
+                stats.coarsened = coarsened;
+                stats.over_budget = stats.pairs > budget;
+                return stats;
+            }
+            grid = coarser_grid(&grid);
+            coarsened += 1;
+        }
+    }
+
+    /// One attempt on one grid: `Err(pairs)` (nothing written) when the pairs exceed `budget`.
+    fn assign_once(
+        &mut self,
+        method: Method,
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+        budget: u64,
+        out: &mut LightLists,
+    ) -> Result<AssignStats, u64> {
         lights.assert_consistent();
         let n = lights.len();
         self.planes.update(camera, grid);
@@ -151,14 +203,14 @@ impl Assigner {
                 camera,
                 grid,
                 &self.planes,
-                view_from_world,
+                budget,
                 out,
-            );
+            )?;
             stats.rejected = rejected;
             stats.culled = culled;
             stats.pairs = out.indices.len() as u64;
             stats.tasks = 1;
-            return stats;
+            return Ok(stats);
         }
         if lights.spot.is_some() && method != Method::Exact {
             let key = (camera.tan_half_fov(), *grid);
@@ -200,15 +252,22 @@ impl Assigner {
                 };
                 for_each_task(&mut self.tasks[..tasks], parallel, gather);
                 out.resize_for(clusters);
-                append::append(
-                    &self.tasks[..tasks],
+                let work = &self.tasks[..tasks];
+                let total = append::count_all(work, parts, parallel, &mut out.counts);
+                if total > budget {
+                    return Err(total);
+                }
+                append::fill_all(
+                    work,
                     parts,
                     parallel,
-                    &mut out.counts,
+                    total,
+                    &out.counts,
                     &mut out.offsets,
                     &mut out.indices,
                     &mut self.cursors,
-                )
+                );
+                total as usize
             }
             AppendStrategy::AtomicCounters => {
                 let gather = |(t, task): (usize, &mut TaskOutput)| {
@@ -217,7 +276,7 @@ impl Assigner {
                 };
                 for_each_task(&mut self.tasks[..tasks], parallel, gather);
                 self.atomic
-                    .assign(&self.tasks[..tasks], clusters, parallel, out)
+                    .assign(&self.tasks[..tasks], clusters, parallel, budget, out)?
             }
         };
         for task in &self.tasks[..tasks] {
@@ -226,8 +285,15 @@ impl Assigner {
         }
         stats.pairs = pairs as u64;
         stats.tasks = tasks as u32;
-        stats
+        Ok(stats)
     }
+}
+
+/// The grid a pair budget falls back to: every dimension halved (rounding down, at least 1),
+/// same depth range and slicing. Repeating it reaches 1×1×1.
+pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
+    let dims = (grid.dims / 2).max(glam::UVec3::ONE);
+    ClusterGrid::new(dims, grid.slicing, grid.near(), grid.far())
 }
 
 /// Splits the clusters into parts of whole depth slices: one part when serial, else about four

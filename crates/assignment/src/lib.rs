@@ -45,6 +45,6 @@ mod lists;
 mod phases;
 mod search;
 
-pub use assigner::{AppendStrategy, AssignStats, Assigner, Method, SERIAL_LIGHTS};
+pub use assigner::{AppendStrategy, AssignStats, Assigner, Method, SERIAL_LIGHTS, coarser_grid};
 pub use input::{LightInput, SpotInput};
 pub use lists::LightLists;

@@ -13,7 +13,7 @@
 
 use crate::geometry::{self, ZRange};
 use crate::{LightInput, LightLists};
-use glam::{Mat3, Vec3};
+use glam::Vec3;
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets, SpotCone, spot_bounding_sphere};
 
 /// Per-cluster temporary lists, reused across frames.
@@ -24,17 +24,19 @@ pub(crate) struct LinearScratch {
     y_normals: Vec<Vec3>,
 }
 
-/// Counts of one run: (rejected, culled).
+/// Counts of one run: `Ok((rejected, culled))`, or `Err(pairs)` without writing `out` when the
+/// pairs exceed `budget`.
 pub(crate) fn assign_linear(
     scratch: &mut LinearScratch,
     lights: &LightInput<'_>,
     camera: &Camera,
     grid: &ClusterGrid,
     planes: &PlaneSets,
-    view_from_world: Mat3,
+    budget: u64,
     out: &mut LightLists,
-) -> (u32, u32) {
+) -> Result<(u32, u32), u64> {
     let clusters = grid.cluster_count();
+    let view_from_world = camera.view_rotation();
     scratch.lists.resize_with(clusters, Vec::new);
     for list in &mut scratch.lists[..clusters] {
         list.clear();
@@ -106,6 +108,13 @@ pub(crate) fn assign_linear(
             }
         }
     }
+    let total: u64 = scratch.lists[..clusters]
+        .iter()
+        .map(|l| l.len() as u64)
+        .sum();
+    if total > budget {
+        return Err(total);
+    }
     out.reset(clusters);
     let mut at = 0u32;
     for (c, list) in scratch.lists[..clusters].iter().enumerate() {
@@ -114,7 +123,7 @@ pub(crate) fn assign_linear(
         at += list.len() as u32;
         out.indices.extend_from_slice(list);
     }
-    (rejected, culled)
+    Ok((rejected, culled))
 }
 
 /// Steps through planes 1..=n for the first tile `t` whose far plane `t + 1` satisfies
