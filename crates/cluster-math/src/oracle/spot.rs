@@ -29,7 +29,9 @@
 //!
 //! # Exactness
 //! The answer is exact except in a band of width `tol = 1e-12 · scale` (`scale` = the largest of
-//! `range`, `|apex|` and the cell corners' magnitudes), where it errs on the side of "intersects":
+//! `range`, `|apex|` and the magnitudes of the corners of the cell cut off one range beyond the
+//! ball's far depth — local to the light, however deep the cell reaches), where it errs on the
+//! side of "intersects"; the ball test (step 2) uses a band of 64 ulps of `scale` instead:
 //! * `false` is only returned with a *certificate*: a direction whose gap exceeds `tol` (up to f64
 //!   rounding of two support values, orders of magnitude below `tol`), or the ball's miss.
 //! * `true` comes with a certificate too — a point of `C − S` (a convex combination of support
@@ -108,6 +110,8 @@ pub struct SpotVolume {
 /// Relative width of the band in which the oracle may answer "intersects" for sets that are in
 /// fact (barely) apart.
 const TOLERANCE: f64 = 1e-12;
+/// Relative rounding bound of the exact ball test (`distance_to_cell`): 64 ulps of the scale.
+const BALL_ROUNDING: f64 = 64.0 * f64::EPSILON;
 /// Relative gap between GJK's upper and lower distance bounds at which it stops refining.
 const CONVERGENCE: f64 = 1e-14;
 /// GJK iteration cap; hitting it hands over to the feature search.
@@ -146,11 +150,28 @@ fn classify(spot: &SpotVolume, cell: &Cell, engine: Engine) -> (bool, Route) {
     if !(spot.range >= 0.0) || !spot.apex.is_finite() {
         return (false, Route::Quick);
     }
-    // 2. The ball misses the cell.
+    // The volume lies inside its ball, so the cell beyond the ball's far depth does not matter:
+    // cut it off there (with a margin of one more range, so the cut never makes a flat cell that
+    // GJK would find degenerate). Same answer, but later lengths — and so the tolerance band —
+    // stay local to the light instead of scaling with the cell's far corners: a cell reaching
+    // 10⁷ deep would otherwise make `tol` 10⁻⁵ absolute, and a tiny light 10⁻⁵ outside it would
+    // wrongly count as touching.
+    let far = cell.depths[1].min(-spot.apex.z + 2.0 * spot.range);
+    if !(far >= cell.depths[0]) {
+        return (false, Route::Quick);
+    }
+    let clipped = Cell {
+        depths: [cell.depths[0], far],
+        ..*cell
+    };
+    let cell = &clipped;
+    // 2. The ball misses the cell. `distance_to_cell` is accurate to a few ulps of the largest
+    // coordinate involved, so this test gets a band of that size rather than `tol`.
     let scale = length_scale(spot, cell);
     let tol = TOLERANCE * scale;
+    let ball_tol = BALL_ROUNDING * scale;
     let apex_distance = distance_to_cell(spot.apex, cell);
-    if !(apex_distance <= spot.range + tol) {
+    if !(apex_distance <= spot.range + ball_tol) {
         return (false, Route::Quick);
     }
     // 3. The apex belongs to the volume.
