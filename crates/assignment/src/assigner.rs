@@ -23,7 +23,7 @@ pub enum Method {
 }
 
 impl Method {
-    /// Every method, fastest-to-build order irrelevant.
+    /// Every method, the reference first.
     pub const ALL: [Method; 4] = [
         Method::Exact,
         Method::Linear,
