@@ -163,6 +163,65 @@ fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
 }
 
 /// The `gltf` crate's error, made readable (validation errors listed, at most 5).
+/// Checks the gltf crate cannot be trusted with (found by `myriad-fuzz gltf`), made on the raw
+/// JSON before it parses it:
+/// * an integer of 2³² or more anywhere: gltf-json reads indices as u32 and would silently wrap
+///   `4294967296` to index 0 (no file this loader can handle needs such a number);
+/// * a primitive whose `POSITION` names an accessor that does not exist: gltf-json 1.4.1's
+///   validation indexes `accessors` with it unchecked and panics.
+fn prevalidate_json(json: &[u8]) -> Result<(), String> {
+    let value: serde_json::Value =
+        serde_json::from_slice(json).map_err(|e| format!("not valid glTF JSON: {e}"))?;
+    fn find_huge(v: &serde_json::Value, path: &mut Vec<String>) -> Option<String> {
+        match v {
+            serde_json::Value::Number(n) if n.as_u64().is_some_and(|u| u > u32::MAX as u64) => {
+                Some(format!(
+                    "{}: {n} is out of range (at most {})",
+                    path.join(""),
+                    u32::MAX
+                ))
+            }
+            serde_json::Value::Array(items) => items.iter().enumerate().find_map(|(i, item)| {
+                path.push(format!("[{i}]"));
+                let found = find_huge(item, path);
+                path.pop();
+                found
+            }),
+            serde_json::Value::Object(fields) => fields.iter().find_map(|(key, item)| {
+                path.push(format!(".{key}"));
+                let found = find_huge(item, path);
+                path.pop();
+                found
+            }),
+            _ => None,
+        }
+    }
+    if let Some(problem) = find_huge(&value, &mut Vec::new()) {
+        return Err(problem);
+    }
+    let accessors = value["accessors"].as_array().map_or(0, Vec::len) as u64;
+    let meshes = value["meshes"]
+        .as_array()
+        .map(Vec::as_slice)
+        .unwrap_or_default();
+    for (m, mesh) in meshes.iter().enumerate() {
+        let primitives = mesh["primitives"]
+            .as_array()
+            .map(Vec::as_slice)
+            .unwrap_or_default();
+        for (p, primitive) in primitives.iter().enumerate() {
+            if let Some(index) = primitive["attributes"]["POSITION"].as_u64()
+                && index >= accessors
+            {
+                return Err(format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {index} does not exist ({accessors} accessors)"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn describe(e: gltf::Error) -> String {
     match e {
         gltf::Error::Validation(errors) => {
@@ -197,9 +256,13 @@ fn load(
             options.light_cutoff
         ));
     }
-    if bytes.starts_with(b"glTF") {
+    let json: std::borrow::Cow<'_, [u8]> = if bytes.starts_with(b"glTF") {
         check_glb_header(bytes)?;
-    }
+        gltf::Glb::from_slice(bytes).map_err(describe)?.json
+    } else {
+        std::borrow::Cow::Borrowed(bytes)
+    };
+    prevalidate_json(&json)?;
     let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(bytes).map_err(describe)?;
     let root = document.as_json();
 

@@ -1,0 +1,310 @@
+//! Degenerate scenes through [`Assigner::assign`] with every method: 0 and 1 lights, every light
+//! outside the frustum, 100k lights in one cluster, one light covering everything, grids 1×1×1
+//! and 128×128×128, resolutions 1×1 and 16384×16384. Each checks the CSR invariants
+//! ([`LightLists::assert_well_formed`]), the counts the scene implies, and conservativeness
+//! against the f64 oracle — over every cluster where that is affordable, over a seeded sample of
+//! clusters for the 2M-cluster grid.
+
+mod common;
+
+use common::*;
+use glam::{DVec3, UVec3, Vec3};
+use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
+use myriad_cluster_math::oracle::{self, Cell};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use rand::{Rng, SeedableRng};
+
+fn camera(width: u32, height: u32) -> Camera {
+    Camera::new(
+        Vec3::new(1.0, 2.0, 3.0),
+        Vec3::new(1.0, 2.0, 2.0),
+        Vec3::Y,
+        60.0,
+        width,
+        height,
+        0.1,
+        100.0,
+    )
+}
+
+fn assign(
+    method: Method,
+    lights: &Columns,
+    camera: &Camera,
+    grid: &ClusterGrid,
+) -> (LightLists, AssignStats) {
+    let mut lists = LightLists::new();
+    let stats = Assigner::new().assign(method, &lights.input(false), camera, grid, &mut lists);
+    lists.assert_well_formed(lights.len());
+    assert_eq!(lists.cluster_count(), grid.cluster_count(), "{method}");
+    assert_eq!(stats.pairs as usize, lists.indices.len(), "{method}");
+    (lists, stats)
+}
+
+/// World position of a view-space point.
+fn world_of(camera: &Camera, view: Vec3) -> Vec3 {
+    let (r, u, f) = camera.basis_f64();
+    let v = r * view.x as f64 + u * view.y as f64 - f * view.z as f64;
+    (camera.position.as_dvec3() + v).as_vec3()
+}
+
+/// Random lights in and around the frustum, radii 0.01–5.
+fn random_lights(camera: &Camera, count: usize, seed: u64) -> Columns {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let t = camera.tan_half_fov();
+    let mut lights = Columns::default();
+    for _ in 0..count {
+        let d = rng.random_range(-5.0f32..110.0);
+        let view = Vec3::new(
+            rng.random_range(-1.2f32..1.2) * t.x * d.abs(),
+            rng.random_range(-1.2f32..1.2) * t.y * d.abs(),
+            -d,
+        );
+        lights.push(world_of(camera, view), rng.random_range(0.01f32..5.0));
+    }
+    lights
+}
+
+/// Oracle check of the clusters in `sample` only: each list holds every light the oracle says
+/// touches that cluster.
+fn assert_conservative_on(
+    name: &str,
+    lists: &LightLists,
+    lights: &Columns,
+    camera: &Camera,
+    grid: &ClusterGrid,
+    sample: impl Iterator<Item = u32>,
+) {
+    for c in sample {
+        let v = grid.cluster_coords(c);
+        let cell = Cell::of_cluster(camera, grid, v.x, v.y, v.z);
+        let got = lists.lights_of(c as usize);
+        for l in 0..lights.len() {
+            let p = DVec3::new(lights.x[l] as f64, lights.y[l] as f64, lights.z[l] as f64);
+            let centre = camera.view_from_world_point_f64(p);
+            if oracle::sphere_intersects_cell(centre, lights.radius[l] as f64, &cell) {
+                assert!(
+                    got.binary_search(&(l as u32)).is_ok(),
+                    "{name}: light {l} missing from cluster {c} {v}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn no_lights() {
+    let cam = camera(1536, 768);
+    let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+    for method in Method::ALL {
+        let (lists, stats) = assign(method, &Columns::default(), &cam, &grid);
+        assert_eq!(stats.lights, 0);
+        assert!(lists.indices.is_empty(), "{method}");
+        assert!(lists.counts.iter().all(|&c| c == 0), "{method}");
+        assert!(lists.offsets.iter().all(|&o| o == 0), "{method}");
+    }
+}
+
+#[test]
+fn one_light() {
+    let cam = camera(1536, 768);
+    let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+    let mut lights = Columns::default();
+    lights.push(world_of(&cam, Vec3::new(0.3, -0.2, -7.0)), 1.5);
+    let truth = brute_force(&lights, false, &cam, &grid);
+    let want: usize = truth.iter().map(Vec::len).sum();
+    assert!(want > 1);
+    for method in Method::ALL {
+        let (lists, stats) = assign(method, &lights, &cam, &grid);
+        assert_eq!(stats.visible(), 1, "{method}");
+        let (exact, extra) = assert_conservative(method.name(), &lists, &truth, "one light");
+        assert_eq!(exact, want);
+        if method == Method::Exact {
+            assert_eq!(extra, 0);
+        }
+    }
+}
+
+#[test]
+fn every_light_outside_the_frustum() {
+    let cam = camera(1536, 768);
+    let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+    let t = cam.tan_half_fov();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    let mut lights = Columns::default();
+    for n in 0..5000 {
+        let r = rng.random_range(0.01f32..2.0);
+        let d = rng.random_range(1.0f32..90.0);
+        let view = match n % 6 {
+            0 => Vec3::new(0.0, 0.0, r * 1.5 + 0.01), // behind, not reaching the eye
+            1 => Vec3::new(0.0, 0.0, -(100.0 + r * 1.5 + 0.01)), // beyond far
+            2 => Vec3::new(-(t.x * d + r * 2.0), 0.0, -d), // left
+            3 => Vec3::new(t.x * d + r * 2.0, 0.0, -d), // right
+            4 => Vec3::new(0.0, t.y * d + r * 2.0, -d), // above
+            _ => Vec3::new(0.3, -(t.y * d + r * 2.0), -d), // below
+        };
+        lights.push(world_of(&cam, view), r);
+    }
+    let truth = brute_force(&lights, false, &cam, &grid);
+    assert!(truth.iter().all(Vec::is_empty), "the scene must be outside");
+    for method in Method::ALL {
+        let (lists, stats) = assign(method, &lights, &cam, &grid);
+        assert_eq!(stats.rejected, 0, "{method}");
+        assert!(
+            lists.indices.is_empty(),
+            "{method}: {} pairs {:?}",
+            lists.indices.len(),
+            &lists.indices[..lists.indices.len().min(20)]
+        );
+        // Outside by well over the radius padding (4e-6 of the distance), so every frustum test
+        // culls them (lights within the padding may count as visible with no pairs).
+        assert_eq!(stats.culled, 5000, "{method}");
+    }
+}
+
+#[test]
+fn hundred_thousand_lights_in_one_cluster() {
+    let cam = camera(1536, 768);
+    let dims = UVec3::new(24, 12, 16);
+    let grid = ClusterGrid::new(dims, DepthSlicing::Log, 0.1, 100.0);
+    // Centre of cluster (10, 5, 9), lights of radius 1e-4 jittered by 1e-3 around it.
+    let (i, j, k) = (10u32, 5u32, 9u32);
+    let (d0, d1) = grid.slice_depth_range(k);
+    let d = 0.5 * (d0 + d1);
+    let t = cam.tan_half_fov();
+    let sx = 0.5 * (grid.x_edge_ndc(i) + grid.x_edge_ndc(i + 1)) * t.x;
+    let sy = 0.5 * (grid.y_edge_ndc(j) + grid.y_edge_ndc(j + 1)) * t.y;
+    let centre = Vec3::new(sx * d, sy * d, -d);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+    let mut lights = Columns::default();
+    let n = 100_000;
+    for _ in 0..n {
+        let jitter = Vec3::new(
+            rng.random_range(-1e-3f32..1e-3),
+            rng.random_range(-1e-3f32..1e-3),
+            rng.random_range(-1e-3f32..1e-3),
+        );
+        lights.push(world_of(&cam, centre + jitter), 1e-4);
+    }
+    let c = grid.cluster_id(i, j, k) as usize;
+    for method in Method::ALL {
+        let (lists, stats) = assign(method, &lights, &cam, &grid);
+        assert_eq!(stats.visible(), n as u32, "{method}");
+        assert_eq!(lists.counts[c] as usize, n, "{method}");
+        assert_eq!(lists.indices.len(), n, "{method}: only that cluster");
+        assert!(
+            lists
+                .lights_of(c)
+                .iter()
+                .enumerate()
+                .all(|(a, &b)| a as u32 == b),
+            "{method}: every light, ascending"
+        );
+    }
+}
+
+#[test]
+fn one_light_covering_everything() {
+    let cam = camera(1536, 768);
+    let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+    for r in [200.0f32, 1.0e6, 3.0e38] {
+        let mut lights = Columns::default();
+        lights.push(cam.position, r);
+        for method in Method::ALL {
+            let (lists, _) = assign(method, &lights, &cam, &grid);
+            assert!(
+                lists.counts.iter().all(|&c| c == 1),
+                "{method}, radius {r}: every cluster has the light"
+            );
+        }
+    }
+}
+
+#[test]
+fn grid_of_one_cluster() {
+    let cam = camera(640, 480);
+    for slicing in [
+        DepthSlicing::Linear,
+        DepthSlicing::Log,
+        DepthSlicing::LogWithNearSlice {
+            first_slice_depth: 1.0,
+        },
+    ] {
+        let grid = ClusterGrid::new(UVec3::ONE, slicing, 0.1, 100.0);
+        let lights = random_lights(&cam, 500, 11);
+        let truth = brute_force(&lights, false, &cam, &grid);
+        for method in Method::ALL {
+            let (lists, _) = assign(method, &lights, &cam, &grid);
+            let (exact, extra) = assert_conservative(method.name(), &lists, &truth, "1x1x1");
+            assert!(exact > 0);
+            if method == Method::Exact {
+                assert_eq!(extra, 0);
+            }
+        }
+    }
+}
+
+#[test]
+fn grid_of_128_cubed() {
+    // 2,097,152 clusters. Fast methods and exact; the oracle on a seeded sample of clusters plus
+    // the eight corners.
+    let cam = camera(1920, 1080);
+    let grid = ClusterGrid::new(UVec3::splat(128), DepthSlicing::Log, 0.1, 100.0);
+    let lights = random_lights(&cam, 300, 5);
+    let clusters = grid.cluster_count() as u32;
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
+    let mut sample: Vec<u32> = (0..1500).map(|_| rng.random_range(0..clusters)).collect();
+    for &i in &[0u32, 127] {
+        for &j in &[0u32, 127] {
+            for &k in &[0u32, 127] {
+                sample.push(grid.cluster_id(i, j, k));
+            }
+        }
+    }
+    let mut pairs = Vec::new();
+    for method in Method::ALL {
+        let (lists, _) = assign(method, &lights, &cam, &grid);
+        assert_conservative_on(
+            method.name(),
+            &lists,
+            &lights,
+            &cam,
+            &grid,
+            sample.iter().copied(),
+        );
+        pairs.push((method, lists.indices.len()));
+    }
+    let exact = pairs[0].1;
+    assert!(exact > 0);
+    for (method, p) in pairs {
+        assert!(p >= exact, "{method}: {p} pairs < exact {exact}");
+    }
+}
+
+#[test]
+fn resolutions_one_pixel_and_16k_square() {
+    for (w, h) in [(1u32, 1u32), (16384, 16384), (1, 16384), (16384, 1)] {
+        let cam = camera(w, h);
+        let grid = ClusterGrid::new(UVec3::new(16, 9, 12), DepthSlicing::Log, 0.1, 100.0);
+        let lights = random_lights(&cam, 200, w as u64 * 31 + h as u64);
+        let truth = brute_force(&lights, false, &cam, &grid);
+        for method in Method::ALL {
+            let (lists, _) = assign(method, &lights, &cam, &grid);
+            let (_, extra) =
+                assert_conservative(method.name(), &lists, &truth, &format!("{w}x{h}"));
+            if method == Method::Exact {
+                assert_eq!(extra, 0);
+            }
+        }
+        // The pixel → cluster mapping stays in range at the corners.
+        for (px, py) in [(0, 0), (w - 1, h - 1), (w / 2, h / 2)] {
+            for depth in [0.0f32, 0.1, 50.0, 100.0, 1e9, f32::NAN] {
+                let c = grid.cluster_of_pixel(px, py, depth, w, h);
+                assert!(
+                    (c as usize) < grid.cluster_count(),
+                    "{w}x{h} ({px},{py}) {depth}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,450 @@
+//! Hostile input that `crates/scene/tests/scene_file.rs` and the loader's unit tests do not
+//! already cover: oversized scene files (200k lights here; 2M with `--ignored`), deep nesting,
+//! megabyte-long numbers and strings, absurd counts that are *valid* (a 4-billion-pixel-wide
+//! camera, a u32::MAX-cluster grid), and hand-written hostile glTF files (accessor counts of 2^31
+//! over a 36-byte buffer, cycles in the node graph, out-of-range and huge indices, offsets past
+//! 2^53, external buffers that are FIFOs). Each must give a clear error (or load, where the input
+//! is in fact valid), never panic and never hang: every case runs on its own thread under
+//! `catch_unwind` with a time limit ([`guarded`]).
+
+use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::scene::{Error, LightPolicy, LoadOptions, Model, Scene, validate_json_slice};
+use std::path::PathBuf;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// Runs `f` on a thread; fails the test if it panics or runs past `limit`.
+fn guarded<T: Send + 'static>(
+    what: &str,
+    limit: Duration,
+    f: impl FnOnce() -> T + Send + 'static,
+) -> T {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+        let _ = tx.send(r);
+    });
+    match rx.recv_timeout(limit) {
+        Ok(Ok(v)) => v,
+        Ok(Err(_)) => panic!("{what}: panicked"),
+        Err(_) => panic!("{what}: still running after {limit:?} (a hang)"),
+    }
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("myriad-hostile-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const CAMERA: &str = r#""camera": {"position":[0,2,10], "target":[0,2,0], "up":[0,1,0],
+  "fov_y_deg":60, "width":1536, "height":768, "near":0.1, "far":100}"#;
+const GRID: &str = r#""grid": {"x":24, "y":12, "z":16, "depth":"log"}"#;
+
+/// A scene file with `lights` generated lights, written straight into a byte vector.
+fn big_scene(lights: usize) -> Vec<u8> {
+    use std::io::Write;
+    let mut out = Vec::with_capacity(lights * 100 + 512);
+    write!(out, "{{ {CAMERA},\n {GRID},\n \"lights\": [").unwrap();
+    for i in 0..lights {
+        let f = i as f32;
+        writeln!(
+            out,
+            "{}{{\"position\":[{},{},{}],\"radius\":{},\"color\":[1,0.5,0.25],\"intensity\":2}}",
+            if i == 0 { "" } else { "," },
+            (f * 0.37).sin() * 20.0,
+            (f * 0.11).cos() * 5.0 + 2.0,
+            -(f % 97.0),
+            0.1 + (f * 0.05).sin().abs(),
+        )
+        .unwrap();
+    }
+    out.extend_from_slice(b"] }\n");
+    out
+}
+
+fn oversized_scene_file(lights: usize, limit: Duration) {
+    let bytes = big_scene(lights);
+    let dir = temp_dir(&format!("big{lights}"));
+    let path = dir.join("big.json");
+    std::fs::write(&path, &bytes).unwrap();
+    let p = path.clone();
+    let scene = guarded("big scene file", limit, move || {
+        Scene::load(&p, LightPolicy::Strict)
+    })
+    .unwrap();
+    assert_eq!(scene.lights.len(), lights);
+    // Cut off mid-light: an error with a position, never a partial scene.
+    let cut = &bytes[..bytes.len() * 2 / 3];
+    std::fs::write(&path, cut).unwrap();
+    let p = path.clone();
+    let e = guarded("truncated big file", limit, move || {
+        Scene::load(&p, LightPolicy::SkipInvalid)
+    })
+    .unwrap_err();
+    assert!(matches!(e, Error::Json { .. }), "{e}");
+    assert!(e.to_string().contains("big.json"), "{e}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn oversized_scene_file_200k_lights() {
+    oversized_scene_file(200_000, Duration::from_secs(30));
+}
+
+#[test]
+#[ignore = "slow: writes and reads a ~200 MB scene file (2M lights); run with --ignored"]
+fn oversized_scene_file_2m_lights() {
+    oversized_scene_file(2_000_000, Duration::from_secs(300));
+}
+
+fn scene_with(camera: &str, grid: &str, lights: &str) -> String {
+    format!("{{ {camera}, {grid}, \"lights\": [{lights}] }}")
+}
+
+#[test]
+fn deep_nesting_and_huge_tokens_are_errors() {
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        ("100k nested arrays", {
+            let mut v = b"{\"lights\": ".to_vec();
+            v.extend(std::iter::repeat_n(b'[', 100_000));
+            v.extend(std::iter::repeat_n(b']', 100_000));
+            v.push(b'}');
+            v
+        }),
+        ("100k nested objects in a light", {
+            let mut v = format!("{{ {CAMERA}, {GRID}, \"lights\": [").into_bytes();
+            for _ in 0..100_000 {
+                v.extend_from_slice(b"{\"a\":");
+            }
+            v.extend(std::iter::repeat_n(b'}', 100_000));
+            v.extend_from_slice(b"] }");
+            v
+        }),
+        (
+            "a 1 MB number",
+            scene_with(
+                CAMERA,
+                GRID,
+                &format!(
+                    "{{\"position\":[0,0,-5],\"radius\":1{}}}",
+                    "0".repeat(1 << 20)
+                ),
+            )
+            .into_bytes(),
+        ),
+        (
+            "a 4 MB key",
+            scene_with(CAMERA, GRID, &format!("{{\"{}\": 1}}", "k".repeat(4 << 20))).into_bytes(),
+        ),
+        ("a lone 64 MB string", {
+            let mut v = b"\"".to_vec();
+            v.extend(std::iter::repeat_n(b'x', 64 << 20));
+            v.push(b'"');
+            v
+        }),
+    ];
+    for (what, bytes) in cases {
+        let bytes = std::sync::Arc::new(bytes);
+        let b = bytes.clone();
+        let strict = guarded(what, Duration::from_secs(20), move || {
+            Scene::from_json_slice(&b, "hostile.json", LightPolicy::Strict).map(|_| ())
+        });
+        let e = strict.expect_err(what);
+        assert!(e.to_string().contains("hostile.json"), "{what}: {e}");
+        let b = bytes.clone();
+        let _ = guarded(what, Duration::from_secs(20), move || {
+            validate_json_slice(&b, "hostile.json").map(|_| ())
+        });
+    }
+}
+
+#[test]
+fn absurd_but_valid_counts_load_and_assign_without_panic() {
+    // Width 2^32 − 1 (aspect 4e9): valid; the side planes are almost flat, nothing may panic
+    // and the assignment must stay within the grid.
+    let camera = r#""camera": {"position":[0,2,10], "target":[0,2,0], "up":[0,1,0],
+      "fov_y_deg":60, "width":4294967295, "height":1, "near":0.1, "far":100}"#;
+    let text = scene_with(
+        camera,
+        r#""grid": {"x":8, "y":1, "z":4, "depth":"linear"}"#,
+        r#"{"position":[0,2,5],"radius":1},{"position":[1e9,2,0],"radius":1e3},
+           {"position":[0,2,-20],"radius":3}"#,
+    );
+    let scene = Scene::from_json_str(&text, "wide.json", LightPolicy::Strict).unwrap();
+    let input = myriad::light_input(&scene.lights);
+    let mut lists = LightLists::new();
+    for method in Method::ALL {
+        Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut lists);
+        lists.assert_well_formed(scene.lights.len());
+        assert_eq!(lists.cluster_count(), 32, "{method}");
+    }
+    // The largest grid the format allows (65535 × 65537 × 1 = u32::MAX clusters) reads as valid:
+    // sizing the assignment for it (34 GB of offsets and counts) is the memory budget's job, not
+    // the reader's. One more cluster, and a 1e9 × 1e9 grid, are errors.
+    let ok = scene_with(
+        CAMERA,
+        r#""grid": {"x":65535, "y":65537, "z":1, "depth":"log"}"#,
+        "",
+    );
+    let scene = Scene::from_json_str(&ok, "max.json", LightPolicy::Strict).unwrap();
+    assert_eq!(scene.grid.cluster_count(), u32::MAX as usize);
+    for grid in [
+        r#""grid": {"x":65536, "y":65536, "z":1, "depth":"log"}"#,
+        r#""grid": {"x":1000000000, "y":1000000000, "z":1, "depth":"log"}"#,
+        r#""grid": {"x":1e9, "y":1e9, "z":1, "depth":"log"}"#,
+        r#""grid": {"x":-1, "y":1, "z":1, "depth":"log"}"#,
+        r#""grid": {"x":18446744073709551616, "y":1, "z":1, "depth":"log"}"#,
+    ] {
+        let e = Scene::from_json_str(&scene_with(CAMERA, grid, ""), "g.json", LightPolicy::Strict)
+            .unwrap_err();
+        assert!(e.to_string().contains("g.json"), "{grid}: {e}");
+    }
+}
+
+#[test]
+fn wrong_types_at_the_top_level() {
+    for text in [
+        "[]",
+        "null",
+        "42",
+        "\"scene\"",
+        r#"{"camera": [], "grid": [], "lights": {}}"#,
+        r#"{"lights": "many"}"#,
+        "\u{feff}{}",
+    ] {
+        let e = Scene::from_json_str(text, "t.json", LightPolicy::SkipInvalid).unwrap_err();
+        assert!(e.to_string().contains("t.json"), "{text}: {e}");
+    }
+}
+
+/// A valid one-triangle glTF with its 36-byte position buffer as a data URI; `edit` swaps
+/// pieces of it for hostile ones.
+const TRIANGLE: &str = r#"{"asset":{"version":"2.0"},
+ "buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+ "bufferViews":[{"buffer":0,"byteLength":36}],
+ "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","max":[1,1,0],"min":[0,0,0]}],
+ "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+ "nodes":[{"mesh":0}],
+ "scenes":[{"nodes":[0]}],"scene":0}"#;
+
+fn gltf_edit(pairs: &[(&str, &str)]) -> String {
+    let mut s = TRIANGLE.to_string();
+    for (from, to) in pairs {
+        assert!(s.contains(from), "{from}");
+        s = s.replacen(from, to, 1);
+    }
+    s
+}
+
+/// Loads `text` from a file in `dir` under the guard; returns the result as a string.
+fn load_gltf(dir: &std::path::Path, name: &str, text: String) -> Result<Model, String> {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    guarded(name, Duration::from_secs(20), move || {
+        Model::load(&path, &LoadOptions::without_images()).map_err(|e| e.to_string())
+    })
+}
+
+#[test]
+fn hand_written_hostile_gltf_files_are_errors() {
+    let dir = temp_dir("gltf");
+    let base = load_gltf(&dir, "base.gltf", TRIANGLE.to_string()).unwrap();
+    assert_eq!(base.triangle_count(), 1);
+    let errors: Vec<(&str, String)> = vec![
+        (
+            "count 2^31",
+            gltf_edit(&[(r#""count":3"#, r#""count":2147483648"#)]),
+        ),
+        (
+            "count u32::MAX",
+            gltf_edit(&[(r#""count":3"#, r#""count":4294967295"#)]),
+        ),
+        (
+            "count 2^64",
+            gltf_edit(&[(r#""count":3"#, r#""count":18446744073709551615"#)]),
+        ),
+        ("count -1", gltf_edit(&[(r#""count":3"#, r#""count":-1"#)])),
+        (
+            "byteOffset 2^53",
+            gltf_edit(&[(
+                r#""bufferView":0,"#,
+                r#""bufferView":0,"byteOffset":9007199254740992,"#,
+            )]),
+        ),
+        (
+            "view past buffer",
+            gltf_edit(&[(
+                r#""byteLength":36}]"#,
+                r#""byteLength":36,"byteOffset":4294967295}]"#,
+            )]),
+        ),
+        (
+            "stride 0 with count 2^30",
+            gltf_edit(&[
+                (
+                    r#""byteLength":36}]"#,
+                    r#""byteLength":36,"byteStride":4}]"#,
+                ),
+                (r#""count":3"#, r#""count":1073741824"#),
+            ]),
+        ),
+        (
+            "buffer declares 2^40 bytes",
+            gltf_edit(&[(
+                r#""byteLength":36,"uri""#,
+                r#""byteLength":1099511627776,"uri""#,
+            )]),
+        ),
+        (
+            "accessor index 2^32",
+            gltf_edit(&[(r#""POSITION":0"#, r#""POSITION":4294967296"#)]),
+        ),
+        (
+            "node is its own child",
+            gltf_edit(&[(r#"{"mesh":0}"#, r#"{"mesh":0,"children":[0]}"#)]),
+        ),
+        (
+            "two-node cycle",
+            gltf_edit(&[(
+                r#""nodes":[{"mesh":0}]"#,
+                r#""nodes":[{"mesh":0,"children":[1]},{"children":[0]}]"#,
+            )]),
+        ),
+        (
+            "scene names node 2^31",
+            gltf_edit(&[(r#""nodes":[0]"#, r#""nodes":[2147483648]"#)]),
+        ),
+        (
+            "mesh index huge",
+            gltf_edit(&[(r#"{"mesh":0}"#, r#"{"mesh":99999999}"#)]),
+        ),
+        (
+            "indices past the vertices",
+            gltf_edit(&[
+                (
+                    r#""bufferViews":[{"buffer":0,"byteLength":36}],"#,
+                    r#""bufferViews":[{"buffer":0,"byteLength":36},{"buffer":1,"byteLength":12}],"#,
+                ),
+                (
+                    r#""type":"VEC3","max":[1,1,0],"min":[0,0,0]}]"#,
+                    r#""type":"VEC3","max":[1,1,0],"min":[0,0,0]},
+                       {"bufferView":1,"componentType":5125,"count":3,"type":"SCALAR"}]"#,
+                ),
+                (
+                    r#"AAAAgD8AAAAA"}]"#,
+                    r#"AAAAgD8AAAAA"},{"byteLength":12,"uri":"data:application/octet-stream;base64,/////wAAAAD/////"}]"#,
+                ),
+                (
+                    r#""attributes":{"POSITION":0}"#,
+                    r#""attributes":{"POSITION":0},"indices":1"#,
+                ),
+            ]),
+        ),
+        (
+            "translation 1e39",
+            gltf_edit(&[(r#"{"mesh":0}"#, r#"{"mesh":0,"translation":[1e39,0,0]}"#)]),
+        ),
+        (
+            "scale -inf-ish",
+            gltf_edit(&[(r#"{"mesh":0}"#, r#"{"mesh":0,"scale":[-1e308,1,1]}"#)]),
+        ),
+        (
+            "matrix of 3 numbers",
+            gltf_edit(&[(r#"{"mesh":0}"#, r#"{"mesh":0,"matrix":[1,0,0]}"#)]),
+        ),
+        (
+            "wrong type for count",
+            gltf_edit(&[(r#""count":3"#, r#""count":"3""#)]),
+        ),
+        (
+            "no asset",
+            gltf_edit(&[(r#""asset":{"version":"2.0"},"#, "")]),
+        ),
+    ];
+    let mut loaded = Vec::new();
+    for (what, text) in errors {
+        match load_gltf(&dir, "hostile.gltf", text) {
+            Err(e) => assert!(
+                e.contains("hostile.gltf"),
+                "{what}: error does not name the file: {e}"
+            ),
+            Ok(m) => {
+                eprintln!("{what}: loads, warnings {:?}", m.warnings);
+                loaded.push((what, m.triangle_count()))
+            }
+        }
+    }
+    // Some of these are valid glTF for the loader's purposes (the crate documents what it
+    // tolerates); they must then load with sane contents. Name them so a change is noticed.
+    for (what, tris) in &loaded {
+        assert!(
+            *tris <= 1,
+            "{what}: {tris} triangles from a one-triangle file"
+        );
+    }
+    let names: Vec<&str> = loaded.iter().map(|(w, _)| *w).collect();
+    // Every hostile file is refused ("accessor index 2^32" used to load as index 0, see
+    // `index_2_pow_32_is_an_error`).
+    assert!(names.is_empty(), "hostile glTF files loaded: {names:?}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn exponential_node_graph_is_refused_quickly() {
+    // 40 levels, each node naming the next level's node twice: 2^40 paths.
+    let mut nodes = vec![r#"{"mesh":0}"#.to_string()];
+    for level in 1..40 {
+        nodes.push(format!(r#"{{"children":[{0},{0}]}}"#, level - 1));
+    }
+    let text = gltf_edit(&[
+        (
+            r#""nodes":[{"mesh":0}]"#,
+            &format!(r#""nodes":[{}]"#, nodes.join(",")),
+        ),
+        (r#""nodes":[0]"#, r#""nodes":[39]"#),
+    ]);
+    let dir = temp_dir("dag");
+    let start = Instant::now();
+    let r = load_gltf(&dir, "dag.gltf", text);
+    assert!(r.is_err(), "2^39 instances accepted");
+    assert!(start.elapsed() < Duration::from_secs(10));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Regression (found by this suite): an index of exactly 2^32 (`"POSITION": 4294967296`) used
+/// to load as index 0 — the `gltf` crate (1.4.1) reads indices as u32 and wraps. The loader now
+/// refuses any integer ≥ 2^32, naming where it is.
+#[test]
+fn index_2_pow_32_is_an_error() {
+    let dir = temp_dir("wrap");
+    let text = gltf_edit(&[(r#""POSITION":0"#, r#""POSITION":4294967296"#)]);
+    let r = load_gltf(&dir, "wrap.gltf", text);
+    std::fs::remove_dir_all(dir).unwrap();
+    let message = format!("{:?}", r.expect_err("index 2^32 accepted as index 0"));
+    assert!(
+        message.contains("POSITION") && message.contains("4294967296"),
+        "{message}"
+    );
+}
+
+/// Regression (found by `myriad-fuzz gltf`): gltf-json 1.4.1's validation hook (`mesh.rs:151`)
+/// indexes `root.accessors` without a bounds check, so a primitive whose POSITION names an
+/// accessor that does not exist panicked inside `gltf::Gltf::from_slice`. The loader now checks
+/// those indices on the raw JSON first and returns an error.
+#[test]
+fn position_of_missing_accessor_is_an_error() {
+    let text =
+        r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#;
+    let r = guarded("missing accessor", Duration::from_secs(10), move || {
+        Model::from_gltf_slice(
+            text.as_bytes(),
+            "m.gltf",
+            None,
+            &LoadOptions::without_images(),
+        )
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+    });
+    assert!(r.is_err());
+}
