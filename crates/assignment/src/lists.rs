@@ -38,7 +38,15 @@ impl LightLists {
 
     /// Bytes of the three arrays as uploaded to the GPU.
     pub fn byte_size(&self) -> usize {
-        4 * (self.offsets.len() + self.counts.len() + self.indices.len())
+        Self::byte_size_for(self.counts.len(), self.indices.len())
+    }
+
+    /// Bytes of the lists for `clusters` clusters and `pairs` pairs: `4·(2·clusters + pairs)`.
+    /// With a pair budget ([`crate::Assigner::with_pair_budget`]) this bounds every frame's output
+    /// before it is computed: `byte_size_for(grid.cluster_count(), budget)` (a coarsened grid only
+    /// has fewer clusters).
+    pub const fn byte_size_for(clusters: usize, pairs: usize) -> usize {
+        4 * (2 * clusters + pairs)
     }
 
     /// Resets to `clusters` empty lists, keeping the storage.
