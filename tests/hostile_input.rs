@@ -448,3 +448,24 @@ fn position_of_missing_accessor_is_an_error() {
     });
     assert!(r.is_err());
 }
+
+/// A buffer URI naming a device (`/dev/zero` would be read forever) or a folder is refused.
+#[test]
+fn buffer_uris_naming_devices_or_folders_are_refused() {
+    let dir = temp_dir("devices");
+    for uri in ["/dev/zero", ".", "/"] {
+        let text = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 16, "uri": "{uri}"}}]}}"#
+        );
+        let path = dir.join("device.gltf");
+        std::fs::write(&path, &text).unwrap();
+        let r = guarded("device uri", Duration::from_secs(20), move || {
+            Model::load(&path, &LoadOptions::without_images())
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        });
+        let message = r.expect_err(uri);
+        assert!(message.contains("not a regular file"), "{uri}: {message}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -285,6 +285,16 @@ fn load(
                 "buffers[{i}]{name}: an external file cannot be read without a base folder"
             ));
         }
+        // A URI naming a device or a pipe (`/dev/zero`, a FIFO) would make the read below never
+        // end: only regular files are read. (URIs that do not resolve as written — percent-
+        // encoded names — are left to the gltf crate, which reports missing files itself.)
+        if let (Some(base), Some(uri)) = (base, declared.uri.as_deref())
+            && !uri.starts_with("data:")
+            && let Ok(meta) = std::fs::metadata(base.join(uri))
+            && !meta.is_file()
+        {
+            return Err(format!("buffers[{i}]{name}: not a regular file"));
+        }
         let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)
             .map_err(|e| format!("buffers[{i}]{name}: {}", describe(e)))?;
         if (data.0.len() as u64) < declared.byte_length.0 {
