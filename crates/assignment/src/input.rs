@@ -28,8 +28,9 @@ pub struct SpotInput<'a> {
     pub dir_y: &'a [f32],
     /// World-space z of the axis.
     pub dir_z: &'a [f32],
-    /// Outer half angle in radians. Angles above π/2 (and `π`, the convention for "point light"
-    /// in a mixed column) are assigned as point lights; a zero or non-finite axis likewise.
+    /// Outer half angle in radians. Angles of π/2 or more (`std::f32::consts::FRAC_PI_2`
+    /// included: as an f32 it is a hair wider than 90°), and `π`, the convention for "point
+    /// light" in a mixed column, are assigned as point lights; a zero or non-finite axis likewise.
     pub angle: &'a [f32],
 }
 

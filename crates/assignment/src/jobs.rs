@@ -147,7 +147,9 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 let angle = s.angle[g];
                 let axis = (m * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g])).normalize_or_zero();
                 spots[b].active = false;
-                if angle > 0.0 && angle <= std::f32::consts::FRAC_PI_2 && axis != Vec3::ZERO {
+                // Strictly below f32's π/2, which is a hair *above* the real π/2: the f64 oracle
+                // (and `emit_exact`) treat that angle as "wider than 90°", i.e. as the whole ball.
+                if angle > 0.0 && angle < std::f32::consts::FRAC_PI_2 && axis != Vec3::ZERO {
                     let apex = Vec3::new(vx[b], vy[b], -vd[b]);
                     let range = l.radius[g];
                     let (c, r) = spot_bounding_sphere(

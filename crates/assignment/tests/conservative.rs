@@ -188,3 +188,43 @@ fn invalid_lights_are_rejected_and_counted() {
         assert!(!lists.indices.is_empty());
     }
 }
+
+/// Regression (found by `myriad-fuzz assign`): a spot angle of exactly `f32::consts::FRAC_PI_2`
+/// is a hair above the real π/2. The f64 oracle treats it as wider than 90° (the whole ball); the
+/// f32 path used to treat it as a 90° cone and missed the clusters behind the apex plane.
+#[test]
+fn spot_angle_of_exactly_f32_half_pi_is_a_point_light_everywhere() {
+    let scene = make_scene(&SceneParams {
+        seed: 1090022740809273286,
+        fov_deg: 178.77597,
+        aspect: 2.5415418,
+        near: 2.6662855,
+        far_ratio: 467.3597,
+        eye_scale: 1.0e6,
+        dims: UVec3::new(4, 1, 4),
+        slicing: 0,
+        lights: 27,
+        spots: true,
+    });
+    assert_eq!(scene.lights.angle[3], std::f32::consts::FRAC_PI_2);
+    check_scene(&scene, true, "spot angle f32 pi/2");
+    // A hand-made one: a big half-pi spot just behind the camera, pointing away from the view.
+    let mut lights = Columns::default();
+    lights.push_spot(
+        Vec3::new(0.0, 0.0, 0.5),
+        50.0,
+        Vec3::Z,
+        std::f32::consts::FRAC_PI_2,
+    );
+    let cam = camera(90.0, 0.1, 100.0);
+    let grid = ClusterGrid::new(UVec3::new(4, 3, 4), DepthSlicing::Log, 0.1, 100.0);
+    check_scene(
+        &Scene {
+            camera: cam,
+            grid,
+            lights,
+        },
+        true,
+        "half-pi spot behind the camera",
+    );
+}
