@@ -135,14 +135,7 @@ fn stress_scene(p: &Stress) -> Scene {
         p.near,
         far,
     );
-    let slicing = match p.slicing % 3 {
-        0 => DepthSlicing::Linear,
-        1 => DepthSlicing::Log,
-        _ => DepthSlicing::LogWithNearSlice {
-            first_slice_depth: p.near * (far / p.near).powf(0.1),
-        },
-    };
-    let grid = ClusterGrid::new(p.dims, slicing, p.near, far);
+    let grid = ClusterGrid::new(p.dims, slicing_of(p.slicing, p.near, far), p.near, far);
     let (right, cam_up, fwd) = {
         let (r, u, f) = camera.basis_f64();
         (r.as_vec3(), u.as_vec3(), f.as_vec3())

@@ -155,6 +155,18 @@ pub fn random_dir(rng: &mut impl Rng) -> Vec3 {
     }
 }
 
+/// Depth slicing by code: 0 linear, 1 log, 2 log with a near slice ending a tenth of the way
+/// (in log depth) from `near` to `far`.
+pub fn slicing_of(code: u8, near: f32, far: f32) -> DepthSlicing {
+    match code % 3 {
+        0 => DepthSlicing::Linear,
+        1 => DepthSlicing::Log,
+        _ => DepthSlicing::LogWithNearSlice {
+            first_slice_depth: near * (far / near).powf(0.1),
+        },
+    }
+}
+
 pub struct SceneParams {
     pub seed: u64,
     pub fov_deg: f32,
@@ -190,14 +202,7 @@ pub fn make_scene(p: &SceneParams) -> Scene {
         p.near,
         far,
     );
-    let slicing = match p.slicing % 3 {
-        0 => DepthSlicing::Linear,
-        1 => DepthSlicing::Log,
-        _ => DepthSlicing::LogWithNearSlice {
-            first_slice_depth: p.near * p.far_ratio.powf(0.1),
-        },
-    };
-    let grid = ClusterGrid::new(p.dims, slicing, p.near, far);
+    let grid = ClusterGrid::new(p.dims, slicing_of(p.slicing, p.near, far), p.near, far);
     let (right, up, fwd) = {
         let (r, u, f) = camera.basis_f64();
         (r.as_vec3(), u.as_vec3(), f.as_vec3())
