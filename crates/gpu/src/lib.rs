@@ -1,12 +1,52 @@
-//! # myriad-gpu — the wgpu renderer (not yet built)
+//! # myriad-gpu — the wgpu renderer
 //!
-//! This crate will hold everything that names `wgpu`: the G-buffer pass, clustered deferred and
-//! forward shading over the CPU-built light lists, the brute-force and tiled baselines, the heat
-//! map, pipelined uploads through a ring of buffers, headless render targets and GPU timing
-//! (issue "GPU renderer"). It will work on the caller's `wgpu::Device`/`Queue`, so an engine can
-//! drop it in, and can also create its own headless adapter for the CLI.
+//! Everything that names `wgpu` lives here: the G-buffer pass, full-screen deferred shading that
+//! visits only the lights of each pixel's cluster (or every light, the brute-force reference, or
+//! a one-slice grid's lists, 2D tiled shading), the clustered forward pass for alpha-blended
+//! materials, the lights-per-pixel heat map, light and list uploads through a ring of staging
+//! buffers, pass timestamps, headless targets and PNG read-back.
 //!
-//! Until then it only fixes the crate's place in the graph: it depends on `myriad-cluster-math`
-//! (the cluster index of a pixel must be computed exactly as the CPU computes it) and on nothing
-//! that knows about scenes or assignment methods.
+//! It works on the caller's `wgpu::Device`/`Queue` ([`GpuContext::from_device`]), so an engine
+//! can drop it in, or creates its own headless adapter ([`GpuContext::headless`]) for the CLI and
+//! tests. It depends on `myriad-cluster-math` (the pixel → cluster mapping must be the CPU's, bit
+//! for bit: `shaders/common/cluster.wgsl` is tested against `ClusterGrid::cluster_of_pixel`) and on
+//! nothing that knows scenes or assignment methods: light columns and CSR lists arrive as plain
+//! slices ([`LightColumns`], [`ClusterLists`]).
+//!
+//! ```no_run
+//! use myriad_gpu::{GpuContext, HeadlessTarget, Renderer, HEADLESS_FORMAT};
+//! let ctx = GpuContext::headless()?;
+//! let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
+//! let target = HeadlessTarget::new(&ctx.device, 640, 360);
+//! // renderer.upload_scene(..), then renderer.render(&ctx, &scene, &frame, &target.view) per frame.
+//! # Ok::<(), myriad_gpu::GpuError>(())
+//! ```
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod buffers;
+pub mod cluster_check;
+mod context;
+mod error;
+mod frame_input;
+pub mod layout;
+pub mod legend;
+mod pipelines;
+mod readback;
+mod renderer;
+mod scene;
+pub mod shaders;
+mod targets;
+mod timing;
+
+pub use context::{GpuContext, SKIP_GPU_TESTS_VAR};
+pub use error::GpuError;
+pub use frame_input::{
+    ClusterLists, LightColumns, SPOT_INNER_FRACTION, SpotColumns, fill_gpu_lights,
+};
+pub use pipelines::ShadingMode;
+pub use readback::{read_rgba8, save_png};
+pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_uniforms};
+pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
+pub use targets::{GBuffer, HEADLESS_FORMAT, HeadlessTarget};
+pub use timing::PassTimes;

@@ -1,0 +1,122 @@
+//! Runs the shaders' `cluster_of_pixel` (`shaders/common/cluster.wgsl`) in a compute pass over
+//! many (pixel, view depth) samples, so tests can compare the GPU's answer with
+//! `ClusterGrid::cluster_of_pixel` sample by sample.
+
+use crate::layout::ClusterCheckUniforms;
+use crate::readback::map_and_read;
+use crate::shaders::PassShader;
+use crate::{GpuContext, GpuError};
+use myriad_cluster_math::ClusterGrid;
+use wgpu::util::DeviceExt;
+
+/// The cluster id the GPU computes for each `(pixel, view depth)` sample on a `width × height`
+/// target. Blocks until done.
+pub fn gpu_cluster_ids(
+    ctx: &GpuContext,
+    grid: &ClusterGrid,
+    width: u32,
+    height: u32,
+    pixels: &[[u32; 2]],
+    depths: &[f32],
+) -> Result<Vec<u32>, GpuError> {
+    if pixels.len() != depths.len() || pixels.is_empty() {
+        return Err(GpuError::InvalidInput(format!(
+            "{} pixels and {} depths (need the same, non-zero count)",
+            pixels.len(),
+            depths.len()
+        )));
+    }
+    let device = &ctx.device;
+    let groups = (pixels.len() as u64).div_ceil(64);
+    let max_groups = device.limits().max_compute_workgroups_per_dimension as u64;
+    if groups > max_groups {
+        return Err(GpuError::InvalidInput(format!(
+            "{} samples need {groups} workgroups, more than the {max_groups} of one dispatch",
+            pixels.len()
+        )));
+    }
+    let groups = groups as u32;
+    let mut edges = Vec::new();
+    grid.fill_slice_edges(&mut edges);
+    let uniforms = ClusterCheckUniforms {
+        target_size: [width, height],
+        sample_count: pixels.len() as u32,
+        _pad: 0,
+        grid_dims: [grid.dims.x, grid.dims.y, grid.dims.z, 0],
+    };
+    let init = |label, contents: &[u8], usage| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
+    };
+    let storage = wgpu::BufferUsages::STORAGE;
+    let params = init(
+        "check params",
+        bytemuck::bytes_of(&uniforms),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let pixel_buffer = init("check pixels", bytemuck::cast_slice(pixels), storage);
+    let depth_buffer = init("check depths", bytemuck::cast_slice(depths), storage);
+    let edge_buffer = init("check edges", bytemuck::cast_slice(&edges), storage);
+    let bytes = pixels.len() as u64 * 4;
+    let out = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("check ids"),
+        size: bytes,
+        usage: storage | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("check readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let module = PassShader::ClusterIndexCheck.module(device);
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("cluster index check"),
+        layout: None,
+        module: &module,
+        entry_point: Some("cs_main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("cluster index check"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: pixel_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: depth_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: edge_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: out.as_entire_binding(),
+            },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(groups, 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(&out, 0, &readback, 0, bytes);
+    ctx.queue.submit([encoder.finish()]);
+    let data = map_and_read(ctx, &readback)?;
+    Ok(bytemuck::cast_slice(&data).to_vec())
+}

@@ -1,0 +1,109 @@
+//! The device the renderer works on: the caller's own (an engine) or one this crate creates for
+//! headless use (the CLI, tests).
+
+use crate::GpuError;
+
+/// A wgpu device and queue plus what the renderer needs to know about them.
+#[derive(Clone, Debug)]
+pub struct GpuContext {
+    /// The device every resource is created on.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter, when this crate created it (engines may not have it at hand).
+    pub adapter_info: Option<wgpu::AdapterInfo>,
+}
+
+impl GpuContext {
+    /// Wraps an engine's device and queue. Timestamp queries are used when the device was
+    /// created with [`wgpu::Features::TIMESTAMP_QUERY`].
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Self {
+        Self {
+            device,
+            queue,
+            adapter_info: None,
+        }
+    }
+
+    /// Creates a headless device on the best adapter wgpu finds (a real GPU, else a software
+    /// one such as Mesa's llvmpipe), with timestamp queries when the adapter has them and the
+    /// adapter's own limits (so large light lists fit).
+    pub fn headless() -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| GpuError::NoAdapter {
+            detail: e.to_string(),
+        })?;
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("myriad"),
+            required_features: adapter.features() & wanted,
+            required_limits: adapter.limits(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::RequestDevice {
+            adapter: info.name.clone(),
+            detail: e.to_string(),
+        })?;
+        Ok(Self {
+            device,
+            queue,
+            adapter_info: Some(info),
+        })
+    }
+
+    /// Whether passes can be timed with timestamp queries.
+    pub fn has_timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// A one-line description of the adapter ("NVIDIA H100 (Vulkan, DiscreteGpu)").
+    pub fn describe(&self) -> String {
+        match &self.adapter_info {
+            Some(info) => format!(
+                "{} ({:?}, {:?}, driver {} {})",
+                info.name, info.backend, info.device_type, info.driver, info.driver_info
+            ),
+            None => "caller's device".to_string(),
+        }
+    }
+
+    /// Blocks until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device(e.to_string()))
+    }
+}
+
+/// Set to `1` to let GPU tests pass (with a note on stderr) where no adapter exists at all.
+/// Without it, a GPU test on a machine without any adapter fails and says how to get one.
+pub const SKIP_GPU_TESTS_VAR: &str = "MYRIAD_SKIP_GPU_TESTS";
+
+impl GpuContext {
+    /// For tests: a headless context; `None` only when there is no adapter *and*
+    /// [`SKIP_GPU_TESTS_VAR`] is `1`; otherwise a missing adapter panics with the reason.
+    pub fn headless_for_tests() -> Option<Self> {
+        match Self::headless() {
+            Ok(ctx) => Some(ctx),
+            Err(e) if std::env::var(SKIP_GPU_TESTS_VAR).as_deref() == Ok("1") => {
+                eprintln!("skipping GPU test ({SKIP_GPU_TESTS_VAR}=1): {e}");
+                None
+            }
+            Err(e) => panic!(
+                "GPU tests need an adapter: {e}. Set {SKIP_GPU_TESTS_VAR}=1 to skip them explicitly."
+            ),
+        }
+    }
+}

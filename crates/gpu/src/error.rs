@@ -1,0 +1,45 @@
+//! What can go wrong on the GPU side, each with a message that says what to do.
+
+/// Errors of the renderer.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// wgpu found no adapter at all (no GPU driver, no software Vulkan).
+    #[error(
+        "no GPU adapter found ({detail}). On Debian/Ubuntu, Mesa's software Vulkan driver gives one \
+         without a GPU: `apt-get install -y mesa-vulkan-drivers`"
+    )]
+    NoAdapter {
+        /// What wgpu said.
+        detail: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("the GPU adapter {adapter:?} refused to create a device: {detail}")]
+    RequestDevice {
+        /// Adapter name.
+        adapter: String,
+        /// What wgpu said.
+        detail: String,
+    },
+    /// A buffer would exceed what the device can bind; nothing is truncated, the frame is refused.
+    #[error(
+        "{what} needs {bytes} bytes, more than this device can bind in one storage buffer \
+         ({limit} bytes); use a coarser grid or a pair budget"
+    )]
+    BufferTooLarge {
+        /// Which buffer.
+        what: &'static str,
+        /// Bytes needed.
+        bytes: u64,
+        /// The device's `max_storage_buffer_binding_size`.
+        limit: u64,
+    },
+    /// Frame inputs that do not fit together (list sizes vs grid, target size vs grid).
+    #[error("invalid frame input: {0}")]
+    InvalidInput(String),
+    /// Mapping a read-back buffer failed.
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+    /// The device reported a validation or out-of-memory error.
+    #[error("wgpu reported an error: {0}")]
+    Device(String),
+}

@@ -1,0 +1,173 @@
+//! What a frame hands the renderer: borrowed light columns and CSR light lists (no scene or
+//! assignment types, so this crate depends on neither), and their conversion to GPU records.
+
+use crate::layout::GpuLight;
+use glam::DVec3;
+
+/// Spot columns, one row per light (point lights: angle >= π).
+#[derive(Clone, Copy, Debug)]
+pub struct SpotColumns<'a> {
+    /// Unit axis, x.
+    pub dir_x: &'a [f32],
+    /// Unit axis, y.
+    pub dir_y: &'a [f32],
+    /// Unit axis, z.
+    pub dir_z: &'a [f32],
+    /// Outer half angle, radians.
+    pub angle: &'a [f32],
+}
+
+/// A frame's lights as SoA columns, world space; all columns have the same length.
+#[derive(Clone, Copy, Debug)]
+pub struct LightColumns<'a> {
+    /// Position x.
+    pub x: &'a [f32],
+    /// Position y.
+    pub y: &'a [f32],
+    /// Position z.
+    pub z: &'a [f32],
+    /// Range.
+    pub radius: &'a [f32],
+    /// Linear colour, red.
+    pub r: &'a [f32],
+    /// Linear colour, green.
+    pub g: &'a [f32],
+    /// Linear colour, blue.
+    pub b: &'a [f32],
+    /// Intensity multiplier.
+    pub intensity: &'a [f32],
+    /// Spot columns, when any light is a spot.
+    pub spot: Option<SpotColumns<'a>>,
+}
+
+impl LightColumns<'_> {
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there are no lights.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Whether every column has [`Self::len`] rows.
+    pub fn check(&self) -> Result<(), String> {
+        let n = self.len();
+        let mut lens = vec![
+            self.y.len(),
+            self.z.len(),
+            self.radius.len(),
+            self.r.len(),
+            self.g.len(),
+            self.b.len(),
+            self.intensity.len(),
+        ];
+        if let Some(s) = &self.spot {
+            lens.extend([s.dir_x.len(), s.dir_y.len(), s.dir_z.len(), s.angle.len()]);
+        }
+        match lens.iter().find(|&&l| l != n) {
+            Some(l) => Err(format!(
+                "light columns differ in length: {n} positions, a column of {l}"
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Cluster light lists in CSR form: cluster `c` has `indices[offsets[c]..offsets[c] + counts[c]]`.
+#[derive(Clone, Copy, Debug)]
+pub struct ClusterLists<'a> {
+    /// Start of each cluster's run in `indices`.
+    pub offsets: &'a [u32],
+    /// Lights per cluster.
+    pub counts: &'a [u32],
+    /// Light indices (into the uploaded light columns).
+    pub indices: &'a [u32],
+}
+
+impl ClusterLists<'_> {
+    /// Checks the lists against the grid's cluster count and the number of lights: every run
+    /// inside `indices`, every index a light.
+    pub fn check(&self, clusters: usize, lights: usize) -> Result<(), String> {
+        if self.offsets.len() != clusters || self.counts.len() != clusters {
+            return Err(format!(
+                "light lists describe {} offsets and {} counts for a grid of {clusters} clusters",
+                self.offsets.len(),
+                self.counts.len()
+            ));
+        }
+        let total = self.indices.len() as u64;
+        if let Some(c) =
+            (0..clusters).find(|&c| self.offsets[c] as u64 + self.counts[c] as u64 > total)
+        {
+            return Err(format!("cluster {c}'s list runs past the {total} indices"));
+        }
+        if let Some(&i) = self.indices.iter().max().filter(|&&m| m as usize >= lights) {
+            return Err(format!(
+                "light index {i} in the lists, but only {lights} lights"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The largest list.
+    pub fn max_count(&self) -> u32 {
+        self.counts.iter().copied().max().unwrap_or(0)
+    }
+}
+
+/// Fraction of the outer cone angle where a spot reaches full strength.
+pub const SPOT_INNER_FRACTION: f32 = 0.8;
+
+/// Converts the columns to camera-relative GPU records in `out` (reusing its storage).
+/// Positions are differenced in f64, so lights far from the origin keep their precision near the
+/// camera. Invalid rows (non-finite values, radius <= 0, negative colour) become records that
+/// light nothing (radius 0 at the camera) — the assignment skips the same rows — and are counted
+/// in the return value.
+pub fn fill_gpu_lights(
+    columns: &LightColumns<'_>,
+    camera: DVec3,
+    out: &mut Vec<GpuLight>,
+) -> usize {
+    out.clear();
+    out.reserve(columns.len());
+    let mut skipped = 0;
+    for i in 0..columns.len() {
+        let position = DVec3::new(
+            columns.x[i] as f64,
+            columns.y[i] as f64,
+            columns.z[i] as f64,
+        );
+        let color = [columns.r[i], columns.g[i], columns.b[i]].map(|c| c * columns.intensity[i]);
+        let radius = columns.radius[i];
+        let mut light = GpuLight {
+            position: (position - camera).as_vec3().to_array(),
+            radius,
+            color,
+            spot_cos_outer: GpuLight::POINT_COS_OUTER,
+            spot_dir: [0.0; 3],
+            spot_cos_inner: 1.0,
+        };
+        let mut valid = position.is_finite()
+            && radius.is_finite()
+            && radius > 0.0
+            && color.iter().all(|c| c.is_finite() && *c >= 0.0);
+        if let Some(s) = &columns.spot {
+            let angle = s.angle[i];
+            let dir = [s.dir_x[i], s.dir_y[i], s.dir_z[i]];
+            valid &= angle.is_finite() && angle > 0.0 && dir.iter().all(|d| d.is_finite());
+            if angle < std::f32::consts::PI {
+                light.spot_cos_outer = angle.cos();
+                light.spot_cos_inner = (angle * SPOT_INNER_FRACTION).cos();
+                light.spot_dir = dir;
+            }
+        }
+        if !valid {
+            skipped += 1;
+            light = GpuLight::default();
+        }
+        out.push(light);
+    }
+    skipped
+}

@@ -1,0 +1,136 @@
+//! The heat map's legend: a strip under the image with the colour ramp and its scale
+//! (0, half, max lights per pixel), drawn on the CPU after read-back with a built-in 3×5 digit
+//! font, so the PNG explains itself.
+
+/// The ramp's colour stops as sRGB bytes (the same stops as `heat_ramp` in
+/// `shaders/common/lighting.wgsl`).
+const STOPS: [[f32; 3]; 5] = [
+    [0.0, 0.0, 0.5],
+    [0.0, 0.6, 1.0],
+    [0.0, 0.9, 0.2],
+    [1.0, 0.9, 0.0],
+    [0.9, 0.0, 0.0],
+];
+
+/// The ramp colour for `t` in [0, 1], as sRGB bytes.
+pub fn heat_color(t: f32) -> [u8; 3] {
+    let x = t.clamp(0.0, 1.0) * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f32;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    [0, 1, 2].map(|c| ((a[c] + (b[c] - a[c]) * f) * 255.0).round() as u8)
+}
+
+/// 3×5 glyphs for 0–9, one row per `u8` (bits 2..0 = left..right).
+const DIGITS: [[u8; 5]; 10] = [
+    [7, 5, 5, 5, 7],
+    [2, 6, 2, 2, 7],
+    [7, 1, 7, 4, 7],
+    [7, 1, 7, 1, 7],
+    [5, 5, 7, 1, 1],
+    [7, 4, 7, 1, 7],
+    [7, 4, 7, 5, 7],
+    [7, 1, 1, 1, 1],
+    [7, 5, 7, 5, 7],
+    [7, 5, 7, 1, 7],
+];
+
+/// Pixels per font pixel.
+const SCALE: u32 = 2;
+/// Height of the legend strip.
+pub const LEGEND_HEIGHT: u32 = 28;
+
+/// Returns the image with a legend strip appended below it, and the new height. `heat_max` is
+/// the light count at the top of the ramp.
+pub fn with_heat_legend(rgba: &[u8], width: u32, height: u32, heat_max: u32) -> (Vec<u8>, u32) {
+    let new_height = height + LEGEND_HEIGHT;
+    let mut out = Vec::with_capacity((width * new_height * 4) as usize);
+    out.extend_from_slice(rgba);
+    out.resize((width * new_height * 4) as usize, 0);
+    let mut put = |x: u32, y: u32, c: [u8; 3]| {
+        if x < width && y < new_height {
+            let i = ((y * width + x) * 4) as usize;
+            out[i..i + 4].copy_from_slice(&[c[0], c[1], c[2], 255]);
+        }
+    };
+    // Background, then the ramp bar across the width (with a margin).
+    for y in height..new_height {
+        for x in 0..width {
+            put(x, y, [16, 16, 16]);
+        }
+    }
+    let margin = 4.min(width / 4);
+    let bar_width = width.saturating_sub(2 * margin).max(1);
+    for y in height + 3..height + 13 {
+        for x in 0..bar_width {
+            put(
+                margin + x,
+                y,
+                heat_color(x as f32 / (bar_width - 1).max(1) as f32),
+            );
+        }
+    }
+    // Labels at 0, the middle and the end of the bar.
+    let text_y = height + 16;
+    let labels = [(0, 0.0), (heat_max / 2, 0.5), (heat_max, 1.0)];
+    for (value, at) in labels {
+        let text = value.to_string();
+        let text_width = text.len() as u32 * 4 * SCALE;
+        let anchor = margin + (at * (bar_width - 1) as f32) as u32;
+        let x0 = anchor.saturating_sub((text_width as f32 * at) as u32);
+        for (n, ch) in text.bytes().enumerate() {
+            let glyph = DIGITS[(ch - b'0') as usize];
+            for (row, bits) in glyph.iter().enumerate() {
+                for col in 0..3 {
+                    if bits & (4 >> col) != 0 {
+                        for dy in 0..SCALE {
+                            for dx in 0..SCALE {
+                                put(
+                                    x0 + (n as u32 * 4 + col) * SCALE + dx,
+                                    text_y + row as u32 * SCALE + dy,
+                                    [230, 230, 230],
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (out, new_height)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramp_ends_and_stops() {
+        assert_eq!(heat_color(0.0), [0, 0, 128]);
+        assert_eq!(heat_color(1.0), [230, 0, 0]);
+        assert_eq!(heat_color(0.5), [0, 230, 51]);
+        assert_eq!(heat_color(-1.0), heat_color(0.0));
+        assert_eq!(heat_color(2.0), heat_color(1.0));
+    }
+
+    #[test]
+    fn legend_keeps_image_and_draws_bar_and_labels() {
+        let (w, h) = (64, 8);
+        let image = vec![7u8; (w * h * 4) as usize];
+        let (out, new_h) = with_heat_legend(&image, w, h, 250);
+        assert_eq!(new_h, h + LEGEND_HEIGHT);
+        assert_eq!(&out[..image.len()], &image[..]);
+        let px = |x: u32, y: u32| {
+            let i = ((y * w + x) * 4) as usize;
+            [out[i], out[i + 1], out[i + 2]]
+        };
+        assert_eq!(px(4, h + 5), heat_color(0.0));
+        assert_eq!(px(4 + 55, h + 5), heat_color(1.0));
+        // Some label pixels are lit in the text row.
+        let lit = (0..w)
+            .flat_map(|x| (h + 16..h + 26).map(move |y| (x, y)))
+            .filter(|&(x, y)| px(x, y) == [230, 230, 230])
+            .count();
+        assert!(lit > 20, "only {lit} label pixels");
+    }
+}

@@ -1,0 +1,331 @@
+//! Bind group layouts and render pipelines, with the shader variants each frame needs.
+//!
+//! Variants are WGSL pipeline-overridable constants, not string edits: `MODE` (light lists or
+//! every light), `HEAT_MAP`, and `HAS_SPOTS` (false compiles the spot-cone code out). Each
+//! combination is built once, on first use, and cached.
+
+use crate::layout::Vertex;
+use crate::shaders::PassShader;
+use crate::targets::{ALBEDO_FORMAT, DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
+use std::collections::HashMap;
+
+/// Which lights a pixel visits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ShadingMode {
+    /// Only the lights of the pixel's cluster, from the uploaded lists: clustered shading, or 2D
+    /// tiled shading when the grid has one depth slice.
+    Lists,
+    /// Every light for every pixel (the reference and the baseline).
+    BruteForce,
+}
+
+impl ShadingMode {
+    fn constant(self) -> f64 {
+        match self {
+            ShadingMode::Lists => 0.0,
+            ShadingMode::BruteForce => 1.0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct DeferredKey {
+    mode: ShadingMode,
+    heat_map: bool,
+    has_spots: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct ForwardKey {
+    mode: ShadingMode,
+    has_spots: bool,
+}
+
+/// Layouts, modules and the pipeline cache.
+#[derive(Debug)]
+pub(crate) struct Pipelines {
+    output_format: wgpu::TextureFormat,
+    pub frame_layout: wgpu::BindGroupLayout,
+    pub deferred_inputs_layout: wgpu::BindGroupLayout,
+    pub lights_layout: wgpu::BindGroupLayout,
+    pub material_layout: wgpu::BindGroupLayout,
+    gbuffer_module: wgpu::ShaderModule,
+    deferred_module: wgpu::ShaderModule,
+    forward_module: wgpu::ShaderModule,
+    pub gbuffer: wgpu::RenderPipeline,
+    deferred: HashMap<DeferredKey, wgpu::RenderPipeline>,
+    forward: HashMap<ForwardKey, wgpu::RenderPipeline>,
+}
+
+fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+const UNFILTERED: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { filterable: false };
+
+fn color_target(
+    format: wgpu::TextureFormat,
+    blend: Option<wgpu::BlendState>,
+) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+impl Pipelines {
+    pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame"),
+            entries: &[uniform_entry(0, vf)],
+        });
+        let deferred_inputs_layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("deferred inputs"),
+                entries: &[
+                    uniform_entry(0, vf),
+                    texture_entry(1, UNFILTERED),
+                    texture_entry(2, UNFILTERED),
+                    texture_entry(3, UNFILTERED),
+                    texture_entry(4, wgpu::TextureSampleType::Depth),
+                ],
+            });
+        let lights_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lights and lists"),
+            entries: &[
+                storage_entry(0),
+                storage_entry(1),
+                storage_entry(2),
+                storage_entry(3),
+                storage_entry(4),
+            ],
+        });
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("material"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+                texture_entry(1, wgpu::TextureSampleType::Float { filterable: true }),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let gbuffer_module = PassShader::GBuffer.module(device);
+        let deferred_module = PassShader::Deferred.module(device);
+        let forward_module = PassShader::Forward.module(device);
+
+        let gbuffer_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
+            immediate_size: 0,
+        });
+        let gbuffer = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer"),
+            layout: Some(&gbuffer_layout),
+            vertex: wgpu::VertexState {
+                module: &gbuffer_module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(Vertex::LAYOUT)],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &gbuffer_module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[
+                    color_target(ALBEDO_FORMAT, None),
+                    color_target(NORMAL_FORMAT, None),
+                    color_target(MATERIAL_FORMAT, None),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            output_format,
+            frame_layout,
+            deferred_inputs_layout,
+            lights_layout,
+            material_layout,
+            gbuffer_module,
+            deferred_module,
+            forward_module,
+            gbuffer,
+            deferred: HashMap::new(),
+            forward: HashMap::new(),
+        }
+    }
+
+    /// The deferred pipeline for this combination, built on first use.
+    pub fn deferred(
+        &mut self,
+        device: &wgpu::Device,
+        mode: ShadingMode,
+        heat_map: bool,
+        has_spots: bool,
+    ) -> &wgpu::RenderPipeline {
+        let key = DeferredKey {
+            mode,
+            heat_map,
+            has_spots,
+        };
+        if !self.deferred.contains_key(&key) {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("deferred"),
+                bind_group_layouts: &[
+                    Some(&self.deferred_inputs_layout),
+                    Some(&self.lights_layout),
+                ],
+                immediate_size: 0,
+            });
+            let constants = [
+                ("MODE", mode.constant()),
+                ("HEAT_MAP", f64::from(u8::from(heat_map))),
+                ("HAS_SPOTS", f64::from(u8::from(has_spots))),
+            ];
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                zero_initialize_workgroup_memory: false,
+            };
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("deferred"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &self.deferred_module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.deferred_module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: options,
+                    targets: &[color_target(self.output_format, None)],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            self.deferred.insert(key, pipeline);
+        }
+        &self.deferred[&key]
+    }
+
+    /// The forward pipeline for this combination, built on first use.
+    pub fn forward(
+        &mut self,
+        device: &wgpu::Device,
+        mode: ShadingMode,
+        has_spots: bool,
+    ) -> &wgpu::RenderPipeline {
+        let key = ForwardKey { mode, has_spots };
+        if !self.forward.contains_key(&key) {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("forward"),
+                bind_group_layouts: &[
+                    Some(&self.frame_layout),
+                    Some(&self.lights_layout),
+                    Some(&self.material_layout),
+                ],
+                immediate_size: 0,
+            });
+            let constants = [
+                ("MODE", mode.constant()),
+                ("HAS_SPOTS", f64::from(u8::from(has_spots))),
+            ];
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                zero_initialize_workgroup_memory: false,
+            };
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("forward"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &self.forward_module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(Vertex::LAYOUT)],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.forward_module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: options,
+                    targets: &[color_target(
+                        self.output_format,
+                        Some(wgpu::BlendState::ALPHA_BLENDING),
+                    )],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            self.forward.insert(key, pipeline);
+        }
+        &self.forward[&key]
+    }
+
+    /// The module of the G-buffer pass (kept alive with the pipeline).
+    #[allow(dead_code)]
+    pub fn gbuffer_module(&self) -> &wgpu::ShaderModule {
+        &self.gbuffer_module
+    }
+}

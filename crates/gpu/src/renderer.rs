@@ -1,0 +1,507 @@
+//! The frame: upload what changed, G-buffer, deferred shading (clustered, tiled, brute force or
+//! heat map), forward pass for blended geometry, pass timestamps.
+
+use crate::buffers::{GrowableBuffer, stage};
+use crate::frame_input::{ClusterLists, LightColumns, fill_gpu_lights};
+use crate::layout::{FrameUniforms, GpuLight};
+use crate::pipelines::{Pipelines, ShadingMode};
+use crate::scene::{GpuScene, SceneGeometry};
+use crate::targets::GBuffer;
+use crate::timing::{PassTimer, PassTimes, TimedPass};
+use crate::{GpuContext, GpuError};
+use glam::{DMat4, Mat4};
+use myriad_cluster_math::{Camera, ClusterGrid};
+use std::time::Instant;
+
+/// Staging chunk size: a frame of 10k lights and their lists fits in one or two chunks; larger
+/// uploads get chunks of their own size.
+const STAGING_CHUNK_BYTES: u64 = 4 << 20;
+
+/// Look and heat-map settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingSettings {
+    /// Ambient term as a fraction of albedo.
+    pub ambient: f32,
+    /// Exposure before tone mapping.
+    pub exposure: f32,
+    /// Lights per pixel at the top of the heat-map ramp; `None` = the largest list (or the light
+    /// count for brute force).
+    pub heat_max: Option<u32>,
+}
+
+impl Default for ShadingSettings {
+    fn default() -> Self {
+        Self {
+            ambient: 0.03,
+            exposure: 1.0,
+            heat_max: None,
+        }
+    }
+}
+
+/// One frame's inputs.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameDesc<'a> {
+    /// The camera; its `width × height` must be the target's size.
+    pub camera: &'a Camera,
+    /// The grid the lists were built for (its depth range may be fitted, narrower than the
+    /// camera's).
+    pub grid: &'a ClusterGrid,
+    /// Which lights each pixel visits.
+    pub mode: ShadingMode,
+    /// Write lights-per-pixel instead of the lit image.
+    pub heat_map: bool,
+    /// This frame's lights, or `None` to keep the last upload (allowed only while the camera
+    /// position is unchanged: records are camera-relative).
+    pub lights: Option<LightColumns<'a>>,
+    /// This frame's lists, or `None` to keep the last upload. Needed for [`ShadingMode::Lists`].
+    pub lists: Option<ClusterLists<'a>>,
+    /// Look settings.
+    pub settings: ShadingSettings,
+}
+
+/// What a frame cost on the CPU side, and what it moved.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameReport {
+    /// Bytes written through the staging ring (lights, lists, slice edges).
+    pub upload_bytes: u64,
+    /// CPU seconds converting lights and writing the staging buffers.
+    pub upload_seconds: f64,
+    /// CPU seconds encoding and submitting the passes.
+    pub encode_seconds: f64,
+    /// Lights uploaded.
+    pub lights: usize,
+    /// Lights with invalid values, uploaded as records that light nothing.
+    pub skipped_lights: usize,
+    /// Whether the forward pass ran.
+    pub forward_pass: bool,
+}
+
+/// The renderer: pipelines, G-buffer, light and list buffers, the staging ring, the timer.
+#[derive(Debug)]
+pub struct Renderer {
+    pipelines: Pipelines,
+    gbuffer: Option<GBuffer>,
+    frame_buffer: wgpu::Buffer,
+    frame_group: wgpu::BindGroup,
+    deferred_inputs: Option<wgpu::BindGroup>,
+    lights: GrowableBuffer,
+    offsets: GrowableBuffer,
+    counts: GrowableBuffer,
+    indices: GrowableBuffer,
+    slice_edges: GrowableBuffer,
+    lights_group: Option<wgpu::BindGroup>,
+    belt: wgpu::util::StagingBelt,
+    timer: PassTimer,
+    scratch_lights: Vec<GpuLight>,
+    scratch_edges: Vec<f32>,
+    light_count: usize,
+    lights_camera: Option<[f32; 3]>,
+    lists_uploaded: Option<(usize, u32)>,
+    has_spots: bool,
+}
+
+impl Renderer {
+    /// A renderer that writes its output into textures of `output_format` (the headless target's
+    /// [`crate::HEADLESS_FORMAT`], or an engine's).
+    pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Self {
+        let device = &ctx.device;
+        let pipelines = Pipelines::new(device, output_format);
+        let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame"),
+            layout: &pipelines.frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame_buffer.as_entire_binding(),
+            }],
+        });
+        Self {
+            gbuffer: None,
+            frame_group,
+            frame_buffer,
+            deferred_inputs: None,
+            lights: GrowableBuffer::new(device, "lights"),
+            offsets: GrowableBuffer::new(device, "cluster offsets"),
+            counts: GrowableBuffer::new(device, "cluster counts"),
+            indices: GrowableBuffer::new(device, "light indices"),
+            slice_edges: GrowableBuffer::new(device, "slice edges"),
+            lights_group: None,
+            belt: wgpu::util::StagingBelt::new(device.clone(), STAGING_CHUNK_BYTES),
+            timer: PassTimer::new(ctx),
+            scratch_lights: Vec::new(),
+            scratch_edges: Vec::new(),
+            light_count: 0,
+            lights_camera: None,
+            lists_uploaded: None,
+            has_spots: false,
+            pipelines,
+        }
+    }
+
+    /// Uploads scene geometry for this renderer's pipelines.
+    pub fn upload_scene(
+        &self,
+        ctx: &GpuContext,
+        geometry: &SceneGeometry,
+    ) -> Result<GpuScene, GpuError> {
+        geometry.check().map_err(GpuError::InvalidInput)?;
+        Ok(GpuScene::new(
+            &ctx.device,
+            &ctx.queue,
+            &self.pipelines.material_layout,
+            geometry,
+        ))
+    }
+
+    /// GPU times of the last frame's passes (waits for the GPU); `None` where the device has no
+    /// timestamp queries.
+    pub fn last_pass_times(&self, ctx: &GpuContext) -> Result<Option<PassTimes>, GpuError> {
+        self.timer.read(ctx)
+    }
+
+    /// Records, encodes and submits one frame into `target` (a view of a texture of the
+    /// renderer's output format and the camera's size). Returns without waiting for the GPU.
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        frame: &FrameDesc<'_>,
+        target: &wgpu::TextureView,
+    ) -> Result<FrameReport, GpuError> {
+        let device = &ctx.device;
+        let (width, height) = (frame.camera.width, frame.camera.height);
+        let target_size = target.texture().size();
+        if (target_size.width, target_size.height) != (width, height) {
+            return Err(GpuError::InvalidInput(format!(
+                "camera is {width}x{height} but the target is {}x{}",
+                target_size.width, target_size.height
+            )));
+        }
+        let dims = frame.grid.dims;
+        if 2 * width as u64 * dims.x as u64 > u32::MAX as u64
+            || 2 * height as u64 * dims.y as u64 > u32::MAX as u64
+        {
+            return Err(GpuError::InvalidInput(format!(
+                "target {width}x{height} with {}x{} tiles overflows the shader's u32 tile arithmetic",
+                dims.x, dims.y
+            )));
+        }
+        let upload_start = Instant::now();
+        let mut report = FrameReport::default();
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
+        let mut rebind_lights = self.lights_group.is_none();
+
+        // Lights.
+        let camera_position = frame.camera.position.to_array();
+        match &frame.lights {
+            Some(columns) => {
+                columns.check().map_err(GpuError::InvalidInput)?;
+                report.skipped_lights = fill_gpu_lights(
+                    columns,
+                    frame.camera.position.as_dvec3(),
+                    &mut self.scratch_lights,
+                );
+                let bytes = std::mem::size_of_val(self.scratch_lights.as_slice()) as u64;
+                rebind_lights |= self.lights.reserve(device, bytes)?;
+                report.upload_bytes += stage(
+                    &mut self.belt,
+                    &mut encoder,
+                    &self.lights,
+                    &self.scratch_lights,
+                );
+                self.light_count = columns.len();
+                self.lights_camera = Some(camera_position);
+                self.has_spots = columns.spot.is_some();
+            }
+            None if self.lights_camera != Some(camera_position) && self.light_count > 0 => {
+                return Err(GpuError::InvalidInput(
+                    "the camera moved, so the camera-relative lights must be uploaded again".into(),
+                ));
+            }
+            None => {}
+        }
+        report.lights = self.light_count;
+
+        // Lists and slice edges.
+        let clusters = frame.grid.cluster_count();
+        if let Some(lists) = &frame.lists {
+            lists
+                .check(clusters, self.light_count)
+                .map_err(GpuError::InvalidInput)?;
+            for (buffer, data) in [
+                (&mut self.offsets, lists.offsets),
+                (&mut self.counts, lists.counts),
+                (&mut self.indices, lists.indices),
+            ] {
+                rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
+                report.upload_bytes += stage(&mut self.belt, &mut encoder, buffer, data);
+            }
+            self.lists_uploaded = Some((clusters, lists.max_count()));
+        }
+        let max_count = match (frame.mode, self.lists_uploaded) {
+            (ShadingMode::BruteForce, _) => self.light_count as u32,
+            (ShadingMode::Lists, Some((c, max))) if c == clusters => max,
+            (ShadingMode::Lists, _) => {
+                return Err(GpuError::InvalidInput(format!(
+                    "clustered shading needs light lists for this grid's {clusters} clusters"
+                )));
+            }
+        };
+        frame.grid.fill_slice_edges(&mut self.scratch_edges);
+        rebind_lights |= self.slice_edges.reserve(
+            device,
+            std::mem::size_of_val(self.scratch_edges.as_slice()) as u64,
+        )?;
+        report.upload_bytes += stage(
+            &mut self.belt,
+            &mut encoder,
+            &self.slice_edges,
+            &self.scratch_edges,
+        );
+
+        let uniforms = frame_uniforms(frame, self.light_count as u32, max_count);
+        ctx.queue
+            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
+        self.belt.finish();
+        report.upload_seconds = upload_start.elapsed().as_secs_f64();
+
+        let encode_start = Instant::now();
+        if rebind_lights {
+            self.lights_group = Some(self.lights_bind_group(device));
+        }
+        if self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
+            let gbuffer = GBuffer::new(device, width, height);
+            self.deferred_inputs = Some(self.deferred_bind_group(device, &gbuffer));
+            self.gbuffer = Some(gbuffer);
+        }
+        self.timer.begin_frame();
+        self.encode_gbuffer(&mut encoder, scene);
+        self.encode_shading(device, &mut encoder, frame, target);
+        report.forward_pass = scene.has_blended() && !frame.heat_map;
+        if report.forward_pass {
+            self.encode_forward(device, &mut encoder, scene, frame, target);
+        }
+        self.timer.resolve(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        self.belt.recall();
+        report.encode_seconds = encode_start.elapsed().as_secs_f64();
+        Ok(report)
+    }
+
+    fn lights_bind_group(&self, device: &wgpu::Device) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = [
+            &self.lights,
+            &self.offsets,
+            &self.counts,
+            &self.indices,
+            &self.slice_edges,
+        ]
+        .iter()
+        .enumerate()
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: binding as u32,
+            resource: b.buffer().as_entire_binding(),
+        })
+        .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lights and lists"),
+            layout: &self.pipelines.lights_layout,
+            entries: &entries,
+        })
+    }
+
+    fn deferred_bind_group(&self, device: &wgpu::Device, gbuffer: &GBuffer) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("deferred inputs"),
+            layout: &self.pipelines.deferred_inputs_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.frame_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.albedo),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.normal),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.material),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer.depth),
+                },
+            ],
+        })
+    }
+
+    fn encode_gbuffer(&mut self, encoder: &mut wgpu::CommandEncoder, scene: &GpuScene) {
+        let gbuffer = self
+            .gbuffer
+            .as_ref()
+            .expect("G-buffer created before encoding");
+        let clear = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer"),
+            color_attachments: &[
+                clear(&gbuffer.albedo),
+                clear(&gbuffer.normal),
+                clear(&gbuffer.material),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &gbuffer.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: self.timer.writes(TimedPass::GBuffer),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipelines.gbuffer);
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+        pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        for draw in &scene.opaque {
+            pass.set_bind_group(1, &scene.material_groups[draw.material as usize], &[]);
+            pass.draw_indexed(
+                draw.first_index..draw.first_index + draw.index_count,
+                0,
+                0..1,
+            );
+        }
+    }
+
+    fn encode_shading(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameDesc<'_>,
+        target: &wgpu::TextureView,
+    ) {
+        let has_spots = self.has_spots;
+        let timestamps = self.timer.writes(TimedPass::Shading);
+        let pipeline = self
+            .pipelines
+            .deferred(device, frame.mode, frame.heat_map, has_spots);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("deferred shading"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, self.deferred_inputs.as_ref(), &[]);
+        pass.set_bind_group(1, self.lights_group.as_ref(), &[]);
+        pass.draw(0..3, 0..1);
+    }
+
+    fn encode_forward(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        frame: &FrameDesc<'_>,
+        target: &wgpu::TextureView,
+    ) {
+        let gbuffer = self
+            .gbuffer
+            .as_ref()
+            .expect("G-buffer created before encoding");
+        let timestamps = self.timer.writes(TimedPass::Forward);
+        let pipeline = self.pipelines.forward(device, frame.mode, self.has_spots);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("forward"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &gbuffer.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_bind_group(1, self.lights_group.as_ref(), &[]);
+        pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+        pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        for draw in scene.blended_back_to_front(frame.camera.position) {
+            pass.set_bind_group(2, &scene.material_groups[draw.material as usize], &[]);
+            pass.draw_indexed(
+                draw.first_index..draw.first_index + draw.index_count,
+                0,
+                0..1,
+            );
+        }
+    }
+}
+
+/// The uniform block for a frame. The inverse projection is taken in f64 so reconstructed
+/// positions are as good as the depth buffer allows.
+pub fn frame_uniforms(frame: &FrameDesc<'_>, light_count: u32, max_count: u32) -> FrameUniforms {
+    let camera = frame.camera;
+    let clip_from_world_rel = camera.clip_from_view() * Mat4::from_mat3(camera.view_rotation());
+    let inverse =
+        DMat4::from_cols_array(&clip_from_world_rel.to_cols_array().map(f64::from)).inverse();
+    let dims = frame.grid.dims;
+    FrameUniforms {
+        clip_from_world_rel: clip_from_world_rel.to_cols_array_2d(),
+        world_rel_from_clip: inverse.as_mat4().to_cols_array_2d(),
+        camera_position: camera.position.extend(1.0).to_array(),
+        target_size: [camera.width, camera.height],
+        light_count,
+        heat_max: frame.settings.heat_max.unwrap_or(max_count).max(1),
+        grid_dims: [dims.x, dims.y, dims.z, 0],
+        camera_near: camera.near,
+        camera_far: camera.far,
+        ambient: frame.settings.ambient,
+        exposure: frame.settings.exposure,
+    }
+}

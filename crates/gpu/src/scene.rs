@@ -1,0 +1,285 @@
+//! Scene geometry on the GPU: one vertex and one index buffer for everything (world space), a
+//! draw per primitive, and a bind group per material.
+//!
+//! The renderer takes plain arrays ([`SceneGeometry`]) rather than a glTF model so that it does
+//! not depend on `myriad-scene`; the facade flattens a model into them.
+
+use crate::layout::{MaterialUniforms, Vertex};
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+/// One draw: a range of the index buffer with one material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Draw {
+    /// First index in [`SceneGeometry::indices`].
+    pub first_index: u32,
+    /// Number of indices (a multiple of 3).
+    pub index_count: u32,
+    /// Index into [`SceneGeometry::materials`].
+    pub material: u32,
+    /// Centre of the draw's bounds (sorting blended draws back to front).
+    pub center: Vec3,
+}
+
+/// How a material's alpha is used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Blend {
+    /// Opaque, or alpha-tested against `alpha_cutoff`: drawn into the G-buffer.
+    Opaque,
+    /// Alpha-blended: drawn by the clustered forward pass.
+    Blended,
+}
+
+/// A material: its constants, blending and optional base-colour texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    /// The uniform block.
+    pub uniforms: MaterialUniforms,
+    /// G-buffer or forward pass.
+    pub blend: Blend,
+    /// Index into [`SceneGeometry::textures`].
+    pub base_color_texture: Option<u32>,
+}
+
+/// An sRGB RGBA8 texture, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureRgba8 {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width·height·4` bytes.
+    pub pixels: Vec<u8>,
+}
+
+/// Everything the renderer draws, flattened.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneGeometry {
+    /// World-space vertices.
+    pub vertices: Vec<Vertex>,
+    /// Triangle-list indices into `vertices`.
+    pub indices: Vec<u32>,
+    /// Draws, any order.
+    pub draws: Vec<Draw>,
+    /// Materials the draws name.
+    pub materials: Vec<MaterialDesc>,
+    /// Textures the materials name.
+    pub textures: Vec<TextureRgba8>,
+}
+
+impl SceneGeometry {
+    /// Whether any draw uses a blended material (the forward pass runs only then).
+    pub fn has_blended(&self) -> bool {
+        self.draws
+            .iter()
+            .any(|d| self.materials[d.material as usize].blend == Blend::Blended)
+    }
+
+    /// Checks that every index, material and texture reference is in range.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(&i) = self
+            .indices
+            .iter()
+            .find(|&&i| i as usize >= self.vertices.len())
+        {
+            return Err(format!("index {i} >= vertex count {}", self.vertices.len()));
+        }
+        for (n, d) in self.draws.iter().enumerate() {
+            let end = d.first_index as u64 + d.index_count as u64;
+            if end > self.indices.len() as u64 || d.index_count % 3 != 0 {
+                return Err(format!(
+                    "draw {n} covers indices {}..{end} of {}",
+                    d.first_index,
+                    self.indices.len()
+                ));
+            }
+            if d.material as usize >= self.materials.len() {
+                return Err(format!(
+                    "draw {n} names material {} of {}",
+                    d.material,
+                    self.materials.len()
+                ));
+            }
+        }
+        for (n, m) in self.materials.iter().enumerate() {
+            if let Some(t) = m.base_color_texture {
+                let Some(tex) = self.textures.get(t as usize) else {
+                    return Err(format!(
+                        "material {n} names texture {t} of {}",
+                        self.textures.len()
+                    ));
+                };
+                if tex.pixels.len() as u64 != tex.width as u64 * tex.height as u64 * 4
+                    || tex.width == 0
+                    || tex.height == 0
+                {
+                    return Err(format!(
+                        "texture {t} is {}x{} with {} bytes",
+                        tex.width,
+                        tex.height,
+                        tex.pixels.len()
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The scene's GPU resources.
+#[derive(Debug)]
+pub struct GpuScene {
+    pub(crate) vertex_buffer: wgpu::Buffer,
+    pub(crate) index_buffer: wgpu::Buffer,
+    pub(crate) opaque: Vec<Draw>,
+    pub(crate) blended: Vec<Draw>,
+    pub(crate) material_groups: Vec<wgpu::BindGroup>,
+    triangles: usize,
+}
+
+impl GpuScene {
+    /// Uploads `geometry`; `material_layout` is the renderer's material bind group layout.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        material_layout: &wgpu::BindGroupLayout,
+        geometry: &SceneGeometry,
+    ) -> Self {
+        // Buffers may not be empty; a scene with no geometry still gets valid (unused) ones.
+        let vertices: &[Vertex] = if geometry.vertices.is_empty() {
+            &[Vertex::default()]
+        } else {
+            &geometry.vertices
+        };
+        let indices: &[u32] = if geometry.indices.is_empty() {
+            &[0, 0, 0]
+        } else {
+            &geometry.indices
+        };
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene vertices"),
+            contents: bytemuck::cast_slice(vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene indices"),
+            contents: bytemuck::cast_slice(indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let textures: Vec<wgpu::TextureView> = geometry
+            .textures
+            .iter()
+            .map(|t| upload_texture(device, queue, t))
+            .collect();
+        let white = upload_texture(
+            device,
+            queue,
+            &TextureRgba8 {
+                width: 1,
+                height: 1,
+                pixels: vec![255; 4],
+            },
+        );
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("material sampler"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let material_groups = geometry
+            .materials
+            .iter()
+            .map(|m| {
+                let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("material"),
+                    contents: bytemuck::bytes_of(&m.uniforms),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let texture = m
+                    .base_color_texture
+                    .map_or(&white, |t| &textures[t as usize]);
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("material"),
+                    layout: material_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: uniforms.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(texture),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::Sampler(&sampler),
+                        },
+                    ],
+                })
+            })
+            .collect();
+        let (blended, opaque): (Vec<Draw>, Vec<Draw>) = geometry
+            .draws
+            .iter()
+            .partition(|d| geometry.materials[d.material as usize].blend == Blend::Blended);
+        Self {
+            vertex_buffer,
+            index_buffer,
+            opaque,
+            blended,
+            material_groups,
+            triangles: geometry.indices.len() / 3,
+        }
+    }
+
+    /// Whether the forward pass has anything to draw.
+    pub fn has_blended(&self) -> bool {
+        !self.blended.is_empty()
+    }
+
+    /// Triangles uploaded.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles
+    }
+
+    /// Blended draws sorted far to near from `camera` (stable for equal distances).
+    pub(crate) fn blended_back_to_front(&self, camera: Vec3) -> Vec<Draw> {
+        let mut draws = self.blended.clone();
+        draws.sort_by(|a, b| {
+            b.center
+                .distance_squared(camera)
+                .total_cmp(&a.center.distance_squared(camera))
+        });
+        draws
+    }
+}
+
+fn upload_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &TextureRgba8,
+) -> wgpu::TextureView {
+    device
+        .create_texture_with_data(
+            queue,
+            &wgpu::TextureDescriptor {
+                label: Some("base colour"),
+                size: wgpu::Extent3d {
+                    width: texture.width,
+                    height: texture.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8UnormSrgb,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &texture.pixels,
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default())
+}

@@ -1,0 +1,105 @@
+//! The WGSL sources, compiled into the crate, and how a pass's module is put together.
+//!
+//! WGSL has no `#include`, so each pass's module is the shared helpers of `shaders/common/` it
+//! needs ([`PassShader::helpers`], in [`COMMON`] order) followed by the pass's own file. A helper
+//! may rely on globals its includer declares (`cluster.wgsl` reads `slice_edges`). Keeping the text in `shaders/` (not in
+//! Rust strings) lets editors, naga's CLI and the validation test see real `.wgsl` files.
+
+/// The shared helpers, in the order they are prepended: structs first, then functions.
+pub const COMMON: [(&str, &str); 4] = [
+    (
+        "common/layout.wgsl",
+        include_str!("../../../shaders/common/layout.wgsl"),
+    ),
+    (
+        "common/cluster.wgsl",
+        include_str!("../../../shaders/common/cluster.wgsl"),
+    ),
+    (
+        "common/octahedral.wgsl",
+        include_str!("../../../shaders/common/octahedral.wgsl"),
+    ),
+    (
+        "common/lighting.wgsl",
+        include_str!("../../../shaders/common/lighting.wgsl"),
+    ),
+];
+
+/// One pass's own WGSL file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassShader {
+    /// `gbuffer.wgsl`.
+    GBuffer,
+    /// `deferred.wgsl` (clustered, tiled, brute force, heat map).
+    Deferred,
+    /// `forward.wgsl`.
+    Forward,
+    /// `cluster_index_check.wgsl` (test pass).
+    ClusterIndexCheck,
+}
+
+impl PassShader {
+    /// Every pass.
+    pub const ALL: [PassShader; 4] = [
+        PassShader::GBuffer,
+        PassShader::Deferred,
+        PassShader::Forward,
+        PassShader::ClusterIndexCheck,
+    ];
+
+    /// File name under `shaders/`.
+    pub fn file_name(self) -> &'static str {
+        match self {
+            PassShader::GBuffer => "gbuffer.wgsl",
+            PassShader::Deferred => "deferred.wgsl",
+            PassShader::Forward => "forward.wgsl",
+            PassShader::ClusterIndexCheck => "cluster_index_check.wgsl",
+        }
+    }
+
+    /// The pass file's own text.
+    pub fn own_source(self) -> &'static str {
+        match self {
+            PassShader::GBuffer => include_str!("../../../shaders/gbuffer.wgsl"),
+            PassShader::Deferred => include_str!("../../../shaders/deferred.wgsl"),
+            PassShader::Forward => include_str!("../../../shaders/forward.wgsl"),
+            PassShader::ClusterIndexCheck => {
+                include_str!("../../../shaders/cluster_index_check.wgsl")
+            }
+        }
+    }
+
+    /// Indices into [`COMMON`] of the helpers this pass includes.
+    pub fn helpers(self) -> &'static [usize] {
+        match self {
+            PassShader::GBuffer => &[0, 2],
+            PassShader::Deferred | PassShader::Forward => &[0, 1, 2, 3],
+            PassShader::ClusterIndexCheck => &[0, 1],
+        }
+    }
+
+    /// The whole module: the common helpers, then the pass.
+    pub fn source(self) -> String {
+        let mut text = String::new();
+        for &(name, body) in self.helpers().iter().map(|&i| &COMMON[i]) {
+            text.push_str("// ---- ");
+            text.push_str(name);
+            text.push('\n');
+            text.push_str(body);
+            text.push('\n');
+        }
+        text.push_str("// ---- ");
+        text.push_str(self.file_name());
+        text.push('\n');
+        text.push_str(self.own_source());
+        text
+    }
+
+    /// Compiles the module on `device`.
+    pub fn module(self, device: &wgpu::Device) -> wgpu::ShaderModule {
+        device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(self.file_name()),
+            source: wgpu::ShaderSource::Wgsl(self.source().into()),
+        })
+    }
+}

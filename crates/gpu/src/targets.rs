@@ -1,0 +1,93 @@
+//! Render targets: the G-buffer the deferred pass reads, and a headless colour target.
+
+/// G-buffer formats. Albedo is sRGB-encoded (8 bits are enough after encoding); the normal is
+/// octahedral in two 16-bit floats; roughness and metallic in 8-bit unorm; depth in f32 so the
+/// view depth reconstructed for the cluster lookup is as precise as the CPU's.
+pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// See [`ALBEDO_FORMAT`].
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// See [`ALBEDO_FORMAT`].
+pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// See [`ALBEDO_FORMAT`].
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The colour format headless targets use (and read back as RGBA8).
+pub const HEADLESS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// The G-buffer textures for one target size.
+#[derive(Debug)]
+pub struct GBuffer {
+    /// Width and height in pixels.
+    pub size: (u32, u32),
+    /// Albedo (sRGB).
+    pub albedo: wgpu::TextureView,
+    /// Octahedral normal.
+    pub normal: wgpu::TextureView,
+    /// Roughness, metallic.
+    pub material: wgpu::TextureView,
+    /// Depth.
+    pub depth: wgpu::TextureView,
+}
+
+impl GBuffer {
+    /// Creates the textures for a `width × height` target.
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        let view = |label, format| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width,
+                        height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        Self {
+            size: (width, height),
+            albedo: view("gbuffer albedo", ALBEDO_FORMAT),
+            normal: view("gbuffer normal", NORMAL_FORMAT),
+            material: view("gbuffer material", MATERIAL_FORMAT),
+            depth: view("gbuffer depth", DEPTH_FORMAT),
+        }
+    }
+}
+
+/// A colour texture to render into headless and read back ([`crate::read_rgba8`]).
+#[derive(Debug)]
+pub struct HeadlessTarget {
+    /// The texture (RENDER_ATTACHMENT | COPY_SRC).
+    pub texture: wgpu::Texture,
+    /// Its default view.
+    pub view: wgpu::TextureView,
+}
+
+impl HeadlessTarget {
+    /// A `width × height` [`HEADLESS_FORMAT`] target.
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("headless target"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: HEADLESS_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        Self { texture, view }
+    }
+}

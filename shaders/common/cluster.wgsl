@@ -1,0 +1,51 @@
+// The cluster of a pixel, computed exactly as `ClusterGrid::cluster_of_pixel` does on the CPU.
+//
+// Pixel -> tile is the same integer formula, floor((2p + 1) * tiles / (2 * pixels)), in u32 (the
+// renderer checks that 2 * pixels * tiles fits). Depth -> slice is a binary search of the same f32
+// edge table the CPU builds (`ClusterGrid::fill_slice_edges`): only comparisons, so no GPU
+// rounding can move a pixel to another slice. The pass that includes this file declares
+// `slice_edges: array<f32>` (grid Z + 1 values, near to far).
+
+fn tile_of_pixel(p: u32, pixels: u32, tiles: u32) -> u32 {
+    return ((2u * p + 1u) * tiles) / (2u * pixels);
+}
+
+// Slice of view depth `depth` for a grid of `z` slices: the largest k in 0..z with
+// slice_edges[k] <= depth; below the first inner edge (or NaN) gives 0, beyond the last gives z - 1.
+fn slice_of_depth(depth: f32, z: u32) -> u32 {
+    // `!(a >= b)` is also true for NaN, as on the CPU.
+    if (z == 1u || !(depth >= slice_edges[1])) {
+        return 0u;
+    }
+    if (depth >= slice_edges[z - 1u]) {
+        return z - 1u;
+    }
+    // Invariant: slice_edges[lo] <= depth < slice_edges[hi].
+    var lo = 1u;
+    var hi = z - 1u;
+    loop {
+        if (hi - lo <= 1u) {
+            break;
+        }
+        let mid = (lo + hi) / 2u;
+        if (depth >= slice_edges[mid]) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+fn cluster_of_pixel(pixel: vec2<u32>, depth: f32, target_size: vec2<u32>, dims: vec3<u32>) -> u32 {
+    let i = tile_of_pixel(pixel.x, target_size.x, dims.x);
+    let j = tile_of_pixel(pixel.y, target_size.y, dims.y);
+    let k = slice_of_depth(depth, dims.z);
+    return i + dims.x * (j + dims.y * k);
+}
+
+// View depth (distance along the view axis) of a depth-buffer value, exactly the CPU's
+// `Camera::view_depth_from_ndc_depth` formula.
+fn view_depth_from_ndc_depth(ndc_depth: f32, near: f32, far: f32) -> f32 {
+    return far * near / (far - ndc_depth * (far - near));
+}

@@ -1,0 +1,63 @@
+// GPU-visible structs shared by every pass. Their Rust twins live in `crates/gpu/src/layout.rs`,
+// and a test checks sizes and member offsets of both against naga's layouter.
+
+// Per-frame constants (uniform buffer, group 0 binding 0 in every pass).
+struct Frame {
+    // Clip space from camera-relative world space (world position minus camera position).
+    clip_from_world_rel: mat4x4<f32>,
+    // Inverse of `clip_from_world_rel`: reconstructs positions from pixel and depth.
+    world_rel_from_clip: mat4x4<f32>,
+    // Camera position in world space (xyz); w unused.
+    camera_position: vec4<f32>,
+    // Render target size in pixels.
+    target_size: vec2<u32>,
+    // Number of lights in the light buffer.
+    light_count: u32,
+    // Light count that maps to the top of the heat-map ramp.
+    heat_max: u32,
+    // Cluster grid: tiles across, tiles down, depth slices; w unused.
+    grid_dims: vec4<u32>,
+    // Camera near and far planes (the depth buffer's range).
+    camera_near: f32,
+    camera_far: f32,
+    // Constant ambient term, as a fraction of albedo.
+    ambient: f32,
+    // Exposure applied before tone mapping.
+    exposure: f32,
+}
+
+// One light, camera-relative (storage buffer, read only).
+struct Light {
+    // Position minus camera position.
+    position: vec3<f32>,
+    // Range: the contribution is exactly zero at and beyond this distance.
+    radius: f32,
+    // Linear colour times intensity.
+    color: vec3<f32>,
+    // Cosine of the spot cone's outer half angle; -2 for point lights (every direction lit).
+    spot_cos_outer: f32,
+    // Unit spot axis (zero for point lights).
+    spot_dir: vec3<f32>,
+    // Cosine of the angle where the spot's angular falloff reaches 1.
+    spot_cos_inner: f32,
+}
+
+// Material constants (uniform buffer, one per material).
+struct Material {
+    base_color: vec4<f32>,
+    emissive: vec3<f32>,
+    roughness: f32,
+    metallic: f32,
+    // Fragments with alpha below this are discarded (0 = no alpha test).
+    alpha_cutoff: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// Parameters of the cluster-index check (`cluster_index_check.wgsl`, a test pass).
+struct ClusterCheck {
+    target_size: vec2<u32>,
+    sample_count: u32,
+    _pad: u32,
+    grid_dims: vec4<u32>,
+}

@@ -1,0 +1,101 @@
+// Lambert + Blinn-Phong for one point or spot light, and the tone map. Every shading pass
+// (clustered, tiled, brute force, forward) calls `shade_light`, so they differ only in which
+// lights they visit.
+
+// False for scenes without spot lights: the spot cone code is compiled out of the pipeline.
+override HAS_SPOTS: bool = true;
+
+// Distance falloff: smooth, 1 at the light, exactly 0 at and beyond `radius`, so a light the
+// assignment left out of a cluster (it cannot reach it) contributes exactly nothing.
+fn distance_falloff(dist2: f32, radius: f32) -> f32 {
+    let x = dist2 / (radius * radius);
+    let t = max(1.0 - x, 0.0);
+    return t * t / (1.0 + 4.0 * x);
+}
+
+// Angular falloff of a spot: exactly 0 outside the outer cone, 1 inside the inner cone.
+fn spot_falloff(light: Light, to_point: vec3<f32>) -> f32 {
+    if (!HAS_SPOTS || light.spot_cos_outer < -1.5) {
+        return 1.0;
+    }
+    let cos_angle = dot(light.spot_dir, to_point);
+    if (cos_angle <= light.spot_cos_outer) {
+        return 0.0;
+    }
+    let t = clamp(
+        (cos_angle - light.spot_cos_outer) / max(light.spot_cos_inner - light.spot_cos_outer, 1e-4),
+        0.0,
+        1.0,
+    );
+    return t * t;
+}
+
+struct Surface {
+    // Camera-relative world position.
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    albedo: vec3<f32>,
+    roughness: f32,
+    metallic: f32,
+}
+
+fn shininess(roughness: f32) -> f32 {
+    let a = max(roughness * roughness, 0.02);
+    return clamp(2.0 / (a * a) - 2.0, 1.0, 4096.0);
+}
+
+// Radiance from one light reflected toward the camera (at the origin of camera-relative space).
+fn shade_light(light: Light, s: Surface) -> vec3<f32> {
+    let to_light = light.position - s.position;
+    let dist2 = dot(to_light, to_light);
+    if (dist2 >= light.radius * light.radius) {
+        return vec3<f32>(0.0);
+    }
+    let dist = sqrt(dist2);
+    let l = to_light / max(dist, 1e-20);
+    let n_dot_l = dot(s.normal, l);
+    if (n_dot_l <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let attenuation = distance_falloff(dist2, light.radius) * spot_falloff(light, -l);
+    let v = normalize(-s.position);
+    let h = normalize(l + v);
+    let spec_strength = mix(0.04, 1.0, s.metallic);
+    let specular = spec_strength * pow(max(dot(s.normal, h), 0.0), shininess(s.roughness));
+    let diffuse = s.albedo * (1.0 - s.metallic);
+    let spec_color = mix(vec3<f32>(1.0), s.albedo, s.metallic) * specular;
+    return light.color * attenuation * n_dot_l * (diffuse + spec_color);
+}
+
+// Exposure and a smooth shoulder; the sRGB target does the encoding.
+fn tone_map(c: vec3<f32>, exposure: f32) -> vec3<f32> {
+    return vec3<f32>(1.0) - exp(-c * exposure);
+}
+
+// Blue -> cyan -> green -> yellow -> red ramp for t in [0, 1] (the heat map and its legend; the
+// CPU legend in `legend.rs` uses the same stops).
+fn heat_ramp(t: f32) -> vec3<f32> {
+    let x = clamp(t, 0.0, 1.0) * 4.0;
+    let c0 = vec3<f32>(0.0, 0.0, 0.5);
+    let c1 = vec3<f32>(0.0, 0.6, 1.0);
+    let c2 = vec3<f32>(0.0, 0.9, 0.2);
+    let c3 = vec3<f32>(1.0, 0.9, 0.0);
+    let c4 = vec3<f32>(0.9, 0.0, 0.0);
+    if (x < 1.0) {
+        return mix(c0, c1, x);
+    }
+    if (x < 2.0) {
+        return mix(c1, c2, x - 1.0);
+    }
+    if (x < 3.0) {
+        return mix(c2, c3, x - 2.0);
+    }
+    return mix(c3, c4, min(x - 3.0, 1.0));
+}
+
+// Inverse of the sRGB transfer function: a colour meant as sRGB bytes, written to an sRGB target.
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    let low = c / 12.92;
+    let high = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(high, low, c <= vec3<f32>(0.04045));
+}
