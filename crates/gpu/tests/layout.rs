@@ -39,7 +39,8 @@ macro_rules! rust_offsets {
 #[test]
 fn structs_match_naga_layout() {
     let module = module();
-    let cases: Vec<(&str, usize, Vec<(String, u32)>)> = vec![
+    type Offsets = Vec<(String, u32)>;
+    let cases: Vec<(&str, usize, Offsets)> = vec![
         (
             "Frame",
             size_of::<FrameUniforms>(),
