@@ -5,12 +5,14 @@
 // False for scenes without spot lights: the spot cone code is compiled out of the pipeline.
 override HAS_SPOTS: bool = true;
 
-// Distance falloff: smooth, 1 at the light, exactly 0 at and beyond `radius`, so a light the
-// assignment left out of a cluster (it cannot reach it) contributes exactly nothing.
+// Distance falloff: inverse square (softened by 1 m² so it stays finite at the light) times a
+// window that is 1 at the light and exactly 0 at and beyond `radius` (Karis, "Real Shading in
+// Unreal Engine 4", 2013). A light the assignment left out of a cluster (it cannot reach it)
+// therefore contributes exactly nothing.
 fn distance_falloff(dist2: f32, radius: f32) -> f32 {
     let x = dist2 / (radius * radius);
-    let t = max(1.0 - x, 0.0);
-    return t * t / (1.0 + 4.0 * x);
+    let window = max(1.0 - x * x, 0.0);
+    return window * window / (dist2 + 1.0);
 }
 
 // Angular falloff of a spot: exactly 0 outside the outer cone, 1 inside the inner cone.

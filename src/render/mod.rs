@@ -1,0 +1,12 @@
+//! Rendering glue: scenes and models into the renderer's inputs, a viewer that assigns and
+//! renders frames, and the pipelined frame loop.
+
+mod geometry;
+mod pipelined;
+mod setup;
+mod viewer;
+
+pub use geometry::scene_geometry;
+pub use pipelined::{FRAMES_IN_FLIGHT, GpuStage, LoopReport, StageTimes, run_frames};
+pub use setup::{DEFAULT_GRID, RenderScene};
+pub use viewer::{Shading, Viewer, ViewerFrame, grid_of, light_columns};

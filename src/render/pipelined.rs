@@ -1,0 +1,265 @@
+//! The frame loop, two ways, so one measurement can show what pipelining buys:
+//!
+//! * **sequential** — per frame, on one thread: animate the lights, assign, upload, render, wait
+//!   for the GPU;
+//! * **pipelined** — a worker thread animates and assigns frame N+1 while the main thread uploads
+//!   and renders frame N. The two talk over crossbeam channels: the worker sends finished
+//!   frames (lights + lists) on a bounded channel, the main thread sends the buffers back once
+//!   the GPU has copied them, so after the first frames nothing is allocated and at most
+//!   [`FRAMES_IN_FLIGHT`] frames exist at once. The GPU side uploads through the renderer's
+//!   staging ring.
+//!
+//! Both produce the same frames (the lights at frame N depend only on N), so the images match;
+//! `tests/gpu_pipeline.rs` checks that. The per-stage times are what each stage took; the
+//! frame time is wall time over all frames divided by their number.
+
+use super::setup::RenderScene;
+use super::viewer::{grid_of, light_columns};
+use crate::light_input;
+use anyhow::{Context, Result};
+use crossbeam::channel;
+use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
+use myriad_gpu::{
+    ClusterLists, FrameDesc, GpuContext, GpuScene, HeadlessTarget, PassTimes, Renderer,
+    ShadingMode, ShadingSettings,
+};
+use myriad_scene::Lights;
+use myriad_scene::systems::{Orbits, animate_orbits};
+use std::time::Instant;
+
+/// Frames the worker may be ahead of the renderer (buffer sets in circulation).
+pub const FRAMES_IN_FLIGHT: usize = 2;
+
+/// Seconds of animation between frames.
+const FRAME_DT: f32 = 1.0 / 60.0;
+
+/// What one frame's stages took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// CPU: animating the lights.
+    pub animate_seconds: f64,
+    /// CPU: light assignment.
+    pub assign_seconds: f64,
+    /// CPU: converting and staging lights and lists.
+    pub upload_seconds: f64,
+    /// Bytes staged.
+    pub upload_bytes: u64,
+    /// CPU: encoding and submitting.
+    pub encode_seconds: f64,
+    /// Waiting for the GPU to finish the frame.
+    pub gpu_wait_seconds: f64,
+    /// GPU pass times from timestamps, where available.
+    pub gpu_passes: Option<PassTimes>,
+    /// Cluster–light pairs.
+    pub pairs: u64,
+}
+
+impl StageTimes {
+    /// Sum of the stages (what a frame costs when nothing overlaps).
+    pub fn sum_seconds(&self) -> f64 {
+        self.animate_seconds
+            + self.assign_seconds
+            + self.upload_seconds
+            + self.encode_seconds
+            + self.gpu_wait_seconds
+    }
+}
+
+/// A run of frames.
+#[derive(Clone, Debug, Default)]
+pub struct LoopReport {
+    /// Whether assignment ran on the worker.
+    pub pipelined: bool,
+    /// Per frame.
+    pub frames: Vec<StageTimes>,
+    /// Wall seconds for all frames.
+    pub wall_seconds: f64,
+}
+
+impl LoopReport {
+    /// Wall time per frame.
+    pub fn frame_seconds(&self) -> f64 {
+        self.wall_seconds / self.frames.len().max(1) as f64
+    }
+
+    /// Mean of a stage over the frames.
+    pub fn mean(&self, stage: impl Fn(&StageTimes) -> f64) -> f64 {
+        self.frames.iter().map(stage).sum::<f64>() / self.frames.len().max(1) as f64
+    }
+}
+
+/// The lights of one frame with their lists, travelling between the threads.
+struct FrameWork {
+    index: usize,
+    lights: Lights,
+    lists: LightLists,
+    stats: AssignStats,
+    animate_seconds: f64,
+    assign_seconds: f64,
+}
+
+/// Animates lights and assigns them: the CPU half of a frame, owned by whichever thread runs it.
+struct CpuStage<'a> {
+    scene: &'a RenderScene,
+    orbits: Orbits,
+    assigner: Assigner,
+    method: Method,
+}
+
+impl<'a> CpuStage<'a> {
+    fn new(scene: &'a RenderScene, method: Method) -> Self {
+        let center = scene.camera.target;
+        let orbits = Orbits::around(center, &scene.lights.x, &scene.lights.z, [0.1, 0.5], 7);
+        Self {
+            scene,
+            orbits,
+            assigner: Assigner::new(),
+            method,
+        }
+    }
+
+    /// Fills `work` with frame `index`: lights at time `index·dt`, and their lists.
+    fn run(&mut self, index: usize, work: &mut FrameWork) {
+        let start = Instant::now();
+        work.index = index;
+        work.lights.clone_from(&self.scene.lights);
+        let lights = &mut work.lights;
+        animate_orbits(
+            &self.orbits,
+            index as f32 * FRAME_DT,
+            &mut lights.x,
+            &mut lights.z,
+        );
+        work.animate_seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        work.stats = self.assigner.assign(
+            self.method,
+            &light_input(&work.lights),
+            &self.scene.camera,
+            &self.scene.grid,
+            &mut work.lists,
+        );
+        work.assign_seconds = start.elapsed().as_secs_f64();
+    }
+}
+
+fn empty_work() -> FrameWork {
+    FrameWork {
+        index: 0,
+        lights: Lights::new(),
+        lists: LightLists::new(),
+        stats: AssignStats::default(),
+        animate_seconds: 0.0,
+        assign_seconds: 0.0,
+    }
+}
+
+/// The GPU half of a frame.
+pub struct GpuStage<'a> {
+    /// The device.
+    pub ctx: &'a GpuContext,
+    /// The renderer.
+    pub renderer: &'a mut Renderer,
+    /// The geometry.
+    pub scene: &'a GpuScene,
+    /// The target.
+    pub target: &'a HeadlessTarget,
+    /// Look.
+    pub settings: ShadingSettings,
+}
+
+impl GpuStage<'_> {
+    /// Uploads, renders and waits for frame `work`; then `after` sees the finished target.
+    fn run(&mut self, scene: &RenderScene, work: &FrameWork) -> Result<StageTimes> {
+        let grid = grid_of(&work.stats, &scene.grid);
+        let frame = FrameDesc {
+            camera: &scene.camera,
+            grid: &grid,
+            mode: ShadingMode::Lists,
+            heat_map: false,
+            lights: Some(light_columns(&work.lights)),
+            lists: Some(ClusterLists {
+                offsets: &work.lists.offsets,
+                counts: &work.lists.counts,
+                indices: &work.lists.indices,
+            }),
+            settings: self.settings,
+        };
+        let report = self
+            .renderer
+            .render(self.ctx, self.scene, &frame, &self.target.view)?;
+        let start = Instant::now();
+        self.ctx.wait_idle()?;
+        let gpu_wait_seconds = start.elapsed().as_secs_f64();
+        Ok(StageTimes {
+            animate_seconds: work.animate_seconds,
+            assign_seconds: work.assign_seconds,
+            upload_seconds: report.upload_seconds,
+            upload_bytes: report.upload_bytes,
+            encode_seconds: report.encode_seconds,
+            gpu_wait_seconds,
+            gpu_passes: self.renderer.last_pass_times(self.ctx)?,
+            pairs: work.stats.pairs,
+        })
+    }
+}
+
+/// Runs `frames` frames of `scene` with its lights orbiting the camera's target. `on_frame`
+/// sees each finished frame's index (the target holds its image), e.g. to read it back.
+pub fn run_frames(
+    gpu: &mut GpuStage<'_>,
+    scene: &RenderScene,
+    method: Method,
+    frames: usize,
+    pipelined: bool,
+    mut on_frame: impl FnMut(usize, &GpuStage<'_>) -> Result<()>,
+) -> Result<LoopReport> {
+    let mut report = LoopReport {
+        pipelined,
+        ..Default::default()
+    };
+    let start = Instant::now();
+    if !pipelined {
+        let mut cpu = CpuStage::new(scene, method);
+        let mut work = empty_work();
+        for index in 0..frames {
+            cpu.run(index, &mut work);
+            report.frames.push(gpu.run(scene, &work)?);
+            on_frame(index, gpu)?;
+        }
+    } else {
+        std::thread::scope(|s| -> Result<()> {
+            // Created inside the scope so that, should rendering fail, both ends the main
+            // thread holds are dropped before the scope joins the worker, which then stops.
+            let (ready_tx, ready_rx) = channel::bounded::<FrameWork>(FRAMES_IN_FLIGHT);
+            let (free_tx, free_rx) = channel::bounded::<FrameWork>(FRAMES_IN_FLIGHT);
+            for _ in 0..FRAMES_IN_FLIGHT {
+                free_tx.send(empty_work()).expect("channel has room");
+            }
+            s.spawn(move || {
+                let mut cpu = CpuStage::new(scene, method);
+                for index in 0..frames {
+                    // The renderer hung up (an error): stop.
+                    let Ok(mut work) = free_rx.recv() else { return };
+                    cpu.run(index, &mut work);
+                    if ready_tx.send(work).is_err() {
+                        return;
+                    }
+                }
+            });
+            for index in 0..frames {
+                let work = ready_rx
+                    .recv()
+                    .context("the assignment worker stopped early")?;
+                debug_assert_eq!(work.index, index);
+                report.frames.push(gpu.run(scene, &work)?);
+                on_frame(index, gpu)?;
+                // The GPU has copied this frame's data: its buffers can carry another frame.
+                let _ = free_tx.send(work);
+            }
+            Ok(())
+        })?;
+    }
+    report.wall_seconds = start.elapsed().as_secs_f64();
+    Ok(report)
+}

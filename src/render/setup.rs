@@ -1,0 +1,104 @@
+//! What a render needs before its first frame: geometry, camera, grid and lights, from the
+//! default scene (the generated atrium) or any glTF model.
+//!
+//! The default scene (decided here, used by the main job and the GPU tests): `assets/atrium.glb`
+//! — the 12 lights authored in it (10 warm lamps, 2 spots) plus lights on its surfaces (area
+//! weighted, 0.2 m off the surface, radii 0.5–3 m, random hues, seed 1) up to the requested
+//! count — seen from its camera "Main" with a 24×12×16 log grid over the camera's depth range.
+
+use anyhow::{Context, Result};
+use myriad_cluster_math::glam::UVec3;
+use myriad_gpu::SceneGeometry;
+use myriad_scene::{
+    Camera, ClusterGrid, DepthSlicing, LightField, Lights, Model, Placement, RadiusRule,
+    SurfaceSampler,
+};
+
+use super::geometry::scene_geometry;
+
+/// A scene ready to render.
+#[derive(Clone, Debug)]
+pub struct RenderScene {
+    /// What it is, for reports.
+    pub name: String,
+    /// Flattened geometry.
+    pub geometry: SceneGeometry,
+    /// The camera (its size is the render size).
+    pub camera: Camera,
+    /// The cluster grid.
+    pub grid: ClusterGrid,
+    /// The lights.
+    pub lights: Lights,
+}
+
+/// Grid of the default scene (the paper's smallest clustered configuration).
+pub const DEFAULT_GRID: UVec3 = UVec3::new(24, 12, 16);
+
+impl RenderScene {
+    /// The default scene with `lights` lights at `width × height` (the atrium is generated in
+    /// code and equals `assets/atrium.glb` byte for byte, so no file is needed).
+    pub fn default_scene(lights: usize, width: u32, height: u32) -> Result<Self> {
+        Self::from_model(
+            &myriad_scene::atrium(),
+            "default scene (atrium)",
+            None,
+            lights,
+            1,
+            width,
+            height,
+        )
+    }
+
+    /// A model's scene: its camera `camera` (by name; default its first) at `width × height`,
+    /// its own lights then surface lights up to `lights` in all (drawn from `seed`).
+    pub fn from_model(
+        model: &Model,
+        name: &str,
+        camera: Option<&str>,
+        lights: usize,
+        seed: u64,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
+        let index = match camera {
+            Some(c) => model.camera_index(c).with_context(|| {
+                let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
+                format!("{name}: no camera named {c:?}; it has {names:?}")
+            })?,
+            None => 0,
+        };
+        let camera = model
+            .camera(index, width, height)
+            .with_context(|| format!("{name}: camera {index} is missing or not perspective"))?;
+        let grid = ClusterGrid::new(DEFAULT_GRID, DepthSlicing::Log, camera.near, camera.far);
+        let mut all = Lights::new();
+        for light in model.lights.iter().take(lights) {
+            all.push(light);
+        }
+        let extra = lights - all.len();
+        if extra > 0 {
+            let field = LightField::new(Placement::Surfaces {
+                surfaces: SurfaceSampler::new(model),
+                offset: 0.2,
+            })
+            .with_radius(RadiusRule::Uniform { min: 0.5, max: 3.0 });
+            let first = all.len() as u32;
+            for (k, light) in field.generate(extra, seed).iter().enumerate() {
+                all.push(light.with_source_index(first + k as u32));
+            }
+        }
+        Ok(Self {
+            name: name.to_string(),
+            geometry: scene_geometry(model),
+            camera,
+            grid,
+            lights: all,
+        })
+    }
+
+    /// The same scene with a different grid over the same depth range.
+    pub fn with_grid(mut self, dims: UVec3, slicing: DepthSlicing) -> Self {
+        self.grid = ClusterGrid::new(dims, slicing, self.grid.near(), self.grid.far());
+        self
+    }
+}

@@ -1,0 +1,185 @@
+//! One scene on one GPU context: assign (on the CPU, with any method), upload, render, read back.
+//! The building block of the main job, the tests and the pipelined loop's sequential reference.
+
+use super::setup::RenderScene;
+use crate::light_input;
+use anyhow::Result;
+use myriad_assignment::{AssignStats, Assigner, LightLists, Method, coarser_grid};
+use myriad_gpu::{
+    ClusterLists, FrameDesc, FrameReport, GpuContext, GpuScene, HEADLESS_FORMAT, HeadlessTarget,
+    LightColumns, Renderer, ShadingMode, ShadingSettings, SpotColumns,
+};
+use myriad_scene::{ClusterGrid, DepthSlicing, Lights};
+use std::time::Instant;
+
+/// How the lit image picks its lights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shading {
+    /// The scene's cluster grid and its lists.
+    Clustered,
+    /// 2D tiles: the grid's X×Y tiles with one depth slice over the whole range.
+    Tiled,
+    /// Every light at every pixel.
+    BruteForce,
+}
+
+impl Shading {
+    /// Every strategy.
+    pub const ALL: [Shading; 3] = [Shading::Clustered, Shading::Tiled, Shading::BruteForce];
+
+    /// Name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shading::Clustered => "clustered",
+            Shading::Tiled => "tiled",
+            Shading::BruteForce => "brute force",
+        }
+    }
+
+    /// The grid this strategy assigns to, for a scene grid.
+    pub fn grid(self, scene_grid: &ClusterGrid) -> ClusterGrid {
+        match self {
+            Shading::Tiled => ClusterGrid::new(
+                scene_grid.dims.with_z(1),
+                DepthSlicing::Linear,
+                scene_grid.near(),
+                scene_grid.far(),
+            ),
+            _ => *scene_grid,
+        }
+    }
+}
+
+/// The borrowed GPU view of a scene's light columns.
+pub fn light_columns(lights: &Lights) -> LightColumns<'_> {
+    LightColumns {
+        x: &lights.x,
+        y: &lights.y,
+        z: &lights.z,
+        radius: &lights.radius,
+        r: &lights.r,
+        g: &lights.g,
+        b: &lights.b,
+        intensity: &lights.intensity,
+        spot: lights.has_spots().then(|| SpotColumns {
+            dir_x: &lights.spot_dir_x,
+            dir_y: &lights.spot_dir_y,
+            dir_z: &lights.spot_dir_z,
+            angle: &lights.spot_angle,
+        }),
+    }
+}
+
+/// The grid lists were built for: `grid`, coarsened as many times as the stats say.
+pub fn grid_of(stats: &AssignStats, grid: &ClusterGrid) -> ClusterGrid {
+    (0..stats.coarsened).fold(*grid, |g, _| coarser_grid(&g))
+}
+
+/// What one frame did.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewerFrame {
+    /// CPU seconds of the light assignment (0 for brute force).
+    pub assign_seconds: f64,
+    /// The assignment's statistics (`None` for brute force).
+    pub stats: Option<AssignStats>,
+    /// Upload and encode report.
+    pub report: FrameReport,
+    /// The grid the frame was shaded with.
+    pub grid: ClusterGrid,
+}
+
+/// A scene on a GPU context with a headless target of the camera's size.
+pub struct Viewer {
+    /// The device.
+    pub ctx: GpuContext,
+    /// The renderer.
+    pub renderer: Renderer,
+    /// The uploaded geometry.
+    pub scene: GpuScene,
+    /// Where frames go.
+    pub target: HeadlessTarget,
+    assigner: Assigner,
+    lists: LightLists,
+    /// Look settings for every frame.
+    pub settings: ShadingSettings,
+}
+
+impl Viewer {
+    /// Uploads `scene`'s geometry and makes a target of its camera's size.
+    pub fn new(ctx: GpuContext, scene: &RenderScene) -> Result<Self> {
+        let renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
+        let gpu_scene = renderer.upload_scene(&ctx, &scene.geometry)?;
+        let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height);
+        Ok(Self {
+            ctx,
+            renderer,
+            scene: gpu_scene,
+            target,
+            assigner: Assigner::new(),
+            lists: LightLists::new(),
+            settings: ShadingSettings::default(),
+        })
+    }
+
+    /// Assigns (unless brute force), uploads and submits one frame; does not wait for the GPU.
+    pub fn frame(
+        &mut self,
+        scene: &RenderScene,
+        shading: Shading,
+        method: Method,
+        heat_map: bool,
+    ) -> Result<ViewerFrame> {
+        let mut grid = shading.grid(&scene.grid);
+        let (mut assign_seconds, mut stats) = (0.0, None);
+        if shading != Shading::BruteForce {
+            let start = Instant::now();
+            let s = self.assigner.assign(
+                method,
+                &light_input(&scene.lights),
+                &scene.camera,
+                &grid,
+                &mut self.lists,
+            );
+            assign_seconds = start.elapsed().as_secs_f64();
+            grid = grid_of(&s, &grid);
+            stats = Some(s);
+        }
+        let lists = (shading != Shading::BruteForce).then(|| ClusterLists {
+            offsets: &self.lists.offsets,
+            counts: &self.lists.counts,
+            indices: &self.lists.indices,
+        });
+        let frame = FrameDesc {
+            camera: &scene.camera,
+            grid: &grid,
+            mode: if shading == Shading::BruteForce {
+                ShadingMode::BruteForce
+            } else {
+                ShadingMode::Lists
+            },
+            heat_map,
+            lights: Some(light_columns(&scene.lights)),
+            lists,
+            settings: self.settings,
+        };
+        let report = self
+            .renderer
+            .render(&self.ctx, &self.scene, &frame, &self.target.view)?;
+        Ok(ViewerFrame {
+            assign_seconds,
+            stats,
+            report,
+            grid,
+        })
+    }
+
+    /// The target's pixels (RGBA8, sRGB), after the GPU has finished.
+    pub fn image(&self) -> Result<Vec<u8>> {
+        Ok(myriad_gpu::read_rgba8(&self.ctx, &self.target.texture)?)
+    }
+
+    /// The last frame's lists.
+    pub fn lists(&self) -> &LightLists {
+        &self.lists
+    }
+}
