@@ -517,29 +517,65 @@ fn bad_options_fail_with_a_helpful_message() {
 
 #[test]
 fn no_arguments_runs_the_main_job() {
-    let out = myriad_ok::<&str>(&[]);
+    // The main job writes into ./out: run it in a fresh folder.
+    let dir = work_dir("main_job");
+    let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .current_dir(&dir)
+        .output()
+        .expect("cannot run the myriad binary");
+    assert!(
+        out.status.success(),
+        "main job failed:\n{}",
+        all_output(&out)
+    );
     let text = stdout(&out);
     assert_mentions(
         &text,
         &[
             "default scene",
-            "paper",
             "1000 lights",
-            "median",
-            "fp ratio",
-            "misses",
+            "1536x768",
+            "CPU light assignment",
+            "GPU shading pass",
+            "lighting calculations skipped",
+            "faster than brute-force deferred",
+            "outside the view frustum",
         ],
     );
-    // One table row per method, each with zero misses (the misses column is the 6th).
-    for method in ["exact", "linear", "binary", "refined"] {
-        let row = text
-            .lines()
-            .find(|l| l.split_whitespace().next() == Some(method))
-            .unwrap_or_else(|| panic!("no row for {method} in:\n{text}"));
-        let columns: Vec<&str> = row.split_whitespace().collect();
-        assert_eq!(columns.len(), 8, "{row}");
-        assert_eq!(columns[5], "0", "misses of {method}: {row}");
+    for file in ["frame.png", "heatmap.png", "stats.json"] {
+        assert!(dir.join("out").join(file).is_file(), "no out/{file}");
     }
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/stats.json")).unwrap())
+            .unwrap();
+    assert_eq!(stats["lights"], 1000);
+    let strategies = stats["strategies"].as_array().unwrap();
+    assert_eq!(strategies.len(), 3);
+    let clustered = &strategies[0];
+    assert_eq!(clustered["shading"], "clustered");
+    assert!(clustered["pairs"].as_u64().unwrap() > 0);
+    let mean = clustered["pixels"]["mean_lights"].as_f64().unwrap();
+    assert!(mean > 0.0 && mean < 1000.0, "{mean}");
+    assert_eq!(
+        strategies[2]["pixels"]["mean_lights"].as_f64().unwrap(),
+        1000.0
+    );
+}
+
+#[test]
+fn render_rejects_bad_options_clearly() {
+    let out = myriad_fails(&["render", "--size", "0x10"]);
+    assert_mentions(&out, &["--size", "WxH"]);
+    let out = myriad_fails(&["render", "--grid", "24x12"]);
+    assert_mentions(&out, &["--grid", "XxYxZ"]);
+    let out = myriad_fails(&["render", "--depth", "cubic"]);
+    assert_mentions(&out, &["--depth", "log or linear"]);
+    let out = myriad_fails(&["render", "--method", "magic"]);
+    assert_mentions(&out, &["magic", "refined"]);
+    let out = myriad_fails(&["render", "--camera", "Nowhere", "--size", "64x32"]);
+    assert_mentions(&out, &["Nowhere", "Main"]);
+    let out = myriad_fails(&["render", "--gltf", "/nonexistent/model.glb"]);
+    assert_mentions(&out, &["/nonexistent/model.glb"]);
 }
 
 #[test]

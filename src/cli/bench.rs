@@ -5,7 +5,7 @@ use super::source::{SceneSource, thread_pool};
 use anyhow::Result;
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::evaluate::{MethodResult, measure};
-use myriad::scene::{Preset, Scene};
+use myriad::scene::Scene;
 use serde::Serialize;
 use std::process::ExitCode;
 
@@ -52,20 +52,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
     } else {
         print_table(&report);
     }
-    Ok(exit_code(&report))
-}
-
-/// The main job until the renderer lands: the paper preset with 1000 lights, every method.
-pub fn main_job() -> Result<ExitCode> {
-    let scene = Preset::Paper.generate(1000, 1);
-    let report = bench(
-        &scene,
-        "default scene: preset paper (1000 lights, seed 1)".into(),
-        &Method::ALL,
-        0,
-        21,
-    )?;
-    print_table(&report);
     Ok(exit_code(&report))
 }
 

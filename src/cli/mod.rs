@@ -5,6 +5,7 @@ mod atrium;
 mod bench;
 mod check;
 mod info;
+mod render;
 mod scene;
 mod source;
 mod validate;
@@ -37,6 +38,8 @@ enum Command {
     Check(check::Args),
     /// Time every method on a scene and report time against error.
     Bench(bench::Args),
+    /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
+    Render(render::Args),
 }
 
 /// Runs the parsed command line; `Ok` carries the exit code (non-zero when a check failed).
@@ -49,6 +52,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Assign(args)) => assign::run(args),
         Some(Command::Check(args)) => check::run(args),
         Some(Command::Bench(args)) => bench::run(args),
-        None => bench::main_job(),
+        Some(Command::Render(args)) => render::run(args),
+        None => render::main_job(),
     }
 }

@@ -98,7 +98,7 @@ fn parse_range(text: &str, what: &str) -> Result<[f32; 2]> {
 }
 
 /// `"24x12x16"` as grid dimensions.
-fn parse_grid(text: &str) -> Result<UVec3> {
+pub(super) fn parse_grid(text: &str) -> Result<UVec3> {
     let parts: Vec<&str> = text.split('x').collect();
     let dims: Option<Vec<u32>> = parts.iter().map(|p| p.parse().ok()).collect();
     match dims.as_deref() {

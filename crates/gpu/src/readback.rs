@@ -6,8 +6,24 @@ use std::path::Path;
 /// Copies an RGBA8 (`Rgba8Unorm` or `Rgba8UnormSrgb`) texture into a tightly packed
 /// `width·height·4` byte vector, rows top to bottom. Blocks until the GPU is done.
 pub fn read_rgba8(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
+    read_texels(ctx, texture, 4, wgpu::TextureAspect::All)
+}
+
+/// Copies a `Depth32Float` texture into one f32 per pixel, rows top to bottom.
+pub fn read_depth(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<f32>, GpuError> {
+    let bytes = read_texels(ctx, texture, 4, wgpu::TextureAspect::DepthOnly)?;
+    Ok(bytemuck::cast_slice(&bytes).to_vec())
+}
+
+/// Copies a single-mip 2D texture of `texel_bytes` per texel, tightly packed.
+fn read_texels(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    texel_bytes: u32,
+    aspect: wgpu::TextureAspect,
+) -> Result<Vec<u8>, GpuError> {
     let (width, height) = (texture.width(), texture.height());
-    let row = width * 4;
+    let row = width * texel_bytes;
     let padded_row =
         row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -22,7 +38,10 @@ pub fn read_rgba8(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>, 
             label: Some("readback"),
         });
     encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
+        wgpu::TexelCopyTextureInfo {
+            aspect,
+            ..texture.as_image_copy()
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
             layout: wgpu::TexelCopyBufferLayout {

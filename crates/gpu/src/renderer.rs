@@ -159,6 +159,15 @@ impl Renderer {
         ))
     }
 
+    /// The last frame's depth buffer (one f32 per pixel, 1.0 where nothing was drawn); waits
+    /// for the GPU. `None` before the first frame.
+    pub fn read_depth(&self, ctx: &GpuContext) -> Result<Option<Vec<f32>>, GpuError> {
+        self.gbuffer
+            .as_ref()
+            .map(|g| crate::readback::read_depth(ctx, &g.depth_texture))
+            .transpose()
+    }
+
     /// GPU times of the last frame's passes (waits for the GPU); `None` where the device has no
     /// timestamp queries.
     pub fn last_pass_times(&self, ctx: &GpuContext) -> Result<Option<PassTimes>, GpuError> {

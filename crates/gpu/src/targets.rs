@@ -27,36 +27,42 @@ pub struct GBuffer {
     pub material: wgpu::TextureView,
     /// Depth.
     pub depth: wgpu::TextureView,
+    /// The depth texture (read back for lights-per-pixel statistics and active clusters).
+    pub depth_texture: wgpu::Texture,
 }
 
 impl GBuffer {
     /// Creates the textures for a `width × height` target.
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
-        let view = |label, format| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width,
-                        height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&wgpu::TextureViewDescriptor::default())
+        let texture = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
         };
+        let view = |label, format| {
+            texture(label, format).create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        let depth_texture = texture("gbuffer depth", DEPTH_FORMAT);
         Self {
             size: (width, height),
             albedo: view("gbuffer albedo", ALBEDO_FORMAT),
             normal: view("gbuffer normal", NORMAL_FORMAT),
             material: view("gbuffer material", MATERIAL_FORMAT),
-            depth: view("gbuffer depth", DEPTH_FORMAT),
+            depth: depth_texture.create_view(&wgpu::TextureViewDescriptor::default()),
+            depth_texture,
         }
     }
 }

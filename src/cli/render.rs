@@ -1,0 +1,355 @@
+//! `myriad render` and the main job: render a scene headless with clustered, tiled and
+//! brute-force deferred shading, write the lit image, the heat map and the numbers.
+
+use super::assign::parse_method;
+use super::scene::parse_grid;
+use anyhow::{Context, Result, bail};
+use myriad::assignment::Method;
+use myriad::cluster_math::glam::UVec3;
+use myriad::gpu::legend::with_heat_legend;
+use myriad::gpu::{GpuContext, PassTimes, save_png};
+use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
+use myriad::scene::{DepthSlicing, LoadOptions, Model};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// glTF model to render (.gltf or .glb) [default: the generated atrium].
+    #[arg(long)]
+    gltf: Option<PathBuf>,
+    /// The model's camera, by name [default: its first].
+    #[arg(long)]
+    camera: Option<String>,
+    /// Lights: the model's own, then lights on its surfaces up to this many.
+    #[arg(long, default_value_t = 1000)]
+    lights: usize,
+    /// Seed of the surface lights.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Assignment method: exact, linear, binary or refined.
+    #[arg(long, default_value = "refined")]
+    method: String,
+    /// Cluster grid XxYxZ.
+    #[arg(long, default_value = "24x12x16")]
+    grid: String,
+    /// Depth slicing: log or linear.
+    #[arg(long, default_value = "log")]
+    depth: String,
+    /// Image size WxH.
+    #[arg(long, default_value = "1536x768")]
+    size: String,
+    /// Output folder for frame.png, heatmap.png and stats.json.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Timed frames per shading strategy (the median is reported; brute force runs fewer
+    /// when frames are slow).
+    #[arg(long, default_value_t = 5)]
+    runs: usize,
+}
+
+impl Default for Args {
+    fn default() -> Self {
+        Self {
+            gltf: None,
+            camera: None,
+            lights: 1000,
+            seed: 1,
+            method: "refined".into(),
+            grid: "24x12x16".into(),
+            depth: "log".into(),
+            size: "1536x768".into(),
+            out: "out".into(),
+            runs: 5,
+        }
+    }
+}
+
+/// `"1536x768"` as (width, height).
+pub fn parse_size(text: &str) -> Result<(u32, u32)> {
+    match text
+        .split_once('x')
+        .map(|(w, h)| (w.parse::<u32>(), h.parse::<u32>()))
+    {
+        Some((Ok(w), Ok(h))) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
+        _ => bail!("--size {text:?}: expected WxH with each side in 1..=16384, e.g. 1536x768"),
+    }
+}
+
+fn parse_slicing(text: &str) -> Result<DepthSlicing> {
+    match text {
+        "log" => Ok(DepthSlicing::Log),
+        "linear" => Ok(DepthSlicing::Linear),
+        other => bail!("--depth {other:?}: expected log or linear"),
+    }
+}
+
+/// Median stage times of one shading strategy.
+#[derive(Serialize, Debug, Clone)]
+struct StrategyResult {
+    shading: &'static str,
+    frames: usize,
+    assign_ms: f64,
+    upload_bytes: u64,
+    upload_ms: f64,
+    encode_ms: f64,
+    gpu_gbuffer_ms: Option<f64>,
+    gpu_shading_ms: Option<f64>,
+    gpu_forward_ms: Option<f64>,
+    /// Submit to GPU idle, wall clock.
+    gpu_frame_wall_ms: f64,
+    pairs: u64,
+    pixels: PixelStats,
+}
+
+#[derive(Serialize, Debug)]
+struct Stats {
+    scene: String,
+    adapter: String,
+    timestamps: bool,
+    width: u32,
+    height: u32,
+    grid: [u32; 3],
+    method: String,
+    lights: usize,
+    lights_rejected: u32,
+    lights_culled: u32,
+    strategies: Vec<StrategyResult>,
+    speedup_vs_brute_force: Option<f64>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
+    let v: Vec<f64> = v.into_iter().flatten().collect();
+    (!v.is_empty()).then(|| median(v))
+}
+
+fn measure(
+    viewer: &mut Viewer,
+    scene: &RenderScene,
+    shading: Shading,
+    method: Method,
+    runs: usize,
+) -> Result<StrategyResult> {
+    let (mut assign, mut upload, mut encode, mut wall) = (vec![], vec![], vec![], vec![]);
+    let mut passes: Vec<PassTimes> = vec![];
+    let mut last = None;
+    let mut run = 0;
+    let started = Instant::now();
+    // One untimed frame builds the pipelines; then `runs` frames, fewer if they are slow.
+    while run <= runs && !(run >= 2 && started.elapsed().as_secs_f64() > 20.0) {
+        let frame = viewer.frame(scene, shading, method, false)?;
+        let t = Instant::now();
+        viewer.ctx.wait_idle()?;
+        if run > 0 {
+            assign.push(frame.assign_seconds * 1e3);
+            upload.push(frame.report.upload_seconds * 1e3);
+            encode.push(frame.report.encode_seconds * 1e3);
+            wall.push(t.elapsed().as_secs_f64() * 1e3 + frame.report.encode_seconds * 1e3);
+            if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
+                passes.push(p);
+            }
+        }
+        last = Some(frame);
+        run += 1;
+    }
+    let frame = last.expect("at least one frame");
+    let depth = viewer
+        .renderer
+        .read_depth(&viewer.ctx)?
+        .context("a frame was rendered")?;
+    let lights = scene.lights.len();
+    let pixels = match shading {
+        Shading::BruteForce => {
+            let all = vec![lights as u32; frame.grid.cluster_count()];
+            pixel_stats(&depth, &scene.camera, &frame.grid, &all, lights)
+        }
+        _ => pixel_stats(
+            &depth,
+            &scene.camera,
+            &frame.grid,
+            &viewer.lists().counts,
+            lights,
+        ),
+    };
+    Ok(StrategyResult {
+        shading: shading.name(),
+        frames: wall.len(),
+        assign_ms: median(assign),
+        upload_bytes: frame.report.upload_bytes,
+        upload_ms: median(upload),
+        encode_ms: median(encode),
+        gpu_gbuffer_ms: median_opt(passes.iter().map(|p| p.gbuffer_ms).collect()),
+        gpu_shading_ms: median_opt(passes.iter().map(|p| p.shading_ms).collect()),
+        gpu_forward_ms: median_opt(passes.iter().map(|p| p.forward_ms).collect()),
+        gpu_frame_wall_ms: median(wall),
+        pairs: frame.stats.map_or(0, |s| s.pairs),
+        pixels,
+    })
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let method = parse_method(&args.method)?;
+    let dims: UVec3 = parse_grid(&args.grid)?;
+    let slicing = parse_slicing(&args.depth)?;
+    let (width, height) = parse_size(&args.size)?;
+    let scene = match &args.gltf {
+        Some(path) => {
+            let model = Model::load(path, &LoadOptions::default())?;
+            RenderScene::from_model(
+                &model,
+                &path.display().to_string(),
+                args.camera.as_deref(),
+                args.lights,
+                args.seed,
+                width,
+                height,
+            )?
+        }
+        None => RenderScene::from_model(
+            &myriad::scene::atrium(),
+            "default scene (atrium)",
+            args.camera.as_deref(),
+            args.lights,
+            args.seed,
+            width,
+            height,
+        )?,
+    }
+    .with_grid(dims, slicing);
+
+    let ctx = GpuContext::headless()?;
+    let adapter = ctx.describe();
+    let timestamps = ctx.has_timestamps();
+    let mut viewer = Viewer::new(ctx, &scene)?;
+
+    let mut strategies = Vec::new();
+    let mut first_stats = None;
+    for shading in Shading::ALL {
+        let result = measure(&mut viewer, &scene, shading, method, args.runs)?;
+        if shading == Shading::Clustered {
+            first_stats = viewer.frame(&scene, shading, method, false)?.stats;
+            viewer.ctx.wait_idle()?;
+            write_png(&args.out.join("frame.png"), &viewer.image()?, width, height)?;
+            // The heat map, with its legend.
+            let heat_max = viewer
+                .lists()
+                .counts
+                .iter()
+                .copied()
+                .max()
+                .unwrap_or(0)
+                .max(1);
+            viewer.frame(&scene, shading, method, true)?;
+            let (heat, h) = with_heat_legend(&viewer.image()?, width, height, heat_max);
+            write_png(&args.out.join("heatmap.png"), &heat, width, h)?;
+        }
+        strategies.push(result);
+    }
+    let assign_stats = first_stats.context("clustered frame has statistics")?;
+    let time_of = |s: &StrategyResult| s.gpu_shading_ms.unwrap_or(s.gpu_frame_wall_ms);
+    let speedup =
+        (time_of(&strategies[0]) > 0.0).then(|| time_of(&strategies[2]) / time_of(&strategies[0]));
+    let stats = Stats {
+        scene: scene.name.clone(),
+        adapter,
+        timestamps,
+        width,
+        height,
+        grid: dims.to_array(),
+        method: method.name().to_string(),
+        lights: scene.lights.len(),
+        lights_rejected: assign_stats.rejected,
+        lights_culled: assign_stats.culled,
+        strategies,
+        speedup_vs_brute_force: speedup,
+    };
+    let json_path = args.out.join("stats.json");
+    std::fs::write(&json_path, serde_json::to_string_pretty(&stats)?)
+        .with_context(|| format!("cannot write {}", json_path.display()))?;
+    print_table(&stats);
+    println!(
+        "wrote {}, {} and {}",
+        args.out.join("frame.png").display(),
+        args.out.join("heatmap.png").display(),
+        json_path.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
+    save_png(path, rgba, width, height).with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn print_table(s: &Stats) {
+    let [x, y, z] = s.grid;
+    println!(
+        "{} — {} lights, {}x{}, grid {x}x{y}x{z}, method {}",
+        s.scene, s.lights, s.width, s.height, s.method
+    );
+    println!(
+        "GPU: {}; pass timestamps: {}",
+        s.adapter,
+        if s.timestamps {
+            "yes"
+        } else {
+            "no (wall clock only)"
+        }
+    );
+    let ms = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.2}"));
+    println!(
+        "{:<34} {:>12} {:>12} {:>12}",
+        "stage (median ms)", "clustered", "tiled", "brute force"
+    );
+    let row = |name: &str, f: &dyn Fn(&StrategyResult) -> String| {
+        let cells: Vec<String> = s.strategies.iter().map(f).collect();
+        println!(
+            "{name:<34} {:>12} {:>12} {:>12}",
+            cells[0], cells[1], cells[2]
+        );
+    };
+    row("CPU light assignment", &|r| format!("{:.3}", r.assign_ms));
+    row("upload (KiB)", &|r| {
+        format!("{:.1}", r.upload_bytes as f64 / 1024.0)
+    });
+    row("upload: convert + stage", &|r| {
+        format!("{:.3}", r.upload_ms)
+    });
+    row("encode + submit", &|r| format!("{:.3}", r.encode_ms));
+    row("GPU G-buffer pass", &|r| ms(r.gpu_gbuffer_ms));
+    row("GPU shading pass", &|r| ms(r.gpu_shading_ms));
+    row("GPU forward pass", &|r| ms(r.gpu_forward_ms));
+    row("GPU frame (submit to idle, wall)", &|r| {
+        format!("{:.2}", r.gpu_frame_wall_ms)
+    });
+    row("cluster-light pairs", &|r| r.pairs.to_string());
+    row("lights per pixel: mean", &|r| {
+        format!("{:.1}", r.pixels.mean_lights)
+    });
+    row("lights per pixel: max", &|r| {
+        r.pixels.max_lights.to_string()
+    });
+    row("lighting calculations skipped", &|r| {
+        format!("{:.1}%", r.pixels.skipped_fraction * 100.0)
+    });
+    println!(
+        "lights: {} ({} rejected as invalid, {} outside the view frustum, culled before assignment)",
+        s.lights, s.lights_rejected, s.lights_culled
+    );
+    if let Some(x) = s.speedup_vs_brute_force {
+        println!(
+            "clustered deferred shading is {x:.1}x faster than brute-force deferred (shading pass)"
+        );
+    }
+}
+
+/// The main job: the default scene with 1000 lights at 1536×768 into `out/`.
+pub fn main_job() -> Result<ExitCode> {
+    run(Args::default())
+}
