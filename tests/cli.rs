@@ -607,3 +607,21 @@ fn preset_options_without_a_preset_are_rejected() {
     );
     assert!(String::from_utf8_lossy(&out.stderr).contains("--preset"));
 }
+
+#[test]
+fn frames_compares_sequential_and_pipelined_loops() {
+    let out = myriad_ok(&["frames", "--lights", "3000", "--size", "64x32", "--frames", "4", "--json"]);
+    let loops: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let loops = loops.as_array().unwrap();
+    assert_eq!(loops.len(), 2);
+    assert_eq!(loops[0]["pipelined"], false);
+    assert_eq!(loops[1]["pipelined"], true);
+    for l in loops {
+        assert_eq!(l["frames"], 4);
+        assert!(l["assign_ms"].as_f64().unwrap() > 0.0);
+        assert!(l["upload_bytes"].as_f64().unwrap() > 3000.0 * 48.0);
+        assert!(l["frame_ms"].as_f64().unwrap() > 0.0);
+    }
+    let out = myriad_fails(&["frames", "--frames", "1"]);
+    assert_mentions(&out, &["--frames", "at least 2"]);
+}

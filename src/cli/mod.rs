@@ -4,6 +4,7 @@ mod assign;
 mod atrium;
 mod bench;
 mod check;
+mod frames;
 mod info;
 mod render;
 mod scene;
@@ -38,6 +39,8 @@ enum Command {
     Check(check::Args),
     /// Time every method on a scene and report time against error.
     Bench(bench::Args),
+    /// Run the frame loop sequentially and pipelined; per-stage times.
+    Frames(frames::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
 }
@@ -53,6 +56,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Check(args)) => check::run(args),
         Some(Command::Bench(args)) => bench::run(args),
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Frames(args)) => frames::run(args),
         None => render::main_job(),
     }
 }

@@ -11,7 +11,8 @@
 //!
 //! Both produce the same frames (the lights at frame N depend only on N), so the images match;
 //! `tests/gpu_pipeline.rs` checks that. The per-stage times are what each stage took; the
-//! frame time is wall time over all frames divided by their number.
+//! frame time is the wall time from one frame end to the next (the first frame, which builds
+//! pipelines and buffers, left out).
 
 use super::setup::RenderScene;
 use super::viewer::{grid_of, light_columns};
@@ -74,12 +75,21 @@ pub struct LoopReport {
     pub frames: Vec<StageTimes>,
     /// Wall seconds for all frames.
     pub wall_seconds: f64,
+    /// When each frame finished (GPU idle), seconds since the loop started.
+    pub finished_at: Vec<f64>,
 }
 
 impl LoopReport {
     /// Wall time per frame.
     pub fn frame_seconds(&self) -> f64 {
         self.wall_seconds / self.frames.len().max(1) as f64
+    }
+
+    /// Wall time per frame after the first (which builds pipelines and buffers): the steady
+    /// state, from the end of frame 0 to the end of the last frame.
+    pub fn steady_frame_seconds(&self) -> Option<f64> {
+        let (first, last) = (self.finished_at.first()?, self.finished_at.last()?);
+        (self.finished_at.len() >= 2).then(|| (last - first) / (self.finished_at.len() - 1) as f64)
     }
 
     /// Mean of a stage over the frames.
@@ -225,6 +235,7 @@ pub fn run_frames(
         for index in 0..frames {
             cpu.run(index, &mut work);
             report.frames.push(gpu.run(scene, &work)?);
+            report.finished_at.push(start.elapsed().as_secs_f64());
             on_frame(index, gpu)?;
         }
     } else {
@@ -253,6 +264,7 @@ pub fn run_frames(
                     .context("the assignment worker stopped early")?;
                 debug_assert_eq!(work.index, index);
                 report.frames.push(gpu.run(scene, &work)?);
+                report.finished_at.push(start.elapsed().as_secs_f64());
                 on_frame(index, gpu)?;
                 // The GPU has copied this frame's data: its buffers can carry another frame.
                 let _ = free_tx.send(work);
