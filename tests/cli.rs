@@ -610,7 +610,9 @@ fn preset_options_without_a_preset_are_rejected() {
 
 #[test]
 fn frames_compares_sequential_and_pipelined_loops() {
-    let out = myriad_ok(&["frames", "--lights", "3000", "--size", "64x32", "--frames", "4", "--json"]);
+    let out = myriad_ok(&[
+        "frames", "--lights", "3000", "--size", "64x32", "--frames", "4", "--json",
+    ]);
     let loops: Value = serde_json::from_str(&stdout(&out)).unwrap();
     let loops = loops.as_array().unwrap();
     assert_eq!(loops.len(), 2);
