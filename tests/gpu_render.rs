@@ -29,7 +29,7 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
         return;
     };
-    let (w, h) = (384, 192);
+    let (w, h) = (768, 384);
     let scene = RenderScene::default_scene(1000, w, h).unwrap();
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
     let mut images = Vec::new();
@@ -52,11 +52,17 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
         .unwrap();
     dump("heat.png", &viewer.image().unwrap(), w, h);
     let (worst, differing) = max_channel_difference(&images[0], &images[2]);
+    eprintln!(
+        "clustered vs brute force at {w}x{h}: max channel difference {worst}, {differing} channels differ"
+    );
     assert!(
         worst <= 1,
         "clustered vs brute force: max difference {worst}, {differing} channels differ"
     );
     let (worst, differing) = max_channel_difference(&images[1], &images[2]);
+    eprintln!(
+        "tiled vs brute force at {w}x{h}: max channel difference {worst}, {differing} channels differ"
+    );
     assert!(
         worst <= 1,
         "tiled vs brute force: max difference {worst}, {differing} channels differ"
