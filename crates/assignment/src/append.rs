@@ -19,6 +19,7 @@
 //! in ascending light order, because tasks are contiguous light ranges walked in order: the
 //! output is identical for any number of tasks, parts or threads.
 
+use crate::ActiveClusters;
 use crate::jobs::TaskOutput;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -46,9 +47,11 @@ pub(crate) fn count_all(
     tasks: &[TaskOutput],
     parts: Parts,
     parallel: bool,
+    active: Option<&ActiveClusters>,
     counts: &mut [u32],
 ) -> u64 {
-    let count_part = |(p, counts): (usize, &mut [u32])| count(tasks, p, p * parts.clusters, counts);
+    let count_part =
+        |(p, counts): (usize, &mut [u32])| count(tasks, p, p * parts.clusters, active, counts);
     if parallel {
         counts
             .par_chunks_mut(parts.clusters)
@@ -70,6 +73,7 @@ pub(crate) fn fill_all(
     tasks: &[TaskOutput],
     parts: Parts,
     parallel: bool,
+    active: Option<&ActiveClusters>,
     total: u64,
     counts: &[u32],
     offsets: &mut [u32],
@@ -94,16 +98,31 @@ pub(crate) fn fill_all(
         parts,
         offsets,
         parallel,
+        active,
     };
     job.fill(0..parts.count, indices, 0, cursors);
 }
 
 /// Step 1 for one part: count its spans into its chunk of `counts` (clusters from `base`).
-fn count(tasks: &[TaskOutput], part: usize, base: usize, counts: &mut [u32]) {
+/// With an `active` mask, spans in rows without an active cluster are skipped and inactive
+/// clusters end with a count of 0.
+fn count(
+    tasks: &[TaskOutput],
+    part: usize,
+    base: usize,
+    active: Option<&ActiveClusters>,
+    counts: &mut [u32],
+) {
     counts.fill(0);
     let len = counts.len();
+    let row_width = active.map_or(1, |a| a.dims().x) as usize;
     for task in tasks {
         for s in &task.buckets[part] {
+            if let Some(a) = active
+                && !a.row_has_any(s.first as usize / row_width)
+            {
+                continue;
+            }
             let start = s.first as usize - base;
             counts[start] = counts[start].wrapping_add(1);
             let end = start + s.len as usize;
@@ -117,6 +136,11 @@ fn count(tasks: &[TaskOutput], part: usize, base: usize, counts: &mut [u32]) {
         running = running.wrapping_add(*n);
         *n = running;
     }
+    if let Some(a) = active {
+        for (n, &on) in counts.iter_mut().zip(&a.flags()[base..base + len]) {
+            *n = if on { *n } else { 0 };
+        }
+    }
 }
 
 /// Step 3, split recursively over the parts so each gets its own `&mut` slices.
@@ -125,6 +149,7 @@ struct FillJob<'a> {
     parts: Parts,
     offsets: &'a [u32],
     parallel: bool,
+    active: Option<&'a ActiveClusters>,
 }
 
 impl FillJob<'_> {
@@ -157,12 +182,35 @@ impl FillJob<'_> {
         }
         let part = range.start;
         let first_cluster = part * self.parts.clusters;
-        for task in self.tasks {
-            for s in &task.buckets[part] {
-                let start = s.first as usize - first_cluster;
-                for cursor in &mut cursors[start..start + s.len as usize] {
-                    indices[*cursor as usize - base] = s.light;
-                    *cursor += 1;
+        match self.active {
+            None => {
+                for task in self.tasks {
+                    for s in &task.buckets[part] {
+                        let start = s.first as usize - first_cluster;
+                        for cursor in &mut cursors[start..start + s.len as usize] {
+                            indices[*cursor as usize - base] = s.light;
+                            *cursor += 1;
+                        }
+                    }
+                }
+            }
+            Some(active) => {
+                let (flags, row_width) = (active.flags(), active.dims().x as usize);
+                for task in self.tasks {
+                    for s in &task.buckets[part] {
+                        let first = s.first as usize;
+                        if !active.row_has_any(first / row_width) {
+                            continue;
+                        }
+                        let (start, len) = (first - first_cluster, s.len as usize);
+                        let on = &flags[first..first + len];
+                        for (cursor, &on) in cursors[start..start + len].iter_mut().zip(on) {
+                            if on {
+                                indices[*cursor as usize - base] = s.light;
+                                *cursor += 1;
+                            }
+                        }
+                    }
                 }
             }
         }

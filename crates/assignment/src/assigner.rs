@@ -1,5 +1,6 @@
 //! The frame driver: plans the tasks, runs the phases in parallel, and owns every reusable buffer.
 
+use crate::ActiveClusters;
 use crate::append::{self, Parts};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
@@ -157,6 +158,29 @@ impl Assigner {
         grid: &ClusterGrid,
         out: &mut LightLists,
     ) -> AssignStats {
+        self.assign_active(method, lights, camera, grid, None, out)
+    }
+
+    /// [`Assigner::assign`] for only the `active` clusters (see [`ActiveClusters`]): every other
+    /// cluster gets an empty list, and neither counting nor filling visits it (rows of a slice
+    /// with no active cluster are skipped whole). `None` is every cluster. When the pair budget
+    /// coarsens the grid, the mask no longer fits and is dropped: the coarser lists are full.
+    pub fn assign_active(
+        &mut self,
+        method: Method,
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+        active: Option<&ActiveClusters>,
+        out: &mut LightLists,
+    ) -> AssignStats {
+        if let Some(a) = active {
+            assert_eq!(
+                a.dims(),
+                grid.dims,
+                "active-cluster mask is for another grid"
+            );
+        }
         let budget = self
             .pair_budget
             .unwrap_or(u32::MAX as u64)
@@ -167,7 +191,9 @@ impl Assigner {
             // One cluster holds at most every light (< 2³² by `assert_consistent`): always fits.
             let last_resort = grid.dims == glam::UVec3::ONE;
             let limit = if last_resort { u32::MAX as u64 } else { budget };
-            if let Ok(mut stats) = self.assign_once(method, lights, camera, &grid, limit, out) {
+            let mask = if coarsened == 0 { active } else { None };
+            if let Ok(mut stats) = self.assign_once(method, lights, camera, &grid, mask, limit, out)
+            {
                 stats.grid_dims = grid.dims.to_array();
                 stats.coarsened = coarsened;
                 stats.over_budget = stats.pairs > budget;
@@ -185,6 +211,7 @@ impl Assigner {
         lights: &LightInput<'_>,
         camera: &Camera,
         grid: &ClusterGrid,
+        active: Option<&ActiveClusters>,
         budget: u64,
         out: &mut LightLists,
     ) -> Result<AssignStats, u64> {
@@ -208,6 +235,9 @@ impl Assigner {
             )?;
             stats.rejected = rejected;
             stats.culled = culled;
+            if let Some(a) = active {
+                out.retain_active(a);
+            }
             stats.pairs = out.indices.len() as u64;
             stats.tasks = 1;
             return Ok(stats);
@@ -253,7 +283,7 @@ impl Assigner {
                 for_each_task(&mut self.tasks[..tasks], parallel, gather);
                 out.resize_for(clusters);
                 let work = &self.tasks[..tasks];
-                let total = append::count_all(work, parts, parallel, &mut out.counts);
+                let total = append::count_all(work, parts, parallel, active, &mut out.counts);
                 if total > budget {
                     return Err(total);
                 }
@@ -261,6 +291,7 @@ impl Assigner {
                     work,
                     parts,
                     parallel,
+                    active,
                     total,
                     &out.counts,
                     &mut out.offsets,
@@ -275,8 +306,16 @@ impl Assigner {
                     jobs::run_task(&ctx, begin, end, task);
                 };
                 for_each_task(&mut self.tasks[..tasks], parallel, gather);
-                self.atomic
-                    .assign(&self.tasks[..tasks], clusters, parallel, budget, out)?
+                let pairs =
+                    self.atomic
+                        .assign(&self.tasks[..tasks], clusters, parallel, budget, out)?;
+                match active {
+                    Some(a) => {
+                        out.retain_active(a);
+                        out.indices.len()
+                    }
+                    None => pairs,
+                }
             }
         };
         for task in &self.tasks[..tasks] {

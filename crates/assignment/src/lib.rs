@@ -35,6 +35,7 @@
 //! Invalid lights (non-finite position or radius, radius ≤ 0) are skipped and counted in
 //! [`AssignStats::rejected`], never written.
 
+mod active;
 mod append;
 mod assigner;
 mod geometry;
@@ -45,6 +46,7 @@ mod lists;
 mod phases;
 mod search;
 
+pub use active::ActiveClusters;
 pub use assigner::{AppendStrategy, AssignStats, Assigner, Method, SERIAL_LIGHTS, coarser_grid};
 pub use input::{LightInput, SpotInput};
 pub use lists::LightLists;

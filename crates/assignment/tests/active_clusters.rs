@@ -1,0 +1,89 @@
+//! `assign_active` equals `assign` on every active cluster and leaves every other cluster empty,
+//! for every method and append strategy, serial and parallel, with masks from empty to full.
+
+mod common;
+
+use common::*;
+use glam::UVec3;
+use myriad_assignment::{ActiveClusters, AppendStrategy, Assigner, LightLists, Method};
+use rand::{Rng, SeedableRng};
+
+fn check(method: Method, strategy: AppendStrategy, lights: usize, density: f64, seed: u64) {
+    let scene = make_scene(&SceneParams {
+        seed,
+        fov_deg: 65.0,
+        aspect: 16.0 / 9.0,
+        near: 0.1,
+        far_ratio: 500.0,
+        eye_scale: 5.0,
+        dims: UVec3::new(16, 9, 24),
+        slicing: 1,
+        lights,
+        spots: true,
+    });
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let mut mask = ActiveClusters::new(&scene.grid);
+    for c in 0..scene.grid.cluster_count() as u32 {
+        if rng.random_bool(density) {
+            mask.mark(c);
+        }
+    }
+    let input = scene.lights.input(true);
+    let mut full = LightLists::new();
+    let mut masked = LightLists::new();
+    let mut assigner = Assigner::new().with_append_strategy(strategy);
+    assigner.assign(method, &input, &scene.camera, &scene.grid, &mut full);
+    let stats = assigner.assign_active(
+        method,
+        &input,
+        &scene.camera,
+        &scene.grid,
+        Some(&mask),
+        &mut masked,
+    );
+    masked.assert_well_formed(lights);
+    let mut expected_pairs = 0;
+    for c in 0..scene.grid.cluster_count() {
+        if mask.is_active(c as u32) {
+            assert_eq!(
+                masked.lights_of(c),
+                full.lights_of(c),
+                "{method:?} {strategy:?}: active cluster {c}"
+            );
+            expected_pairs += full.counts[c] as u64;
+        } else {
+            assert!(
+                masked.lights_of(c).is_empty(),
+                "{method:?}: inactive cluster {c} has lights"
+            );
+        }
+    }
+    assert_eq!(stats.pairs, expected_pairs);
+    assert_eq!(masked.pair_count() as u64, expected_pairs);
+}
+
+#[test]
+fn masked_lists_are_the_full_lists_on_active_clusters() {
+    for method in [Method::Binary, Method::Refined, Method::Linear] {
+        for strategy in [
+            AppendStrategy::PartitionedByDepth,
+            AppendStrategy::AtomicCounters,
+        ] {
+            for (lights, density, seed) in [
+                (500, 0.3, 1),
+                (6000, 0.05, 2),
+                (6000, 0.0, 3),
+                (6000, 1.0, 4),
+            ] {
+                check(method, strategy, lights, density, seed);
+            }
+        }
+    }
+    check(
+        Method::Exact,
+        AppendStrategy::PartitionedByDepth,
+        300,
+        0.2,
+        5,
+    );
+}
