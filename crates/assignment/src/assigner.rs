@@ -205,6 +205,7 @@ impl Assigner {
     }
 
     /// One attempt on one grid: `Err(pairs)` (nothing written) when the pairs exceed `budget`.
+    #[allow(clippy::too_many_arguments)] // The frame's inputs, the mask, the budget, the output.
     fn assign_once(
         &mut self,
         method: Method,
