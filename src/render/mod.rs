@@ -5,10 +5,12 @@ mod geometry;
 mod pipelined;
 mod pixel_stats;
 mod setup;
+mod skips;
 mod viewer;
 
 pub use geometry::scene_geometry;
 pub use pipelined::{FRAMES_IN_FLIGHT, GpuStage, LoopReport, StageTimes, run_frames};
 pub use pixel_stats::{PixelStats, pixel_stats};
 pub use setup::{DEFAULT_GRID, RenderScene};
+pub use skips::{SkipFrame, Skips, fitted_grid, mark_active};
 pub use viewer::{Shading, Viewer, ViewerFrame, grid_of, light_columns};

@@ -7,10 +7,10 @@
 //! count — seen from its camera "Main" with a 24×12×16 log grid over the camera's depth range.
 
 use anyhow::{Context, Result};
-use myriad_cluster_math::glam::UVec3;
+use myriad_cluster_math::glam::{UVec3, Vec3};
 use myriad_gpu::SceneGeometry;
 use myriad_scene::{
-    Camera, ClusterGrid, DepthSlicing, LightField, Lights, Model, Placement, RadiusRule,
+    Aabb, Camera, ClusterGrid, DepthSlicing, LightField, Lights, Model, Placement, RadiusRule,
     SurfaceSampler,
 };
 
@@ -29,6 +29,8 @@ pub struct RenderScene {
     pub grid: ClusterGrid,
     /// The lights.
     pub lights: Lights,
+    /// World bounds of each alpha-blended draw: where the forward pass may shade.
+    pub blended_bounds: Vec<Aabb>,
 }
 
 /// Grid of the default scene (the paper's smallest clustered configuration).
@@ -87,13 +89,20 @@ impl RenderScene {
                 all.push(light.with_source_index(first + k as u32));
             }
         }
+        let geometry = scene_geometry(model);
         Ok(Self {
             name: name.to_string(),
-            geometry: scene_geometry(model),
+            blended_bounds: blended_bounds(&geometry),
+            geometry,
             camera,
             grid,
             lights: all,
         })
+    }
+
+    /// Whether any geometry is alpha-blended (the forward pass has work).
+    pub fn has_blended(&self) -> bool {
+        !self.blended_bounds.is_empty()
     }
 
     /// The same scene with a different grid over the same depth range.
@@ -101,4 +110,21 @@ impl RenderScene {
         self.grid = ClusterGrid::new(dims, slicing, self.grid.near(), self.grid.far());
         self
     }
+}
+
+/// World bounds of every blended draw's vertices.
+fn blended_bounds(geometry: &SceneGeometry) -> Vec<Aabb> {
+    geometry
+        .draws
+        .iter()
+        .filter(|d| geometry.materials[d.material as usize].blend == myriad_gpu::Blend::Blended)
+        .map(|d| {
+            let range = d.first_index as usize..(d.first_index + d.index_count) as usize;
+            Aabb::from_points(
+                geometry.indices[range]
+                    .iter()
+                    .map(|&i| Vec3::from_array(geometry.vertices[i as usize].position)),
+            )
+        })
+        .collect()
 }

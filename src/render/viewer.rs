@@ -98,10 +98,11 @@ pub struct Viewer {
     pub scene: GpuScene,
     /// Where frames go.
     pub target: HeadlessTarget,
-    assigner: Assigner,
-    lists: LightLists,
+    pub(super) assigner: Assigner,
+    pub(super) lists: LightLists,
     /// Look settings for every frame.
     pub settings: ShadingSettings,
+    pub(super) skip_state: super::skips::SkipState,
 }
 
 impl Viewer {
@@ -118,6 +119,7 @@ impl Viewer {
             assigner: Assigner::new(),
             lists: LightLists::new(),
             settings: ShadingSettings::default(),
+            skip_state: Default::default(),
         })
     }
 

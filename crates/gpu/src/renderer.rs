@@ -27,6 +27,10 @@ pub struct ShadingSettings {
     /// Lights per pixel at the top of the heat-map ramp; `None` = the largest list (or the light
     /// count for brute force).
     pub heat_max: Option<u32>,
+    /// Run every shader path and pass even when the frame does not need it (the spot-cone code
+    /// without spot lights, the forward pass without blended geometry): the baseline that
+    /// measures what skipping them saves. Normally false.
+    pub force_all_features: bool,
 }
 
 impl Default for ShadingSettings {
@@ -35,6 +39,7 @@ impl Default for ShadingSettings {
             ambient: 0.03,
             exposure: 1.0,
             heat_max: None,
+            force_all_features: false,
         }
     }
 }
@@ -98,6 +103,7 @@ pub struct Renderer {
     light_count: usize,
     lights_camera: Option<[f32; 3]>,
     lists_uploaded: Option<(usize, u32)>,
+    edges_uploaded: Option<ClusterGrid>,
     has_spots: bool,
 }
 
@@ -139,6 +145,7 @@ impl Renderer {
             light_count: 0,
             lights_camera: None,
             lists_uploaded: None,
+            edges_uploaded: None,
             has_spots: false,
             pipelines,
         }
@@ -182,6 +189,77 @@ impl Renderer {
         scene: &GpuScene,
         frame: &FrameDesc<'_>,
         target: &wgpu::TextureView,
+    ) -> Result<FrameReport, GpuError> {
+        self.render_frame(ctx, scene, frame, target, true)
+    }
+
+    /// Draws only the G-buffer for `camera` (a depth prepass: read it with
+    /// [`Renderer::read_depth`]) and submits. A following [`Renderer::render_after_prepass`] with
+    /// the same camera shades it without drawing the geometry again.
+    pub fn render_prepass(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera: &Camera,
+    ) -> Result<(), GpuError> {
+        let (width, height) = (camera.width, camera.height);
+        self.ensure_gbuffer(&ctx.device, width, height);
+        let grid = ClusterGrid::new(
+            glam::UVec3::ONE,
+            myriad_cluster_math::DepthSlicing::Linear,
+            camera.near,
+            camera.far,
+        );
+        let frame = FrameDesc {
+            camera,
+            grid: &grid,
+            mode: ShadingMode::BruteForce,
+            heat_map: false,
+            lights: None,
+            lists: None,
+            settings: ShadingSettings::default(),
+        };
+        let uniforms = frame_uniforms(&frame, self.light_count as u32, 0);
+        ctx.queue
+            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("prepass"),
+            });
+        self.timer.begin_frame();
+        self.encode_gbuffer(&mut encoder, scene);
+        ctx.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// [`Renderer::render`] without the G-buffer pass: shades the G-buffer the last
+    /// [`Renderer::render_prepass`] drew (for the same camera).
+    pub fn render_after_prepass(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        frame: &FrameDesc<'_>,
+        target: &wgpu::TextureView,
+    ) -> Result<FrameReport, GpuError> {
+        self.render_frame(ctx, scene, frame, target, false)
+    }
+
+    fn ensure_gbuffer(&mut self, device: &wgpu::Device, width: u32, height: u32) {
+        if self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
+            let gbuffer = GBuffer::new(device, width, height);
+            self.deferred_inputs = Some(self.deferred_bind_group(device, &gbuffer));
+            self.gbuffer = Some(gbuffer);
+        }
+    }
+
+    fn render_frame(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        frame: &FrameDesc<'_>,
+        target: &wgpu::TextureView,
+        draw_gbuffer: bool,
     ) -> Result<FrameReport, GpuError> {
         let device = &ctx.device;
         let (width, height) = (frame.camera.width, frame.camera.height);
@@ -264,17 +342,18 @@ impl Renderer {
                 )));
             }
         };
-        frame.grid.fill_slice_edges(&mut self.scratch_edges);
-        rebind_lights |= self.slice_edges.reserve(
-            device,
-            std::mem::size_of_val(self.scratch_edges.as_slice()) as u64,
-        )?;
-        report.upload_bytes += stage(
-            &mut self.belt,
-            &mut encoder,
-            &self.slice_edges,
-            &self.scratch_edges,
-        );
+        if self.edges_uploaded != Some(*frame.grid) {
+            frame.grid.fill_slice_edges(&mut self.scratch_edges);
+            let bytes = std::mem::size_of_val(self.scratch_edges.as_slice()) as u64;
+            rebind_lights |= self.slice_edges.reserve(device, bytes)?;
+            report.upload_bytes += stage(
+                &mut self.belt,
+                &mut encoder,
+                &self.slice_edges,
+                &self.scratch_edges,
+            );
+            self.edges_uploaded = Some(*frame.grid);
+        }
 
         let uniforms = frame_uniforms(frame, self.light_count as u32, max_count);
         ctx.queue
@@ -286,15 +365,19 @@ impl Renderer {
         if rebind_lights {
             self.lights_group = Some(self.lights_bind_group(device));
         }
-        if self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
-            let gbuffer = GBuffer::new(device, width, height);
-            self.deferred_inputs = Some(self.deferred_bind_group(device, &gbuffer));
-            self.gbuffer = Some(gbuffer);
+        if !draw_gbuffer && self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
+            return Err(GpuError::InvalidInput(
+                "render_after_prepass needs a prepass of the same size first".into(),
+            ));
         }
+        self.ensure_gbuffer(device, width, height);
         self.timer.begin_frame();
-        self.encode_gbuffer(&mut encoder, scene);
+        if draw_gbuffer {
+            self.encode_gbuffer(&mut encoder, scene);
+        }
         self.encode_shading(device, &mut encoder, frame, target);
-        report.forward_pass = scene.has_blended() && !frame.heat_map;
+        report.forward_pass =
+            (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map;
         if report.forward_pass {
             self.encode_forward(device, &mut encoder, scene, frame, target);
         }
@@ -412,7 +495,7 @@ impl Renderer {
         frame: &FrameDesc<'_>,
         target: &wgpu::TextureView,
     ) {
-        let has_spots = self.has_spots;
+        let has_spots = self.has_spots || frame.settings.force_all_features;
         let timestamps = self.timer.writes(TimedPass::Shading);
         let pipeline = self
             .pipelines
@@ -452,7 +535,8 @@ impl Renderer {
             .as_ref()
             .expect("G-buffer created before encoding");
         let timestamps = self.timer.writes(TimedPass::Forward);
-        let pipeline = self.pipelines.forward(device, frame.mode, self.has_spots);
+        let has_spots = self.has_spots || frame.settings.force_all_features;
+        let pipeline = self.pipelines.forward(device, frame.mode, has_spots);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("forward"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {

@@ -1,0 +1,464 @@
+//! Skip what a frame does not need (issue "Skip what a scene doesn't need"), each saving behind
+//! its own switch ([`Skips`]) so it can be measured alone and shown not to change the image:
+//!
+//! 1. **cull** — lights outside the view frustum (`myriad_scene::systems::cull_lights`, sphere
+//!    or cone against the six planes) never reach the assignment or the GPU: only the visible
+//!    rows are gathered, assigned and uploaded (so brute force would also shade fewer).
+//! 2. **active clusters** — a depth prepass (the G-buffer pass, run first and read back) marks
+//!    the clusters that hold an opaque pixel; the screen boxes of alpha-blended draws mark the
+//!    clusters the forward pass may shade. Lists are built only there
+//!    ([`myriad_assignment::Assigner::assign_active`]); the G-buffer is not drawn twice.
+//! 3. **fitted depth** — the grid's near/far become the prepass's nearest and farthest pixel
+//!    (and the blended draws' depth extent), widened by 1e-4 relative so GPU rounding of the
+//!    reconstructed depth cannot put a pixel outside, and never beyond the camera's range.
+//! 4. **reuse unchanged** — with the camera and every light column unchanged since the last
+//!    frame, nothing is culled, assigned or uploaded; when only colours or intensities changed,
+//!    the lights are re-uploaded and the lists kept (dirty tracking per column). Geometry is
+//!    assumed static.
+//! 5. **feature variants** — without spot lights the pipelines are built with `HAS_SPOTS = false`
+//!    and without blended geometry the forward pass does not run; turning this off forces both
+//!    (`ShadingSettings::force_all_features`) to measure the difference.
+//!
+//! Exactness: pixel → cluster on the GPU uses its own f32 rounding of the view depth, so a pixel
+//! whose depth lies within 1e-5 (relative) of a slice edge marks the clusters on both sides.
+
+use super::setup::RenderScene;
+use super::viewer::{Viewer, grid_of, light_columns};
+use crate::light_input;
+use anyhow::{Context, Result};
+use myriad_assignment::{ActiveClusters, AssignStats, Method};
+use myriad_gpu::{ClusterLists, FrameDesc, FrameReport, ShadingMode, ShadingSettings};
+use myriad_scene::systems::{Visibility, cull_lights};
+use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing, Lights};
+use std::time::Instant;
+
+/// Which savings a frame applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Skips {
+    /// Frustum-cull lights before assignment and upload.
+    pub cull: bool,
+    /// Lists only for clusters with geometry (depth prepass + blended boxes).
+    pub active_clusters: bool,
+    /// Grid depth range fitted to the visible geometry.
+    pub fitted_depth: bool,
+    /// Reuse last frame's lists and uploads when nothing changed.
+    pub reuse_unchanged: bool,
+    /// No spot code without spots, no forward pass without blended geometry.
+    pub feature_variants: bool,
+}
+
+impl Skips {
+    /// Every saving off: the baseline.
+    pub const NONE: Skips = Skips {
+        cull: false,
+        active_clusters: false,
+        fitted_depth: false,
+        reuse_unchanged: false,
+        feature_variants: false,
+    };
+    /// Every saving on.
+    pub const ALL: Skips = Skips {
+        cull: true,
+        active_clusters: true,
+        fitted_depth: true,
+        reuse_unchanged: true,
+        feature_variants: true,
+    };
+
+    fn needs_prepass(self) -> bool {
+        self.active_clusters || self.fitted_depth
+    }
+}
+
+/// What a frame with [`Skips`] did.
+#[derive(Clone, Copy, Debug)]
+pub struct SkipFrame {
+    /// Nothing changed: no cull, assignment or upload of lights or lists.
+    pub reused: bool,
+    /// Only colours/intensities changed: lights re-uploaded, lists kept.
+    pub appearance_only: bool,
+    /// Lights in the scene.
+    pub lights: usize,
+    /// Lights that went to the assignment and the GPU.
+    pub lights_assigned: usize,
+    /// CPU seconds of the frustum cull and gather.
+    pub cull_seconds: f64,
+    /// Seconds of the depth prepass: GPU pass, read-back, range and mask on the CPU.
+    pub prepass_seconds: f64,
+    /// CPU seconds of the assignment.
+    pub assign_seconds: f64,
+    /// The assignment's statistics (`None` when reused).
+    pub stats: Option<AssignStats>,
+    /// Upload and encode report.
+    pub report: FrameReport,
+    /// The grid shaded with (fitted when asked).
+    pub grid: ClusterGrid,
+    /// Active clusters, when masked.
+    pub active_clusters: Option<usize>,
+}
+
+/// What the last frame left for the next one.
+#[derive(Clone, Debug)]
+struct Cache {
+    skips: Skips,
+    camera: Camera,
+    base_grid: ClusterGrid,
+    grid: ClusterGrid,
+    lights: Lights,
+}
+
+/// Scratch and cache of the skipping frame path, kept in the [`Viewer`].
+#[derive(Debug, Default)]
+pub struct SkipState {
+    visibility: Visibility,
+    visible: Lights,
+    mask: Option<ActiveClusters>,
+    cache: Option<Cache>,
+}
+
+/// Relative widening of the fitted range and of the slice-edge tolerance.
+const DEPTH_TOLERANCE: f32 = 1e-4;
+const EDGE_TOLERANCE: f32 = 1e-5;
+
+impl Viewer {
+    /// One clustered frame with `skips` applied; submits without waiting for the GPU.
+    pub fn frame_with_skips(
+        &mut self,
+        scene: &RenderScene,
+        method: Method,
+        skips: Skips,
+    ) -> Result<SkipFrame> {
+        let settings = ShadingSettings {
+            force_all_features: !skips.feature_variants,
+            ..self.settings
+        };
+        let mut state = std::mem::take(&mut self.skip_state);
+        let result = self.skipping_frame(scene, method, skips, settings, &mut state);
+        self.skip_state = state;
+        result
+    }
+
+    fn skipping_frame(
+        &mut self,
+        scene: &RenderScene,
+        method: Method,
+        skips: Skips,
+        settings: ShadingSettings,
+        state: &mut SkipState,
+    ) -> Result<SkipFrame> {
+        let lights = &scene.lights;
+        let mut frame = SkipFrame {
+            reused: false,
+            appearance_only: false,
+            lights: lights.len(),
+            lights_assigned: lights.len(),
+            cull_seconds: 0.0,
+            prepass_seconds: 0.0,
+            assign_seconds: 0.0,
+            stats: None,
+            report: FrameReport::default(),
+            grid: scene.grid,
+            active_clusters: None,
+        };
+        // 4. Dirty tracking.
+        if let Some(cache) = state.cache.as_ref().filter(|c| {
+            skips.reuse_unchanged
+                && c.skips == skips
+                && c.camera == scene.camera
+                && c.base_grid == scene.grid
+                && !geometry_dirty(&c.lights, lights)
+        }) {
+            let appearance = appearance_dirty(&cache.lights, lights);
+            frame.grid = cache.grid;
+            frame.lights_assigned = if skips.cull {
+                state.visible.len()
+            } else {
+                lights.len()
+            };
+            if appearance {
+                if skips.cull {
+                    gather(lights, &state.visibility.indices, &mut state.visible);
+                }
+                frame.appearance_only = true;
+            } else {
+                frame.reused = true;
+            }
+            let upload =
+                appearance.then(|| light_columns(if skips.cull { &state.visible } else { lights }));
+            let desc = FrameDesc {
+                camera: &scene.camera,
+                grid: &frame.grid,
+                mode: ShadingMode::Lists,
+                heat_map: false,
+                lights: upload,
+                lists: None,
+                settings,
+            };
+            frame.report =
+                self.renderer
+                    .render(&self.ctx, &self.scene, &desc, &self.target.view)?;
+            if appearance {
+                state
+                    .cache
+                    .as_mut()
+                    .expect("cache present")
+                    .lights
+                    .clone_from(lights);
+            }
+            return Ok(frame);
+        }
+
+        // 1. Cull.
+        let start = Instant::now();
+        if skips.cull {
+            cull_lights(&scene.camera, lights.slices(), &mut state.visibility);
+            gather(lights, &state.visibility.indices, &mut state.visible);
+            frame.lights_assigned = state.visible.len();
+        }
+        frame.cull_seconds = start.elapsed().as_secs_f64();
+
+        // 2–3. Depth prepass: fitted range and active clusters.
+        let start = Instant::now();
+        let mut grid = scene.grid;
+        if skips.needs_prepass() {
+            self.renderer
+                .render_prepass(&self.ctx, &self.scene, &scene.camera)?;
+            let depth = self
+                .renderer
+                .read_depth(&self.ctx)?
+                .context("prepass drew")?;
+            if skips.fitted_depth {
+                grid = fitted_grid(&scene.grid, &scene.camera, &depth, &scene.blended_bounds);
+            }
+            if skips.active_clusters {
+                let mask = state.mask.get_or_insert_with(|| ActiveClusters::new(&grid));
+                mark_active(mask, &grid, &scene.camera, &depth, &scene.blended_bounds);
+                frame.active_clusters = Some(mask.active_count());
+            }
+        }
+        frame.prepass_seconds = start.elapsed().as_secs_f64();
+
+        // Assign.
+        let assigned = if skips.cull { &state.visible } else { lights };
+        let start = Instant::now();
+        let mask = if skips.active_clusters {
+            state.mask.as_ref()
+        } else {
+            None
+        };
+        let stats = self.assigner.assign_active(
+            method,
+            &light_input(assigned),
+            &scene.camera,
+            &grid,
+            mask,
+            &mut self.lists,
+        );
+        frame.assign_seconds = start.elapsed().as_secs_f64();
+        frame.grid = grid_of(&stats, &grid);
+        frame.stats = Some(stats);
+
+        let desc = FrameDesc {
+            camera: &scene.camera,
+            grid: &frame.grid,
+            mode: ShadingMode::Lists,
+            heat_map: false,
+            lights: Some(light_columns(assigned)),
+            lists: Some(ClusterLists {
+                offsets: &self.lists.offsets,
+                counts: &self.lists.counts,
+                indices: &self.lists.indices,
+            }),
+            settings,
+        };
+        frame.report = if skips.needs_prepass() {
+            self.renderer
+                .render_after_prepass(&self.ctx, &self.scene, &desc, &self.target.view)?
+        } else {
+            self.renderer
+                .render(&self.ctx, &self.scene, &desc, &self.target.view)?
+        };
+        if skips.reuse_unchanged {
+            let cache = state.cache.get_or_insert_with(|| Cache {
+                skips,
+                camera: scene.camera,
+                base_grid: scene.grid,
+                grid: frame.grid,
+                lights: Lights::new(),
+            });
+            cache.skips = skips;
+            cache.camera = scene.camera;
+            cache.base_grid = scene.grid;
+            cache.grid = frame.grid;
+            cache.lights.clone_from(lights);
+        } else {
+            state.cache = None;
+        }
+        Ok(frame)
+    }
+}
+
+/// Whether positions, radii or spot cones differ (the lists depend on them).
+fn geometry_dirty(a: &Lights, b: &Lights) -> bool {
+    a.x != b.x
+        || a.y != b.y
+        || a.z != b.z
+        || a.radius != b.radius
+        || a.spot_dir_x != b.spot_dir_x
+        || a.spot_dir_y != b.spot_dir_y
+        || a.spot_dir_z != b.spot_dir_z
+        || a.spot_angle != b.spot_angle
+}
+
+/// Whether colours or intensities differ (only the upload depends on them).
+fn appearance_dirty(a: &Lights, b: &Lights) -> bool {
+    a.r != b.r || a.g != b.g || a.b != b.b || a.intensity != b.intensity
+}
+
+/// The rows `indices` of `lights`, column by column, into `out` (reusing its storage).
+fn gather(lights: &Lights, indices: &[u32], out: &mut Lights) {
+    let pick = |src: &Vec<f32>, dst: &mut Vec<f32>| {
+        dst.clear();
+        if !src.is_empty() {
+            dst.extend(indices.iter().map(|&i| src[i as usize]));
+        }
+    };
+    pick(&lights.x, &mut out.x);
+    pick(&lights.y, &mut out.y);
+    pick(&lights.z, &mut out.z);
+    pick(&lights.radius, &mut out.radius);
+    pick(&lights.r, &mut out.r);
+    pick(&lights.g, &mut out.g);
+    pick(&lights.b, &mut out.b);
+    pick(&lights.intensity, &mut out.intensity);
+    pick(&lights.spot_dir_x, &mut out.spot_dir_x);
+    pick(&lights.spot_dir_y, &mut out.spot_dir_y);
+    pick(&lights.spot_dir_z, &mut out.spot_dir_z);
+    pick(&lights.spot_angle, &mut out.spot_angle);
+    out.source_index.clear();
+    out.source_index
+        .extend(indices.iter().map(|&i| lights.source_index[i as usize]));
+}
+
+/// View-depth extent of a world box seen by `camera` (corners), or `None` when it lies wholly
+/// behind the near plane or beyond the far plane.
+fn box_depths(camera: &Camera, b: &Aabb) -> Option<(f32, f32, [f32; 4])> {
+    let (tan_x, tan_y) = (camera.tan_half_fov().x, camera.tan_half_fov().y);
+    let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
+    let mut ndc = [
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    let mut in_front = true;
+    for corner in b.corners() {
+        let v = camera.view_from_world_point(corner);
+        let d = -v.z;
+        dmin = dmin.min(d);
+        dmax = dmax.max(d);
+        if d <= camera.near {
+            in_front = false;
+        } else {
+            let (x, y) = (v.x / (d * tan_x), v.y / (d * tan_y));
+            ndc = [ndc[0].min(x), ndc[1].max(x), ndc[2].min(y), ndc[3].max(y)];
+        }
+    }
+    if dmax < camera.near || dmin > camera.far {
+        return None;
+    }
+    if !in_front {
+        ndc = [-1.0, 1.0, -1.0, 1.0];
+    }
+    Some((dmin.max(camera.near), dmax.min(camera.far), ndc))
+}
+
+/// The scene grid over the depth range that holds every covered pixel and every blended draw.
+pub fn fitted_grid(
+    grid: &ClusterGrid,
+    camera: &Camera,
+    depth: &[f32],
+    blended: &[Aabb],
+) -> ClusterGrid {
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &d in depth {
+        if d < 1.0 {
+            let v = camera.view_depth_from_ndc_depth(d);
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    for b in blended {
+        if let Some((dmin, dmax, _)) = box_depths(camera, b) {
+            lo = lo.min(dmin);
+            hi = hi.max(dmax);
+        }
+    }
+    if !(lo <= hi) {
+        return *grid; // Nothing visible: any range will do.
+    }
+    let near = (lo * (1.0 - DEPTH_TOLERANCE)).max(grid.near());
+    let mut far = (hi * (1.0 + DEPTH_TOLERANCE)).min(grid.far());
+    if !(far > near) {
+        far = (near * (1.0 + DEPTH_TOLERANCE)).max(near.next_up());
+    }
+    let slicing = match grid.slicing {
+        DepthSlicing::LogWithNearSlice { first_slice_depth }
+            if !(first_slice_depth > near && first_slice_depth < far) =>
+        {
+            DepthSlicing::Log
+        }
+        s => s,
+    };
+    ClusterGrid::new(grid.dims, slicing, near, far)
+}
+
+/// Marks the clusters of every covered pixel (both sides of a slice edge within
+/// [`EDGE_TOLERANCE`]) and of every blended draw's screen box.
+pub fn mark_active(
+    mask: &mut ActiveClusters,
+    grid: &ClusterGrid,
+    camera: &Camera,
+    depth: &[f32],
+    blended: &[Aabb],
+) {
+    mask.reset(grid);
+    let (w, h) = (camera.width, camera.height);
+    let tile_x: Vec<u32> = (0..w).map(|px| grid.tile_x_of_pixel(px, w)).collect();
+    for py in 0..h {
+        let j = grid.tile_y_of_pixel(py, h);
+        let row = &depth[(py * w) as usize..((py + 1) * w) as usize];
+        for (px, &d) in row.iter().enumerate() {
+            if d >= 1.0 {
+                continue;
+            }
+            let v = camera.view_depth_from_ndc_depth(d);
+            let k0 = grid.slice_of_depth(v * (1.0 - EDGE_TOLERANCE));
+            let k1 = grid.slice_of_depth(v * (1.0 + EDGE_TOLERANCE));
+            for k in k0..=k1 {
+                mask.mark(grid.cluster_id(tile_x[px], j, k));
+            }
+        }
+    }
+    let dims = grid.dims;
+    for b in blended {
+        let Some((dmin, dmax, ndc)) = box_depths(camera, b) else {
+            continue;
+        };
+        let tile = |t: f32, n: u32| ((t.clamp(0.0, 1.0) * n as f32) as u32).min(n - 1);
+        // One tile of margin each way: the corner projection is rounded differently on the GPU.
+        let x = [
+            tile((ndc[0] + 1.0) / 2.0, dims.x).saturating_sub(1),
+            tile((ndc[1] + 1.0) / 2.0, dims.x) + 1,
+        ];
+        let y = [
+            tile((1.0 - ndc[3]) / 2.0, dims.y).saturating_sub(1),
+            tile((1.0 - ndc[2]) / 2.0, dims.y) + 1,
+        ];
+        let z = [
+            grid.slice_of_depth(dmin * (1.0 - EDGE_TOLERANCE)),
+            grid.slice_of_depth(dmax * (1.0 + EDGE_TOLERANCE)),
+        ];
+        mask.mark_box(x, y, z);
+    }
+}

@@ -1,0 +1,158 @@
+//! Every saving of `Skips` leaves the image unchanged: the clustered image with each saving alone,
+//! and with all of them, equals the image with none, from several cameras; unchanged frames are
+//! reused without uploading lights or lists, and changed colours or positions are picked up.
+
+use myriad::assignment::Method;
+use myriad::gpu::GpuContext;
+use myriad::render::{RenderScene, Skips, Viewer};
+use myriad::scene::{Lights, atrium};
+
+fn max_difference(a: &[u8], b: &[u8]) -> u8 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
+fn singles() -> Vec<(&'static str, Skips)> {
+    let none = Skips::NONE;
+    vec![
+        ("cull", Skips { cull: true, ..none }),
+        (
+            "active clusters",
+            Skips {
+                active_clusters: true,
+                ..none
+            },
+        ),
+        (
+            "fitted depth",
+            Skips {
+                fitted_depth: true,
+                ..none
+            },
+        ),
+        (
+            "reuse unchanged",
+            Skips {
+                reuse_unchanged: true,
+                ..none
+            },
+        ),
+        (
+            "feature variants",
+            Skips {
+                feature_variants: true,
+                ..none
+            },
+        ),
+        ("all", Skips::ALL),
+    ]
+}
+
+fn render(
+    viewer: &mut Viewer,
+    scene: &RenderScene,
+    skips: Skips,
+) -> (Vec<u8>, myriad::render::SkipFrame) {
+    let frame = viewer
+        .frame_with_skips(scene, Method::Refined, skips)
+        .unwrap();
+    (viewer.image().unwrap(), frame)
+}
+
+/// The scene's lights without its spot lights (to exercise the spot-free shader variant).
+fn without_spots(lights: &Lights) -> Lights {
+    let mut out = Lights::new();
+    for l in lights.iter().filter(|l| l.spot.is_none()) {
+        out.push(l);
+    }
+    out
+}
+
+#[test]
+fn each_saving_leaves_the_image_unchanged() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let model = atrium();
+    let mut viewer: Option<Viewer> = None;
+    for camera in ["Main", "Overview", "Courtyard"] {
+        for spots in [true, false] {
+            let mut scene =
+                RenderScene::from_model(&model, "atrium", Some(camera), 1000, 1, 256, 128).unwrap();
+            if !spots {
+                scene.lights = without_spots(&scene.lights);
+                assert!(!scene.lights.has_spots());
+            }
+            let v = match viewer.as_mut() {
+                Some(v) => v,
+                None => viewer.insert(Viewer::new(ctx.clone(), &scene).unwrap()),
+            };
+            let (reference, base) = render(v, &scene, Skips::NONE);
+            assert!(base.active_clusters.is_none());
+            for (name, skips) in singles() {
+                let (image, frame) = render(v, &scene, skips);
+                let d = max_difference(&image, &reference);
+                assert!(
+                    d <= 1,
+                    "{camera}, spots {spots}: {name} changes the image by {d}/255"
+                );
+                if skips.cull {
+                    assert!(
+                        frame.lights_assigned < frame.lights,
+                        "{camera}: nothing culled"
+                    );
+                }
+                if skips.active_clusters {
+                    let active = frame.active_clusters.unwrap();
+                    assert!(
+                        active > 0 && active < frame.grid.cluster_count(),
+                        "{camera}: {active} active"
+                    );
+                    assert!(frame.stats.unwrap().pairs < base.stats.unwrap().pairs);
+                }
+                if skips.fitted_depth {
+                    assert!(
+                        frame.grid.far() < scene.grid.far()
+                            || frame.grid.near() > scene.grid.near()
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn unchanged_frames_are_reused_and_changes_are_seen() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+    let (first, f1) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(!f1.reused && f1.report.upload_bytes > 0);
+    let (second, f2) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(f2.reused, "nothing changed, so the frame is reused");
+    assert_eq!(f2.report.upload_bytes, 0, "a reused frame uploads nothing");
+    assert!(f2.stats.is_none());
+    assert_eq!(first, second);
+
+    // A colour change: lights re-uploaded, lists kept; the image equals a fresh render.
+    for i in 0..scene.lights.len() {
+        scene.lights.r[i] *= 0.5;
+    }
+    let (recoloured, f3) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(f3.appearance_only && !f3.reused);
+    assert!(f3.report.upload_bytes > 0 && f3.stats.is_none());
+    let mut fresh = Viewer::new(ctx.clone(), &scene).unwrap();
+    let (expected, _) = render(&mut fresh, &scene, Skips::NONE);
+    assert!(max_difference(&recoloured, &expected) <= 1);
+    assert_ne!(recoloured, first);
+
+    // A moved light: full path again.
+    scene.lights.y[100] += 0.5;
+    let (_, f4) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(!f4.reused && !f4.appearance_only && f4.stats.is_some());
+}
