@@ -8,6 +8,7 @@ mod frames;
 mod info;
 mod render;
 mod scene;
+mod skips;
 mod source;
 mod validate;
 
@@ -41,6 +42,8 @@ enum Command {
     Bench(bench::Args),
     /// Run the frame loop sequentially and pipelined; per-stage times.
     Frames(frames::Args),
+    /// Measure each saving of "skip what the scene does not need", before and after.
+    Skips(skips::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
 }
@@ -57,6 +60,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Bench(args)) => bench::run(args),
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Frames(args)) => frames::run(args),
+        Some(Command::Skips(args)) => skips::run(args),
         None => render::main_job(),
     }
 }

@@ -60,6 +60,17 @@ impl GpuContext {
         })
     }
 
+    /// The most loop iterations one shader invocation may run on this adapter, where it is
+    /// known to be limited: Mesa's llvmpipe stops after 65 535 (`LP_MAX_TGSI_LOOP_ITERATIONS`,
+    /// counted over all loops of the invocation — found by the 100 000-light test). `None` for
+    /// other adapters and for callers' devices (whose adapter is unknown).
+    pub fn shader_loop_limit(&self) -> Option<u64> {
+        self.adapter_info
+            .as_ref()
+            .filter(|info| info.name.contains("llvmpipe") || info.driver.contains("llvmpipe"))
+            .map(|_| 65_535)
+    }
+
     /// Whether passes can be timed with timestamp queries.
     pub fn has_timestamps(&self) -> bool {
         self.device

@@ -33,6 +33,22 @@ pub enum GpuError {
         /// The device's `max_storage_buffer_binding_size`.
         limit: u64,
     },
+    /// A pixel would loop over more lights than the adapter's shader compiler allows: Mesa's
+    /// llvmpipe ends any shader invocation's loops after 65 535 iterations in all, which would
+    /// silently drop the remaining lights. Refused instead.
+    #[error(
+        "a pixel would evaluate {lights} lights, but {adapter} stops shader loops after {limit} \
+         iterations (lights past that would be silently dropped); use light lists (clustered \
+         shading) or fewer lights per pass"
+    )]
+    ShaderLoopLimit {
+        /// Lights one pixel would visit.
+        lights: u64,
+        /// The adapter.
+        adapter: String,
+        /// Its loop limit.
+        limit: u64,
+    },
     /// Frame inputs that do not fit together (list sizes vs grid, target size vs grid).
     #[error("invalid frame input: {0}")]
     InvalidInput(String),

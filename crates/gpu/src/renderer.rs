@@ -279,6 +279,28 @@ impl Renderer {
                 dims.x, dims.y
             )));
         }
+        // Checked before anything is staged, so a refused frame changes nothing.
+        if let Some(limit) = ctx.shader_loop_limit()
+            && !frame.heat_map
+        {
+            let per_pixel = match frame.mode {
+                ShadingMode::BruteForce => {
+                    frame.lights.map_or(self.light_count, |c| c.len()) as u64
+                }
+                ShadingMode::Lists => frame
+                    .lists
+                    .map(|l| l.max_count())
+                    .or(self.lists_uploaded.map(|(_, max)| max))
+                    .unwrap_or(0) as u64,
+            };
+            if per_pixel > limit {
+                return Err(GpuError::ShaderLoopLimit {
+                    lights: per_pixel,
+                    adapter: ctx.describe(),
+                    limit,
+                });
+            }
+        }
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {

@@ -1,0 +1,316 @@
+//! `myriad skips`: what each saving of [`Skips`] buys, alone and all together, on the default
+//! scene and on Sponza (when `../shared/assets/sponza` is there): assignment time, pairs, bytes
+//! uploaded and GPU shading time before and after, plus what it costs (the depth prepass) and
+//! proof that the image did not change.
+
+use super::assign::parse_method;
+use super::render::parse_size;
+use anyhow::Result;
+use myriad::gpu::GpuContext;
+use myriad::render::{RenderScene, SkipFrame, Skips, Viewer};
+use myriad::scene::{LoadOptions, Model};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Where Sponza is when the shared assets are checked out next to the repository.
+const SPONZA: &str = "../shared/assets/sponza/Sponza.gltf";
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Models to measure [default: the atrium, and Sponza when ../shared/assets has it].
+    #[arg(long)]
+    gltf: Vec<PathBuf>,
+    /// Lights per scene.
+    #[arg(long, default_value_t = 1000)]
+    lights: usize,
+    /// Image size WxH.
+    #[arg(long, default_value = "1536x768")]
+    size: String,
+    /// Assignment method.
+    #[arg(long, default_value = "refined")]
+    method: String,
+    /// Timed frames per configuration (medians).
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Print JSON instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize, Clone, Debug)]
+struct Measured {
+    cpu_ms: f64,
+    prepass_ms: f64,
+    pairs: u64,
+    lights_assigned: usize,
+    upload_bytes: u64,
+    shading_ms: Option<f64>,
+    max_image_difference: u8,
+}
+
+#[derive(Serialize)]
+struct Row {
+    saving: &'static str,
+    before: Measured,
+    after: Measured,
+    active_clusters: Option<usize>,
+    clusters: usize,
+    fitted_range: Option<[f32; 2]>,
+}
+
+#[derive(Serialize)]
+struct SceneReport {
+    scene: String,
+    lights: usize,
+    has_spots: bool,
+    has_blended: bool,
+    rows: Vec<Row>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Renders `runs` frames with `skips` (after one untimed frame; `reuse` frames are timed on an
+/// unchanged second frame) and returns medians plus the last frame and image.
+fn measure(
+    viewer: &mut Viewer,
+    scene: &RenderScene,
+    method: myriad::assignment::Method,
+    skips: Skips,
+    runs: usize,
+    reference: Option<&[u8]>,
+) -> Result<(Measured, SkipFrame, Vec<u8>)> {
+    let (mut cpu, mut prepass, mut shading) = (vec![], vec![], vec![]);
+    let mut last = None;
+    for run in 0..=runs {
+        // Without reuse, every frame is fresh; with it, the first frame fills the cache and the
+        // timed ones find nothing changed.
+        let frame = viewer.frame_with_skips(scene, method, skips)?;
+        viewer.ctx.wait_idle()?;
+        if run > 0 {
+            cpu.push(
+                (frame.cull_seconds + frame.assign_seconds + frame.report.upload_seconds) * 1e3,
+            );
+            prepass.push(frame.prepass_seconds * 1e3);
+            if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
+                shading.push(p.shading_ms.unwrap_or(0.0) + p.forward_ms.unwrap_or(0.0));
+            }
+        }
+        last = Some(frame);
+    }
+    let frame = last.expect("frames ran");
+    let image = viewer.image()?;
+    let max_image_difference = reference.map_or(0, |r| {
+        r.iter()
+            .zip(&image)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap_or(0)
+    });
+    Ok((
+        Measured {
+            cpu_ms: median(cpu),
+            prepass_ms: median(prepass),
+            pairs: frame.stats.map_or(0, |s| s.pairs),
+            lights_assigned: frame.lights_assigned,
+            upload_bytes: frame.report.upload_bytes,
+            shading_ms: (!shading.is_empty()).then(|| median(shading)),
+            max_image_difference,
+        },
+        frame,
+        image,
+    ))
+}
+
+fn savings() -> Vec<(&'static str, Skips)> {
+    let none = Skips::NONE;
+    vec![
+        ("1. frustum cull", Skips { cull: true, ..none }),
+        (
+            "2. active clusters",
+            Skips {
+                active_clusters: true,
+                ..none
+            },
+        ),
+        (
+            "3. fitted depth range",
+            Skips {
+                fitted_depth: true,
+                ..none
+            },
+        ),
+        (
+            "4. nothing moved: reuse",
+            Skips {
+                reuse_unchanged: true,
+                ..none
+            },
+        ),
+        (
+            "5. feature variants",
+            Skips {
+                feature_variants: true,
+                ..none
+            },
+        ),
+        ("all five", Skips::ALL),
+    ]
+}
+
+fn scene_report(
+    ctx: &GpuContext,
+    scene: &RenderScene,
+    method: myriad::assignment::Method,
+    runs: usize,
+) -> Result<SceneReport> {
+    let mut viewer = Viewer::new(ctx.clone(), scene)?;
+    let (before, _, reference) = measure(&mut viewer, scene, method, Skips::NONE, runs, None)?;
+    let mut rows = Vec::new();
+    for (name, skips) in savings() {
+        let mut fresh = Viewer::new(ctx.clone(), scene)?;
+        let (after, frame, _) = measure(&mut fresh, scene, method, skips, runs, Some(&reference))?;
+        rows.push(Row {
+            saving: name,
+            before: before.clone(),
+            after,
+            active_clusters: frame.active_clusters,
+            clusters: frame.grid.cluster_count(),
+            fitted_range: skips
+                .fitted_depth
+                .then(|| [frame.grid.near(), frame.grid.far()]),
+        });
+    }
+    Ok(SceneReport {
+        scene: format!(
+            "{} ({}x{})",
+            scene.name, scene.camera.width, scene.camera.height
+        ),
+        lights: scene.lights.len(),
+        has_spots: scene.lights.has_spots(),
+        has_blended: scene.has_blended(),
+        rows,
+    })
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let method = parse_method(&args.method)?;
+    let (width, height) = parse_size(&args.size)?;
+    let ctx = GpuContext::headless()?;
+    let mut scenes = Vec::new();
+    if args.gltf.is_empty() {
+        scenes.push(RenderScene::default_scene(args.lights, width, height)?);
+        let sponza = PathBuf::from(SPONZA);
+        if sponza.is_file() {
+            let model = Model::load(&sponza, &LoadOptions::default())?;
+            scenes.push(RenderScene::from_model(
+                &model,
+                "Sponza",
+                None,
+                args.lights,
+                1,
+                width,
+                height,
+            )?);
+        } else {
+            eprintln!("note: {SPONZA} not found; measuring the default scene only");
+        }
+    } else {
+        for path in &args.gltf {
+            let model = Model::load(path, &LoadOptions::default())?;
+            let name = path.display().to_string();
+            scenes.push(RenderScene::from_model(
+                &model,
+                &name,
+                None,
+                args.lights,
+                1,
+                width,
+                height,
+            )?);
+        }
+    }
+    let mut reports = Vec::new();
+    for scene in &scenes {
+        reports.push(scene_report(&ctx, scene, method, args.runs)?);
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&reports)?);
+    } else {
+        println!(
+            "GPU: {}; method {}; medians of {} frames",
+            ctx.describe(),
+            method.name(),
+            args.runs
+        );
+        for r in &reports {
+            print_table(r);
+        }
+    }
+    let changed = reports
+        .iter()
+        .flat_map(|r| &r.rows)
+        .any(|row| row.after.max_image_difference > 1);
+    if changed {
+        eprintln!("error: a saving changed the image by more than 1/255");
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_table(r: &SceneReport) {
+    println!(
+        "\n{} — {} lights (spots: {}, blended geometry: {})",
+        r.scene,
+        r.lights,
+        if r.has_spots { "yes" } else { "no" },
+        if r.has_blended { "yes" } else { "no" }
+    );
+    println!(
+        "{:<25} {:>19} {:>17} {:>19} {:>19} {:>11} {:>6}",
+        "saving (before → after)",
+        "CPU cull+assign+up ms",
+        "pairs",
+        "upload KiB",
+        "GPU shading ms",
+        "prepass ms",
+        "Δimage"
+    );
+    let ms = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
+    for row in &r.rows {
+        let (b, a) = (&row.before, &row.after);
+        println!(
+            "{:<25} {:>19} {:>17} {:>19} {:>19} {:>11} {:>6}",
+            row.saving,
+            format!("{:.3} → {:.3}", b.cpu_ms, a.cpu_ms),
+            format!("{} → {}", b.pairs, a.pairs),
+            format!(
+                "{:.1} → {:.1}",
+                b.upload_bytes as f64 / 1024.0,
+                a.upload_bytes as f64 / 1024.0
+            ),
+            format!("{} → {}", ms(b.shading_ms), ms(a.shading_ms)),
+            format!("{:.1}", a.prepass_ms),
+            a.max_image_difference,
+        );
+        let mut notes = Vec::new();
+        if a.lights_assigned != b.lights_assigned {
+            notes.push(format!(
+                "lights assigned {} → {}",
+                b.lights_assigned, a.lights_assigned
+            ));
+        }
+        if let Some(active) = row.active_clusters {
+            notes.push(format!("{active} of {} clusters active", row.clusters));
+        }
+        if let Some([n, f]) = row.fitted_range {
+            notes.push(format!("depth range fitted to [{n:.3}, {f:.3}]"));
+        }
+        if !notes.is_empty() {
+            println!("{:<25} {}", "", notes.join("; "));
+        }
+    }
+}
