@@ -157,6 +157,7 @@ fn savings() -> Vec<(&'static str, Skips)> {
                 ..none
             },
         ),
+        ("1-3 and 5 (no reuse)", Skips { reuse_unchanged: false, ..Skips::ALL }),
         ("all five", Skips::ALL),
     ]
 }
