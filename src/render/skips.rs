@@ -414,7 +414,7 @@ pub fn fitted_grid(
 }
 
 /// Marks the clusters of every covered pixel (both sides of a slice edge within
-/// [`EDGE_TOLERANCE`]) and of every blended draw's screen box.
+/// 1e-5 relative) and of every blended draw's screen box.
 pub fn mark_active(
     mask: &mut ActiveClusters,
     grid: &ClusterGrid,
