@@ -22,6 +22,7 @@ pub use myriad_scene as scene;
 
 pub mod dump;
 pub mod evaluate;
+pub mod profiling;
 pub mod render;
 
 use myriad_assignment::{LightInput, SpotInput};

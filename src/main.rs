@@ -6,6 +6,7 @@ mod cli;
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
+    myriad::profiling::start();
     let args = cli::Cli::parse();
     match cli::run(args) {
         Ok(code) => code,

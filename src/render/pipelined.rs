@@ -130,6 +130,7 @@ impl<'a> CpuStage<'a> {
 
     /// Fills `work` with frame `index`: lights at time `index·dt`, and their lists.
     fn run(&mut self, index: usize, work: &mut FrameWork) {
+        crate::profile_span!("cpu stage: animate and assign");
         let start = Instant::now();
         work.index = index;
         work.lights.clone_from(&self.scene.lights);
@@ -198,7 +199,11 @@ impl GpuStage<'_> {
         let report = self
             .renderer
             .render(self.ctx, self.scene, &frame, &self.target.view)?;
+        crate::profile_plot!("visible lights", work.stats.visible());
+        crate::profile_plot!("cluster-light pairs", work.stats.pairs);
+        crate::profile_plot!("bytes uploaded", report.upload_bytes);
         let start = Instant::now();
+        crate::profile_span!("wait for GPU");
         self.ctx.wait_idle()?;
         let gpu_wait_seconds = start.elapsed().as_secs_f64();
         Ok(StageTimes {
@@ -236,6 +241,7 @@ pub fn run_frames(
             cpu.run(index, &mut work);
             report.frames.push(gpu.run(scene, &work)?);
             report.finished_at.push(start.elapsed().as_secs_f64());
+            crate::profiling::frame_mark();
             on_frame(index, gpu)?;
         }
     } else {
@@ -265,6 +271,7 @@ pub fn run_frames(
                 debug_assert_eq!(work.index, index);
                 report.frames.push(gpu.run(scene, &work)?);
                 report.finished_at.push(start.elapsed().as_secs_f64());
+                crate::profiling::frame_mark();
                 on_frame(index, gpu)?;
                 // The GPU has copied this frame's data: its buffers can carry another frame.
                 let _ = free_tx.send(work);

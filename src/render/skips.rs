@@ -209,6 +209,7 @@ impl Viewer {
         }
 
         // 1. Cull.
+        crate::profile_span!("skipping frame");
         let start = Instant::now();
         if skips.cull {
             cull_lights(&scene.camera, lights.slices(), &mut state.visibility);

@@ -134,6 +134,7 @@ impl Viewer {
         let mut grid = shading.grid(&scene.grid);
         let (mut assign_seconds, mut stats) = (0.0, None);
         if shading != Shading::BruteForce {
+            crate::profile_span!("assign");
             let start = Instant::now();
             let s = self.assigner.assign(
                 method,
@@ -167,6 +168,8 @@ impl Viewer {
         let report = self
             .renderer
             .render(&self.ctx, &self.scene, &frame, &self.target.view)?;
+        crate::profile_plot!("bytes uploaded", report.upload_bytes);
+        crate::profiling::frame_mark();
         Ok(ViewerFrame {
             assign_seconds,
             stats,

@@ -50,6 +50,7 @@ pub(crate) fn count_all(
     active: Option<&ActiveClusters>,
     counts: &mut [u32],
 ) -> u64 {
+    crate::profiling::profile_span!("append count");
     let count_part =
         |(p, counts): (usize, &mut [u32])| count(tasks, p, p * parts.clusters, active, counts);
     if parallel {
@@ -80,6 +81,7 @@ pub(crate) fn fill_all(
     indices: &mut Vec<u32>,
     cursors: &mut Vec<u32>,
 ) {
+    crate::profiling::profile_span!("append fill");
     assert!(
         total <= u32::MAX as u64,
         "{total} pairs do not fit u32 offsets"

@@ -4,6 +4,7 @@ use crate::ActiveClusters;
 use crate::append::{self, Parts};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
+use crate::profiling::profile_span;
 use crate::search::FramePlanes;
 use crate::{LightInput, LightLists};
 use glam::Vec4;
@@ -216,6 +217,7 @@ impl Assigner {
         budget: u64,
         out: &mut LightLists,
     ) -> Result<AssignStats, u64> {
+        profile_span!("assign");
         lights.assert_consistent();
         let n = lights.len();
         self.planes.update(camera, grid);

@@ -97,6 +97,7 @@ struct SpotView {
 /// for any thread count.
 #[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
+    crate::profiling::profile_span!("assign task");
     if out.buckets.len() < ctx.parts {
         out.buckets.resize_with(ctx.parts, Vec::new);
     }

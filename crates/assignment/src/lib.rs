@@ -44,6 +44,7 @@ mod jobs;
 mod linear;
 mod lists;
 mod phases;
+mod profiling;
 mod search;
 
 pub use active::ActiveClusters;

@@ -32,6 +32,7 @@ mod frame_input;
 pub mod layout;
 pub mod legend;
 mod pipelines;
+mod profiling;
 mod readback;
 mod renderer;
 mod scene;

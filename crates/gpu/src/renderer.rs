@@ -5,6 +5,7 @@ use crate::buffers::{GrowableBuffer, stage};
 use crate::frame_input::{ClusterLists, LightColumns, fill_gpu_lights};
 use crate::layout::{FrameUniforms, GpuLight};
 use crate::pipelines::{Pipelines, ShadingMode};
+use crate::profiling::profile_span;
 use crate::scene::{GpuScene, SceneGeometry};
 use crate::targets::GBuffer;
 use crate::timing::{PassTimer, PassTimes, TimedPass};
@@ -301,6 +302,7 @@ impl Renderer {
                 });
             }
         }
+        profile_span!("upload lights and lists");
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -383,6 +385,7 @@ impl Renderer {
         self.belt.finish();
         report.upload_seconds = upload_start.elapsed().as_secs_f64();
 
+        profile_span!("encode and submit");
         let encode_start = Instant::now();
         if rebind_lights {
             self.lights_group = Some(self.lights_bind_group(device));
