@@ -627,3 +627,78 @@ fn frames_compares_sequential_and_pipelined_loops() {
     let out = myriad_fails(&["frames", "--frames", "1"]);
     assert_mentions(&out, &["--frames", "at least 2"]);
 }
+
+#[test]
+fn render_takes_scene_files_presets_and_sizes() {
+    let dir = work_dir("render_sources");
+    let scene = dir.join("uniform.json");
+    myriad_ok(&[
+        "scene",
+        "--preset",
+        "uniform",
+        "--lights",
+        "300",
+        "--out",
+        scene.to_str().unwrap(),
+    ]);
+    let out_dir = dir.join("out");
+    let out = myriad_ok(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--size",
+        "96x54",
+        "--grid",
+        "8x4x6",
+        "--runs",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_mentions(
+        &stdout(&out),
+        &[
+            "uniform.json in default scene",
+            "300 lights",
+            "96x54",
+            "grid 8x4x6",
+        ],
+    );
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
+            .unwrap();
+    assert_eq!(stats["lights"], 300);
+    assert_eq!(stats["grid"], serde_json::json!([8, 4, 6]));
+    let out = myriad_ok(&[
+        "render",
+        "--preset",
+        "paper",
+        "--lights",
+        "200",
+        "--size",
+        "64x32",
+        "--runs",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_mentions(
+        &stdout(&out),
+        &[
+            "preset paper (200 lights, seed 1)",
+            "64x32",
+            "grid 24x12x16",
+        ],
+    );
+    // A scene file fixes its own lights; a preset has no model cameras.
+    let out = myriad_fails(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--lights",
+        "5",
+    ]);
+    assert_mentions(&out, &["--lights", "--scene"]);
+    let out = myriad_fails(&["render", "--preset", "paper", "--camera", "Main"]);
+    assert_mentions(&out, &["--camera", "--preset"]);
+}

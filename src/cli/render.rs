@@ -20,27 +20,35 @@ pub struct Args {
     /// glTF model to render (.gltf or .glb) [default: the generated atrium].
     #[arg(long)]
     gltf: Option<PathBuf>,
+    /// Take camera, grid and lights from this scene file, drawn in the model's geometry.
+    #[arg(long, conflicts_with_all = ["preset", "camera", "lights", "seed"])]
+    scene: Option<PathBuf>,
+    /// Take camera, grid and lights from a standard preset (paper, uniform, sphere), drawn in the
+    /// model's geometry (the `paper` courtyard matches the atrium's size).
+    #[arg(long, conflicts_with_all = ["camera"])]
+    preset: Option<String>,
     /// The model's camera, by name [default: its first].
     #[arg(long)]
     camera: Option<String>,
-    /// Lights: the model's own, then lights on its surfaces up to this many.
-    #[arg(long, default_value_t = 1000)]
-    lights: usize,
-    /// Seed of the surface lights.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    /// Lights: the model's own, then lights on its surfaces up to this many (with --preset: the
+    /// preset's lights) [default: 1000].
+    #[arg(long)]
+    lights: Option<usize>,
+    /// Seed of the generated lights [default: 1].
+    #[arg(long)]
+    seed: Option<u64>,
     /// Assignment method: exact, linear, binary or refined.
     #[arg(long, default_value = "refined")]
     method: String,
-    /// Cluster grid XxYxZ.
-    #[arg(long, default_value = "24x12x16")]
-    grid: String,
-    /// Depth slicing: log or linear.
-    #[arg(long, default_value = "log")]
-    depth: String,
-    /// Image size WxH.
-    #[arg(long, default_value = "1536x768")]
-    size: String,
+    /// Cluster grid XxYxZ [default: 24x12x16, or the scene's].
+    #[arg(long)]
+    grid: Option<String>,
+    /// Depth slicing: log or linear [default: log, or the scene's].
+    #[arg(long)]
+    depth: Option<String>,
+    /// Image size WxH [default: 1536x768, or the scene's camera].
+    #[arg(long)]
+    size: Option<String>,
     /// Output folder for frame.png, heatmap.png and stats.json.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -54,13 +62,15 @@ impl Default for Args {
     fn default() -> Self {
         Self {
             gltf: None,
+            scene: None,
+            preset: None,
             camera: None,
-            lights: 1000,
-            seed: 1,
+            lights: None,
+            seed: None,
             method: "refined".into(),
-            grid: "24x12x16".into(),
-            depth: "log".into(),
-            size: "1536x768".into(),
+            grid: None,
+            depth: None,
+            size: None,
             out: "out".into(),
             runs: 5,
         }
@@ -196,33 +206,9 @@ fn measure(
 
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
-    let dims: UVec3 = parse_grid(&args.grid)?;
-    let slicing = parse_slicing(&args.depth)?;
-    let (width, height) = parse_size(&args.size)?;
-    let scene = match &args.gltf {
-        Some(path) => {
-            let model = Model::load(path, &LoadOptions::default())?;
-            RenderScene::from_model(
-                &model,
-                &path.display().to_string(),
-                args.camera.as_deref(),
-                args.lights,
-                args.seed,
-                width,
-                height,
-            )?
-        }
-        None => RenderScene::from_model(
-            &myriad::scene::atrium(),
-            "default scene (atrium)",
-            args.camera.as_deref(),
-            args.lights,
-            args.seed,
-            width,
-            height,
-        )?,
-    }
-    .with_grid(dims, slicing);
+    let scene = load_scene(&args)?;
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let dims = scene.grid.dims;
 
     let ctx = GpuContext::headless()?;
     let adapter = ctx.describe();
@@ -281,6 +267,67 @@ pub fn run(args: Args) -> Result<ExitCode> {
         json_path.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The scene to render: geometry from `--gltf` (or the atrium), camera/grid/lights from
+/// `--scene`, `--preset` or the model (its camera, its lights plus surface lights), then the
+/// size, grid and slicing options.
+fn load_scene(args: &Args) -> Result<RenderScene> {
+    let (model, model_name) = match &args.gltf {
+        Some(path) => (
+            Model::load(path, &LoadOptions::default())?,
+            path.display().to_string(),
+        ),
+        None => (
+            myriad::scene::atrium(),
+            "default scene (atrium)".to_string(),
+        ),
+    };
+    let size = args.size.as_deref().map(parse_size).transpose()?;
+    let mut scene = match (&args.scene, &args.preset) {
+        (Some(path), _) => {
+            let file = myriad::scene::Scene::load(path, myriad::scene::LightPolicy::SkipInvalid)?;
+            super::source::report_skipped(&file);
+            let name = format!("{} in {model_name}", path.display());
+            RenderScene::from_scene(&model, &name, file)
+        }
+        (None, Some(preset)) => {
+            let preset = super::source::parse_preset(preset)?;
+            let (lights, seed) = (args.lights.unwrap_or(1000), args.seed.unwrap_or(1));
+            let name = format!(
+                "preset {} ({lights} lights, seed {seed}) in {model_name}",
+                preset.name()
+            );
+            RenderScene::from_scene(&model, &name, preset.generate(lights, seed))
+        }
+        (None, None) => {
+            let (w, h) = size.unwrap_or((1536, 768));
+            RenderScene::from_model(
+                &model,
+                &model_name,
+                args.camera.as_deref(),
+                args.lights.unwrap_or(1000),
+                args.seed.unwrap_or(1),
+                w,
+                h,
+            )?
+        }
+    };
+    if let Some((w, h)) = size {
+        scene = scene.with_size(w, h);
+    }
+    if args.grid.is_some() || args.depth.is_some() {
+        let dims: UVec3 = match &args.grid {
+            Some(g) => parse_grid(g)?,
+            None => scene.grid.dims,
+        };
+        let slicing = match &args.depth {
+            Some(d) => parse_slicing(d)?,
+            None => scene.grid.slicing,
+        };
+        scene = scene.with_grid(dims, slicing);
+    }
+    Ok(scene)
 }
 
 fn write_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {

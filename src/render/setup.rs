@@ -100,6 +100,26 @@ impl RenderScene {
         })
     }
 
+    /// A scene file's (or preset's) camera, grid and lights, drawn in `model`'s geometry.
+    pub fn from_scene(model: &Model, name: &str, scene: myriad_scene::Scene) -> Self {
+        let geometry = scene_geometry(model);
+        Self {
+            name: name.to_string(),
+            blended_bounds: blended_bounds(&geometry),
+            geometry,
+            camera: scene.camera,
+            grid: scene.grid,
+            lights: scene.lights,
+        }
+    }
+
+    /// The same scene at another image size (same camera otherwise).
+    pub fn with_size(mut self, width: u32, height: u32) -> Self {
+        self.camera.width = width;
+        self.camera.height = height;
+        self
+    }
+
     /// Whether any geometry is alpha-blended (the forward pass has work).
     pub fn has_blended(&self) -> bool {
         !self.blended_bounds.is_empty()
