@@ -1,5 +1,5 @@
 //! Tracy instrumentation of the frame, compiled only with the `tracy` feature: spans
-//! ([`profile_span!`]), frame marks ([`frame_mark`]) and plots ([`plot`]). With the feature off
+//! ([`crate::profile_span!`]), frame marks ([`frame_mark`]) and plots ([`crate::profile_plot!`]). With the feature off
 //! every one of them expands to nothing, so a default build carries no profiler code (CI checks
 //! the release binary for tracy symbols). With it on, start a client first
 //! (`tracy_client::Client::start()`, as `myriad` does in `main`).
