@@ -68,3 +68,34 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
         "tiled vs brute force: max difference {worst}, {differing} channels differ"
     );
 }
+
+#[test]
+fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let (w, h) = (96, 48);
+    let small = RenderScene::default_scene(100, w, h).unwrap();
+    let large = RenderScene::default_scene(8_000, w, h).unwrap();
+    let mut viewer = Viewer::new(ctx, &small).unwrap();
+    for scene in [&small, &large, &small] {
+        let frame = viewer
+            .frame(scene, Shading::Clustered, Method::Refined, false)
+            .unwrap();
+        assert_eq!(frame.report.lights, scene.lights.len());
+        // Lights and lists both went through the staging ring: 48 bytes a light, 4 a pair.
+        let pairs = frame.stats.unwrap().pairs;
+        assert!(frame.report.upload_bytes >= 48 * scene.lights.len() as u64 + 4 * pairs);
+        let clustered = viewer.image().unwrap();
+        viewer
+            .frame(scene, Shading::BruteForce, Method::Refined, false)
+            .unwrap();
+        let brute = viewer.image().unwrap();
+        let (worst, differing) = max_channel_difference(&clustered, &brute);
+        assert!(
+            worst <= 1,
+            "{} lights: max difference {worst} ({differing} channels)",
+            scene.lights.len()
+        );
+    }
+}
