@@ -702,3 +702,107 @@ fn render_takes_scene_files_presets_and_sizes() {
     let out = myriad_fails(&["render", "--preset", "paper", "--camera", "Main"]);
     assert_mentions(&out, &["--camera", "--preset"]);
 }
+
+#[test]
+fn paper_reproduces_both_tables_with_json_and_heat_map() {
+    // Run in a fresh folder: the scene is Sponza only when ../shared/assets has it from there.
+    let dir = work_dir("paper");
+    let out_dir = dir.join("results");
+    let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .current_dir(&dir)
+        .args(["paper", "--size", "192x96", "--runs", "1", "--out"])
+        .arg(&out_dir)
+        .output()
+        .expect("cannot run the myriad binary");
+    assert!(out.status.success(), "paper failed:\n{}", all_output(&out));
+    let text = stdout(&out);
+    let sponza = dir.join("../shared/assets/sponza/Sponza.gltf").is_file();
+    assert_mentions(
+        &text,
+        &[
+            if sponza {
+                "scene: Sponza"
+            } else {
+                "scene: default scene (atrium)"
+            },
+            "192x96",
+            "Table 1 — 1000 lights",
+            "Table 2 — 10 lights",
+            "the paper's Table 1",
+            "Figure 4",
+            "paper_heatmap.png",
+        ],
+    );
+    if !sponza {
+        assert_mentions(&text, &["not found", "--assets"]);
+    }
+    // Each table: its three grids and "no clustering", with the paper's row beside ours.
+    let paper_rows = [
+        ("Table 1", ["9.16", "8.28", "9.10", "156.00"]),
+        ("Table 2", ["0.63", "0.64", "0.78", "1.60"]),
+    ];
+    for (table, paper_totals) in paper_rows {
+        let start = text.find(table).unwrap();
+        let lines: Vec<&str> = text[start..].lines().skip(3).take(4).collect();
+        let configs = ["24x12x16", "24x12x32", "24x12x64", "no clustering"];
+        for ((line, config), total) in lines.iter().zip(configs).zip(paper_totals) {
+            assert!(
+                line.starts_with(config),
+                "{table}: {line:?} is not {config}"
+            );
+            assert!(
+                line.contains(total),
+                "{table}: no paper total {total} in {line:?}"
+            );
+        }
+    }
+    // Progress: one line per configuration.
+    assert_eq!(stderr(&out).matches("/8] ").count(), 8, "{}", stderr(&out));
+
+    let json = read_json(&out_dir.join("paper.json"));
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 8);
+    for (i, row) in rows.iter().enumerate() {
+        let lights = if i < 4 { 10 } else { 1000 };
+        assert_eq!(row["lights"], lights, "{row}");
+        assert_eq!(row["table"], if lights == 10 { 2 } else { 1 }, "{row}");
+        let shading = row["shading_ms"].as_f64().unwrap();
+        let total = row["total_ms"].as_f64().unwrap();
+        assert!(shading > 0.0 && total >= shading, "{row}");
+        assert!(row["paper"]["total_ms"].as_f64().unwrap() > 0.0, "{row}");
+        if i % 4 < 3 {
+            let z = [16, 32, 64][i % 4];
+            assert_eq!(row["config"], format!("24x12x{z}"));
+            assert_eq!(row["grid"], serde_json::json!([24, 12, z]));
+            assert!(row["assign_ms"].as_f64().unwrap() > 0.0, "{row}");
+            let pairs = u64_field(row, "pairs");
+            assert!(pairs > 0, "{row}");
+            // The CSR lists: offsets and counts per cluster, one index per pair.
+            assert_eq!(u64_field(row, "list_bytes"), 4 * (2 * 24 * 12 * z + pairs));
+            let mean = row["pixels"]["mean_lights"].as_f64().unwrap();
+            assert!(mean < lights as f64, "{row}");
+        } else {
+            assert_eq!(row["config"], "no clustering");
+            assert_eq!(row["assign_ms"].as_f64().unwrap(), 0.0);
+            assert_eq!(u64_field(row, "list_bytes"), 0);
+            assert_eq!(
+                row["pixels"]["mean_lights"].as_f64().unwrap(),
+                lights as f64
+            );
+        }
+    }
+    assert_eq!(json["heat_map"]["grid"], serde_json::json!([24, 12, 32]));
+    let heat = out_dir.join("paper_heatmap.png");
+    assert!(heat.is_file(), "no {}", heat.display());
+    assert!(std::fs::metadata(&heat).unwrap().len() > 1000);
+
+    // Bad options fail before any rendering, naming the option.
+    let out = myriad_fails(&["paper", "--runs", "0"]);
+    assert_mentions(&out, &["--runs", "at least 1"]);
+    let out = myriad_fails(&["paper", "--size", "192"]);
+    assert_mentions(&out, &["--size", "WxH"]);
+    let out = myriad_fails(&["paper", "--assets", "/nonexistent/assets"]);
+    assert_mentions(&out, &["--assets", "/nonexistent/assets", "no such folder"]);
+    let out = myriad_fails(&["paper", "--depth", "cubic"]);
+    assert_mentions(&out, &["--depth", "log or linear"]);
+}

@@ -6,6 +6,7 @@ mod bench;
 mod check;
 mod frames;
 mod info;
+mod paper;
 mod render;
 mod scene;
 mod skips;
@@ -46,6 +47,9 @@ enum Command {
     Skips(skips::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
+    /// Reproduce the paper's Tables 1 and 2 (10 and 1000 lights, three grids and brute force) and
+    /// its Figure 4 heat map, next to the paper's numbers.
+    Paper(paper::Args),
 }
 
 /// Runs the parsed command line; `Ok` carries the exit code (non-zero when a check failed).
@@ -61,6 +65,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Frames(args)) => frames::run(args),
         Some(Command::Skips(args)) => skips::run(args),
+        Some(Command::Paper(args)) => paper::run(args),
         None => render::main_job(),
     }
 }

@@ -88,7 +88,8 @@ pub fn parse_size(text: &str) -> Result<(u32, u32)> {
     }
 }
 
-fn parse_slicing(text: &str) -> Result<DepthSlicing> {
+/// `"log"` or `"linear"` as a depth slicing.
+pub(super) fn parse_slicing(text: &str) -> Result<DepthSlicing> {
     match text {
         "log" => Ok(DepthSlicing::Log),
         "linear" => Ok(DepthSlicing::Linear),
