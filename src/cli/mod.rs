@@ -7,6 +7,7 @@ mod check;
 mod frames;
 mod info;
 mod render;
+mod report;
 mod scene;
 mod skips;
 mod source;
@@ -44,6 +45,8 @@ enum Command {
     Frames(frames::Args),
     /// Measure each saving of "skip what the scene does not need", before and after.
     Skips(skips::Args),
+    /// The time-against-error study: every method × standard scene × grid; table, JSON, plot.
+    Report(report::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
 }
@@ -59,6 +62,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Check(args)) => check::run(args),
         Some(Command::Bench(args)) => bench::run(args),
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Report(args)) => report::run(args),
         Some(Command::Frames(args)) => frames::run(args),
         Some(Command::Skips(args)) => skips::run(args),
         None => render::main_job(),
