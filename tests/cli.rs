@@ -806,3 +806,107 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     let out = myriad_fails(&["paper", "--depth", "cubic"]);
     assert_mentions(&out, &["--depth", "log or linear"]);
 }
+
+#[test]
+fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
+    let dir = work_dir("report");
+    let out = myriad_ok(&[
+        "report",
+        "--lights",
+        "500",
+        "--grids",
+        "8x4x8,16x9x24",
+        "--runs",
+        "3",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let (scenes, grids, methods) = (
+        ["paper", "uniform", "sphere"],
+        ["8×4×8", "16×9×24"],
+        ["exact", "linear", "binary", "refined"],
+    );
+
+    // report.md, also printed to stdout: one table row per scene × grid × method, no misses.
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert_eq!(stdout(&out), md);
+    assert_mentions(&md, &["shading cost", "| scene | grid | method |"]);
+    let rows: Vec<Vec<&str>> = md
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| scene") && !l.starts_with("| ---"))
+        .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 2 * 4, "{md}");
+    for scene in scenes {
+        for grid in grids {
+            for method in methods {
+                let row = rows
+                    .iter()
+                    .find(|r| r[..3] == [scene, grid, method])
+                    .unwrap_or_else(|| panic!("no row for {scene} {grid} {method} in:\n{md}"));
+                assert_eq!(row[6], "0", "misses in {row:?}");
+            }
+        }
+        assert!(
+            rows.iter().any(|r| r[0] == scene && r[8] == "✓"),
+            "{scene} has no point on its Pareto front:\n{md}"
+        );
+    }
+    // Progress: one stderr line per scene × grid.
+    let progress = stderr(&out);
+    for k in 1..=6 {
+        assert!(progress.contains(&format!("[{k}/6] ")), "{progress}");
+    }
+
+    // report.json: every number, misses 0 everywhere.
+    let report = read_json(&dir.join("report.json"));
+    let json_rows = report["rows"].as_array().expect("a rows array");
+    assert_eq!(json_rows.len(), 24);
+    for r in json_rows {
+        assert_eq!(u64_field(r, "misses"), 0, "{r}");
+        assert!(r["median_us"].as_f64().is_some_and(|t| t > 0.0), "{r}");
+        assert!(u64_field(r, "pairs") > 0, "{r}");
+        let exact = json_rows
+            .iter()
+            .find(|e| e["scene"] == r["scene"] && e["grid"] == r["grid"] && e["method"] == "exact")
+            .unwrap();
+        assert_eq!(exact["false_positive_ratio"].as_f64(), Some(0.0));
+        // Every method lists a superset of the exact lights: never cheaper to shade than exact.
+        assert!(
+            r["shading_cost"].as_f64().unwrap() >= exact["shading_cost"].as_f64().unwrap(),
+            "{r} vs {exact}"
+        );
+        assert_eq!(r["lit_clusters"], exact["lit_clusters"]);
+        assert!(r["false_positive_ratio"].as_f64().unwrap() >= 0.0, "{r}");
+    }
+
+    // report.svg: an SVG with the method and scene names and one Pareto-front line per scene
+    // (drawn in the front colour, #FF7F0E; the legend has one more sample of it).
+    let svg = std::fs::read_to_string(dir.join("report.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") || svg.starts_with("<?xml"),
+        "{}",
+        &svg[..svg.len().min(200)]
+    );
+    assert!(svg.trim_end().ends_with("</svg>"));
+    for name in methods.iter().chain(&scenes).chain(&grids) {
+        assert!(svg.contains(name), "{name} not in the SVG");
+    }
+    let fronts = svg
+        .lines()
+        .filter(|l| l.starts_with("<polyline") && l.contains(r##"stroke="#FF7F0E""##))
+        .count();
+    assert_eq!(fronts, 1 + 3, "legend sample + one front per scene");
+
+    // Bad options fail before measuring anything.
+    let out = myriad_fails(&[
+        "report",
+        "--grids",
+        "8x4x8,16x9",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_mentions(&out, &["--grids", "16x9"]);
+    let out = myriad_fails(&["report", "--runs", "0", "--out", dir.to_str().unwrap()]);
+    assert_mentions(&out, &["--runs"]);
+}

@@ -8,6 +8,7 @@ mod frames;
 mod info;
 mod paper;
 mod render;
+mod report;
 mod scene;
 mod skips;
 mod source;
@@ -45,6 +46,8 @@ enum Command {
     Frames(frames::Args),
     /// Measure each saving of "skip what the scene does not need", before and after.
     Skips(skips::Args),
+    /// The time-against-error study: every method × standard scene × grid; table, JSON, plot.
+    Report(report::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
     /// Reproduce the paper's Tables 1 and 2 (10 and 1000 lights, three grids and brute force) and
@@ -63,6 +66,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Check(args)) => check::run(args),
         Some(Command::Bench(args)) => bench::run(args),
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Report(args)) => report::run(args),
         Some(Command::Frames(args)) => frames::run(args),
         Some(Command::Skips(args)) => skips::run(args),
         Some(Command::Paper(args)) => paper::run(args),
