@@ -910,3 +910,39 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
     let out = myriad_fails(&["report", "--runs", "0", "--out", dir.to_str().unwrap()]);
     assert_mentions(&out, &["--runs"]);
 }
+
+#[test]
+fn skips_measures_every_saving_and_the_image_stays() {
+    let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
+    let out = myriad_ok(&[
+        "skips",
+        "--gltf",
+        atrium.to_str().unwrap(),
+        "--size",
+        "96x48",
+        "--runs",
+        "1",
+        "--json",
+    ]);
+    let reports: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let rows = reports[0]["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 7);
+    for row in rows {
+        assert!(
+            row["after"]["max_image_difference"].as_u64().unwrap() <= 1,
+            "{row}"
+        );
+    }
+    let by_name = |prefix: &str| {
+        rows.iter()
+            .find(|r| r["saving"].as_str().unwrap().starts_with(prefix))
+            .unwrap()
+    };
+    let cull = by_name("1.");
+    assert!(cull["after"]["lights_assigned"].as_u64() < cull["before"]["lights_assigned"].as_u64());
+    let active = by_name("2.");
+    assert!(active["after"]["pairs"].as_u64() < active["before"]["pairs"].as_u64());
+    let reuse = by_name("4.");
+    assert_eq!(reuse["after"]["upload_bytes"], 0);
+    assert_eq!(reuse["after"]["pairs"], 0);
+}

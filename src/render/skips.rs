@@ -83,8 +83,11 @@ pub struct SkipFrame {
     pub lights_assigned: usize,
     /// CPU seconds of the frustum cull and gather.
     pub cull_seconds: f64,
-    /// Seconds of the depth prepass: GPU pass, read-back, range and mask on the CPU.
+    /// Seconds of the depth prepass on the GPU and its read-back (the G-buffer pass moves here
+    /// from the frame; the read-back is the added cost).
     pub prepass_seconds: f64,
+    /// CPU seconds turning the depth buffer into the fitted range and the active-cluster mask.
+    pub mask_seconds: f64,
     /// CPU seconds of the assignment.
     pub assign_seconds: f64,
     /// The assignment's statistics (`None` when reused).
@@ -154,6 +157,7 @@ impl Viewer {
             lights_assigned: lights.len(),
             cull_seconds: 0.0,
             prepass_seconds: 0.0,
+            mask_seconds: 0.0,
             assign_seconds: 0.0,
             stats: None,
             report: FrameReport::default(),
@@ -228,6 +232,8 @@ impl Viewer {
                 .renderer
                 .read_depth(&self.ctx)?
                 .context("prepass drew")?;
+            frame.prepass_seconds = start.elapsed().as_secs_f64();
+            let start = Instant::now();
             if skips.fitted_depth {
                 grid = fitted_grid(&scene.grid, &scene.camera, &depth, &scene.blended_bounds);
             }
@@ -236,8 +242,8 @@ impl Viewer {
                 mark_active(mask, &grid, &scene.camera, &depth, &scene.blended_bounds);
                 frame.active_clusters = Some(mask.active_count());
             }
+            frame.mask_seconds = start.elapsed().as_secs_f64();
         }
-        frame.prepass_seconds = start.elapsed().as_secs_f64();
 
         // Assign.
         let assigned = if skips.cull { &state.visible } else { lights };
