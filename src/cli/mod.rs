@@ -10,6 +10,7 @@ mod render;
 mod scene;
 mod skips;
 mod source;
+mod stress;
 mod validate;
 
 use anyhow::Result;
@@ -44,6 +45,8 @@ enum Command {
     Frames(frames::Args),
     /// Measure each saving of "skip what the scene does not need", before and after.
     Skips(skips::Args),
+    /// One frame with very many lights: every stage timed, the lists checked against the oracle.
+    Stress(stress::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
 }
@@ -61,6 +64,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Frames(args)) => frames::run(args),
         Some(Command::Skips(args)) => skips::run(args),
+        Some(Command::Stress(args)) => stress::run(args),
         None => render::main_job(),
     }
 }

@@ -157,7 +157,13 @@ fn savings() -> Vec<(&'static str, Skips)> {
                 ..none
             },
         ),
-        ("1-3 and 5 (no reuse)", Skips { reuse_unchanged: false, ..Skips::ALL }),
+        (
+            "1-3 and 5 (no reuse)",
+            Skips {
+                reuse_unchanged: false,
+                ..Skips::ALL
+            },
+        ),
         ("all five", Skips::ALL),
     ]
 }
