@@ -946,3 +946,94 @@ fn skips_measures_every_saving_and_the_image_stays() {
     assert_eq!(reuse["after"]["upload_bytes"], 0);
     assert_eq!(reuse["after"]["pairs"], 0);
 }
+
+/// The stage times every `myriad stress --json` report carries.
+const STRESS_STAGES: [&str; 8] = [
+    "scene_ms",
+    "assign_ms",
+    "assign_again_ms",
+    "gpu_setup_ms",
+    "upload_ms",
+    "encode_ms",
+    "gpu_wall_ms",
+    "check_ms",
+];
+
+/// Runs `myriad stress --json` with `args`; the parsed report (the run must succeed).
+fn stress_json(args: &[&str]) -> Value {
+    let mut all = vec!["stress", "--json"];
+    all.extend_from_slice(args);
+    let out = myriad_ok(&all);
+    serde_json::from_str(&stdout(&out)).expect("stress --json prints one JSON object")
+}
+
+fn assert_stress_stages(report: &Value) {
+    let stages = &report["stages"];
+    for stage in STRESS_STAGES {
+        let ms = stages[stage]
+            .as_f64()
+            .unwrap_or_else(|| panic!("stage {stage} missing in {stages}"));
+        assert!(ms >= 0.0 && ms.is_finite(), "{stage}: {ms}");
+    }
+    assert!(stages["gpu_wall_ms"].as_f64().unwrap() > 0.0);
+    if report["timestamps"] == true {
+        for pass in ["gpu_gbuffer_ms", "gpu_shading_ms"] {
+            assert!(
+                stages[pass].as_f64().is_some(),
+                "{pass} missing in {stages}"
+            );
+        }
+    }
+}
+
+#[test]
+fn stress_checks_every_cluster_against_the_oracle() {
+    let r = stress_json(&["--lights", "20000", "--size", "64x36"]);
+    assert_eq!(r["lights"], 20000);
+    assert_eq!(
+        (r["width"].as_u64(), r["height"].as_u64()),
+        (Some(64), Some(36))
+    );
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["mode"], "full");
+    assert_eq!(check["misses"], 0);
+    assert_eq!(check["first_miss"], Value::Null);
+    assert_eq!(check["clusters_checked"], check["clusters_total"]);
+    assert!(u64_field(check, "exact_pairs") > 0);
+    let pairs = u64_field(&r["assignment"], "pairs");
+    assert!(pairs > 0);
+    // Every cluster was checked, so the reported pairs are all of them.
+    assert_eq!(u64_field(check, "reported_pairs"), pairs);
+    assert!(u64_field(check, "exact_pairs") <= pairs);
+    // Lights (32 bytes or more each) and the lists went up.
+    assert!(u64_field(&r, "upload_bytes") > 20000 * 32 + 4 * pairs);
+    assert_stress_stages(&r);
+}
+
+#[test]
+fn stress_samples_clusters_above_the_exact_limit() {
+    let r = stress_json(&["--sample", "50", "--lights", "250000", "--size", "32x18"]);
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["mode"], "sampled");
+    assert_eq!(check["clusters_checked"], 50);
+    assert_eq!(check["misses"], 0);
+    assert!(u64_field(check, "exact_pairs") > 0, "{check}");
+    assert!(u64_field(check, "reported_pairs") >= u64_field(check, "exact_pairs"));
+    assert_stress_stages(&r);
+}
+
+#[test]
+fn stress_rejects_bad_options_clearly() {
+    let out = myriad_fails(&["stress", "--lights", "0"]);
+    assert_mentions(&out, &["--lights", "at least 1"]);
+    let out = myriad_fails(&["stress", "--sample", "0", "--lights", "10"]);
+    assert_mentions(&out, &["--sample", "at least 1"]);
+    let out = myriad_fails(&["stress", "--size", "64"]);
+    assert_mentions(&out, &["--size", "WxH"]);
+    let out = myriad_fails(&["stress", "--method", "guess"]);
+    assert_mentions(&out, &["guess", "refined"]);
+    let out = myriad_fails(&["stress", "--lights", "many"]);
+    assert_mentions(&out, &["--lights", "many"]);
+}

@@ -12,6 +12,7 @@ mod report;
 mod scene;
 mod skips;
 mod source;
+mod stress;
 mod validate;
 
 use anyhow::Result;
@@ -48,6 +49,8 @@ enum Command {
     Skips(skips::Args),
     /// The time-against-error study: every method × standard scene × grid; table, JSON, plot.
     Report(report::Args),
+    /// One frame with very many lights: every stage timed, the lists checked against the oracle.
+    Stress(stress::Args),
     /// Render a scene headless (clustered, tiled, brute force): image, heat map, numbers.
     Render(render::Args),
     /// Reproduce the paper's Tables 1 and 2 (10 and 1000 lights, three grids and brute force) and
@@ -70,6 +73,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Frames(args)) => frames::run(args),
         Some(Command::Skips(args)) => skips::run(args),
         Some(Command::Paper(args)) => paper::run(args),
+        Some(Command::Stress(args)) => stress::run(args),
         None => render::main_job(),
     }
 }
