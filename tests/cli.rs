@@ -756,8 +756,13 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
             );
         }
     }
-    // Progress: one line per configuration.
-    assert_eq!(stderr(&out).matches("/8] ").count(), 8, "{}", stderr(&out));
+    // Progress: one result line per configuration (and a start line each).
+    let err = stderr(&out);
+    let results = err
+        .lines()
+        .filter(|l| l.contains("/8] ") && l.contains(": shading "))
+        .count();
+    assert_eq!(results, 8, "{err}");
 
     let json = read_json(&out_dir.join("paper.json"));
     let rows = json["rows"].as_array().unwrap();

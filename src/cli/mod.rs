@@ -7,6 +7,7 @@ mod check;
 mod frames;
 mod info;
 mod paper;
+mod progress;
 mod render;
 mod report;
 mod scene;

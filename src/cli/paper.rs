@@ -21,6 +21,7 @@
 //! paper spaced its planes uniformly (`--depth linear` for that).
 
 use super::assign::parse_method;
+use super::progress::Progress;
 use super::render::{parse_size, parse_slicing};
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
@@ -364,6 +365,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let heat_path = args.out.join("paper_heatmap.png");
     let mut heat_map = None;
     let mut rows = Vec::new();
+    let progress = Progress::new("paper");
     for (base, &lights) in scenes.iter().zip(&LIGHT_COUNTS) {
         let (table, paper) = paper_table(lights);
         for (config, paper) in configs.iter().zip(paper) {
@@ -378,6 +380,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 }
                 None => (base.clone(), Shading::BruteForce, "no clustering".into()),
             };
+            progress.start(&format!(
+                "[{}/{total_rows}] {lights} lights, {name}",
+                rows.len() + 1
+            ));
             let t = time_frames(&mut viewer, &scene, shading, method, args.runs)?;
             let pixels = frame_pixels(&viewer, &scene, shading)?;
             let clustered = shading == Shading::Clustered;
@@ -402,7 +408,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 pixels,
                 paper: *paper,
             };
-            eprintln!(
+            progress.line(format!(
                 "[{}/{total_rows}] {lights} lights, {}: shading {:.2} ms, assignment {}, \
                  total {:.2} ms, lists {} bytes ({} frame{})",
                 rows.len() + 1,
@@ -417,7 +423,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 row.list_bytes,
                 row.frames,
                 if row.frames == 1 { "" } else { "s" }
-            );
+            ));
             if clustered && lights == 1000 && *config == Some(HEAT_MAP_Z) {
                 heat_map = Some(write_heat_map(
                     &mut viewer,

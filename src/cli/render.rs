@@ -2,6 +2,7 @@
 //! brute-force deferred shading, write the lit image, the heat map and the numbers.
 
 use super::assign::parse_method;
+use super::progress::Progress;
 use super::scene::parse_grid;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
@@ -147,6 +148,7 @@ fn measure(
     shading: Shading,
     method: Method,
     runs: usize,
+    progress: &Progress,
 ) -> Result<StrategyResult> {
     let (mut assign, mut upload, mut encode, mut wall) = (vec![], vec![], vec![], vec![]);
     let mut passes: Vec<PassTimes> = vec![];
@@ -155,6 +157,15 @@ fn measure(
     let started = Instant::now();
     // One untimed frame builds the pipelines; then `runs` frames, fewer if they are slow.
     while run <= runs && !(run >= 2 && started.elapsed().as_secs_f64() > 20.0) {
+        progress.start(&format!(
+            "{}: {}",
+            shading.name(),
+            if run == 0 {
+                "warm-up frame".to_string()
+            } else {
+                format!("frame {run} of {runs}")
+            }
+        ));
         let frame = viewer.frame(scene, shading, method, false)?;
         let t = Instant::now();
         viewer.ctx.wait_idle()?;
@@ -218,8 +229,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     let mut strategies = Vec::new();
     let mut first_stats = None;
+    let progress = Progress::new("render");
     for shading in Shading::ALL {
-        let result = measure(&mut viewer, &scene, shading, method, args.runs)?;
+        let started = Instant::now();
+        let result = measure(&mut viewer, &scene, shading, method, args.runs, &progress)?;
+        progress.done(shading.name(), started.elapsed().as_secs_f64());
         if shading == Shading::Clustered {
             first_stats = viewer.frame(&scene, shading, method, false)?.stats;
             viewer.ctx.wait_idle()?;

@@ -55,10 +55,10 @@
 //! changes the surface lights (1 is the default scene exactly) and the sampled clusters.
 
 use super::assign::parse_method;
+use super::progress::Progress;
 use super::render::parse_size;
 use super::scene::parse_grid;
-use anyhow::{Context, Result, ensure};
-use indicatif::{ProgressBar, ProgressStyle};
+use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::DVec3;
 use myriad::cluster_math::oracle::{self, Cell, SpotVolume};
@@ -70,9 +70,8 @@ use myriad::scene::{DepthSlicing, Lights};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::io::IsTerminal;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -192,7 +191,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         args.sample >= 1,
         "--sample must be at least 1 (clusters checked against the oracle)"
     );
-    let progress = Progress::new();
+    let progress = Progress::new("stress");
     let mut stages = Stages::default();
 
     // 1. Scene.
@@ -642,73 +641,6 @@ fn peak_memory_bytes() -> Option<u64> {
         .parse()
         .ok()?;
     Some(kib * 1024)
-}
-
-/// Stage announcements on stderr: a spinner on a terminal, plain lines otherwise.
-struct Progress {
-    spinner: Option<ProgressBar>,
-}
-
-impl Progress {
-    fn new() -> Self {
-        let spinner = std::io::stderr().is_terminal().then(|| {
-            let bar = ProgressBar::new_spinner();
-            if let Ok(style) = ProgressStyle::with_template("{spinner} {msg} {elapsed}") {
-                bar.set_style(style);
-            }
-            bar.enable_steady_tick(Duration::from_millis(120));
-            bar
-        });
-        Self { spinner }
-    }
-
-    fn line(&self, text: String) {
-        match &self.spinner {
-            Some(bar) => bar.println(text),
-            None => eprintln!("{text}"),
-        }
-    }
-
-    fn start(&self, stage: &str) {
-        match &self.spinner {
-            Some(bar) => {
-                bar.reset_elapsed();
-                bar.set_message(format!("{stage}…"));
-            }
-            None => eprintln!("stress: {stage}…"),
-        }
-    }
-
-    fn done(&self, stage: &str, seconds: f64) {
-        self.line(format!("stress: {stage}: done in {:.1} ms", seconds * 1e3));
-    }
-
-    fn note(&self, text: &str) {
-        self.line(format!("stress:   {text}"));
-    }
-
-    /// Runs one stage, announced and timed.
-    fn stage<T>(&self, name: &str, f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
-        self.start(name);
-        let start = Instant::now();
-        let value = f().with_context(|| format!("stage \"{name}\""))?;
-        let seconds = start.elapsed().as_secs_f64();
-        self.done(name, seconds);
-        Ok((value, seconds))
-    }
-
-    fn finish(&self) {
-        if let Some(bar) = &self.spinner {
-            bar.finish_and_clear();
-        }
-    }
-}
-
-impl Drop for Progress {
-    /// Clears the spinner also when a stage fails, before the error is printed.
-    fn drop(&mut self) {
-        self.finish();
-    }
 }
 
 fn print_table(r: &Report) {
