@@ -51,3 +51,5 @@ pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_unif
 pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
 pub use targets::{GBuffer, HEADLESS_FORMAT, HeadlessTarget};
 pub use timing::PassTimes;
+/// The wgpu version this crate is built against, for callers that want to match it.
+pub use wgpu;
