@@ -69,63 +69,83 @@ struct SceneReport {
     rows: Vec<Row>,
 }
 
+/// Median (0 for no samples: the untimed reference frame).
 fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
-/// Renders `runs` frames with `skips` (after one untimed frame; `reuse` frames are timed on an
-/// unchanged second frame) and returns medians plus the last frame and image.
-fn measure(
-    viewer: &mut Viewer,
-    scene: &RenderScene,
-    method: myriad::assignment::Method,
-    skips: Skips,
-    runs: usize,
-    reference: Option<&[u8]>,
-) -> Result<(Measured, SkipFrame, Vec<u8>)> {
-    let (mut cpu, mut prepass, mut mask, mut shading) = (vec![], vec![], vec![], vec![]);
-    let mut last = None;
-    for run in 0..=runs {
-        // Without reuse, every frame is fresh; with it, the first frame fills the cache and the
-        // timed ones find nothing changed.
+/// Samples of one configuration, frame by frame.
+#[derive(Default)]
+struct Samples {
+    cpu: Vec<f64>,
+    prepass: Vec<f64>,
+    mask: Vec<f64>,
+    shading: Vec<f64>,
+    last: Option<SkipFrame>,
+}
+
+impl Samples {
+    /// Renders one frame with `skips` and records it (`timed` false: a warm-up, which also fills
+    /// the reuse cache, so timed `reuse` frames find nothing changed).
+    fn frame(
+        &mut self,
+        viewer: &mut Viewer,
+        scene: &RenderScene,
+        method: myriad::assignment::Method,
+        skips: Skips,
+        timed: bool,
+    ) -> Result<()> {
         let frame = viewer.frame_with_skips(scene, method, skips)?;
         viewer.ctx.wait_idle()?;
-        if run > 0 {
-            cpu.push(
+        if timed {
+            self.cpu.push(
                 (frame.cull_seconds + frame.assign_seconds + frame.report.upload_seconds) * 1e3,
             );
-            prepass.push(frame.prepass_seconds * 1e3);
-            mask.push(frame.mask_seconds * 1e3);
+            self.prepass.push(frame.prepass_seconds * 1e3);
+            self.mask.push(frame.mask_seconds * 1e3);
             if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
-                shading.push(p.shading_ms.unwrap_or(0.0) + p.forward_ms.unwrap_or(0.0));
+                self.shading
+                    .push(p.shading_ms.unwrap_or(0.0) + p.forward_ms.unwrap_or(0.0));
             }
         }
-        last = Some(frame);
+        self.last = Some(frame);
+        Ok(())
     }
-    let frame = last.expect("frames ran");
-    let image = viewer.image()?;
-    let max_image_difference = reference.map_or(0, |r| {
-        r.iter()
-            .zip(&image)
-            .map(|(a, b)| a.abs_diff(*b))
-            .max()
-            .unwrap_or(0)
-    });
-    Ok((
-        Measured {
-            cpu_ms: median(cpu),
-            prepass_ms: median(prepass),
-            mask_ms: median(mask),
-            pairs: frame.stats.map_or(0, |s| s.pairs),
-            lights_assigned: frame.lights_assigned,
-            upload_bytes: frame.report.upload_bytes,
-            shading_ms: (!shading.is_empty()).then(|| median(shading)),
-            max_image_difference,
-        },
-        frame,
-        image,
-    ))
+
+    /// Medians, and the image's largest difference from `reference`.
+    fn summary(
+        self,
+        viewer: &Viewer,
+        reference: Option<&[u8]>,
+    ) -> Result<(Measured, SkipFrame, Vec<u8>)> {
+        let frame = self.last.expect("frames ran");
+        let image = viewer.image()?;
+        let max_image_difference = reference.map_or(0, |r| {
+            r.iter()
+                .zip(&image)
+                .map(|(a, b)| a.abs_diff(*b))
+                .max()
+                .unwrap_or(0)
+        });
+        Ok((
+            Measured {
+                cpu_ms: median(self.cpu),
+                prepass_ms: median(self.prepass),
+                mask_ms: median(self.mask),
+                pairs: frame.stats.map_or(0, |s| s.pairs),
+                lights_assigned: frame.lights_assigned,
+                upload_bytes: frame.report.upload_bytes,
+                shading_ms: (!self.shading.is_empty()).then(|| median(self.shading)),
+                max_image_difference,
+            },
+            frame,
+            image,
+        ))
+    }
 }
 
 fn savings() -> Vec<(&'static str, Skips)> {
@@ -177,15 +197,25 @@ fn scene_report(
     method: myriad::assignment::Method,
     runs: usize,
 ) -> Result<SceneReport> {
+    // The reference image: every saving off.
     let mut viewer = Viewer::new(ctx.clone(), scene)?;
-    let (before, _, reference) = measure(&mut viewer, scene, method, Skips::NONE, runs, None)?;
+    let mut warm = Samples::default();
+    warm.frame(&mut viewer, scene, method, Skips::NONE, false)?;
+    let (_, _, reference) = warm.summary(&viewer, None)?;
     let mut rows = Vec::new();
     for (name, skips) in savings() {
+        // Before and after frames alternate, so drift in the machine's load hits both alike.
         let mut fresh = Viewer::new(ctx.clone(), scene)?;
-        let (after, frame, _) = measure(&mut fresh, scene, method, skips, runs, Some(&reference))?;
+        let (mut before, mut after) = (Samples::default(), Samples::default());
+        for run in 0..=runs {
+            before.frame(&mut viewer, scene, method, Skips::NONE, run > 0)?;
+            after.frame(&mut fresh, scene, method, skips, run > 0)?;
+        }
+        let (before, _, _) = before.summary(&viewer, None)?;
+        let (after, frame, _) = after.summary(&fresh, Some(&reference))?;
         rows.push(Row {
             saving: name,
-            before: before.clone(),
+            before,
             after,
             active_clusters: frame.active_clusters,
             clusters: frame.grid.cluster_count(),
@@ -267,8 +297,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
              first and its depth read back (the G-buffer pass then does not run again in the \
              frame; the read-back wait is the added cost). mask = depth buffer -> fitted range \
              and active clusters on the CPU. Δimage = largest channel difference from the image \
-             with no saving (of 255). \"all five\" and \"reuse\" time the second of two \
-             identical frames."
+             with no saving (of 255). \"all five\" and \"reuse\" time frames after an \
+             identical first one. Before and after frames alternate; medians."
         );
     }
     let changed = reports
