@@ -180,7 +180,7 @@ pub struct GpuStage<'a> {
 }
 
 impl GpuStage<'_> {
-    /// Uploads, renders and waits for frame `work`; then `after` sees the finished target.
+    /// Uploads, renders and waits for frame `work`.
     fn run(&mut self, scene: &RenderScene, work: &FrameWork) -> Result<StageTimes> {
         let grid = grid_of(&work.stats, &scene.grid);
         let frame = FrameDesc {

@@ -54,7 +54,7 @@ impl LightColumns<'_> {
     /// Whether every column has [`Self::len`] rows.
     pub fn check(&self) -> Result<(), String> {
         let n = self.len();
-        let mut lens = vec![
+        let lens = [
             self.y.len(),
             self.z.len(),
             self.radius.len(),
@@ -63,10 +63,14 @@ impl LightColumns<'_> {
             self.b.len(),
             self.intensity.len(),
         ];
-        if let Some(s) = &self.spot {
-            lens.extend([s.dir_x.len(), s.dir_y.len(), s.dir_z.len(), s.angle.len()]);
-        }
-        match lens.iter().find(|&&l| l != n) {
+        let spot_lens = self
+            .spot
+            .map(|s| [s.dir_x.len(), s.dir_y.len(), s.dir_z.len(), s.angle.len()]);
+        match lens
+            .iter()
+            .chain(spot_lens.iter().flatten())
+            .find(|&&l| l != n)
+        {
             Some(l) => Err(format!(
                 "light columns differ in length: {n} positions, a column of {l}"
             )),

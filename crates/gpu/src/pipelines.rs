@@ -49,7 +49,6 @@ pub(crate) struct Pipelines {
     pub deferred_inputs_layout: wgpu::BindGroupLayout,
     pub lights_layout: wgpu::BindGroupLayout,
     pub material_layout: wgpu::BindGroupLayout,
-    gbuffer_module: wgpu::ShaderModule,
     deferred_module: wgpu::ShaderModule,
     forward_module: wgpu::ShaderModule,
     pub gbuffer: wgpu::RenderPipeline,
@@ -196,7 +195,6 @@ impl Pipelines {
             deferred_inputs_layout,
             lights_layout,
             material_layout,
-            gbuffer_module,
             deferred_module,
             forward_module,
             gbuffer,
@@ -321,11 +319,5 @@ impl Pipelines {
             self.forward.insert(key, pipeline);
         }
         &self.forward[&key]
-    }
-
-    /// The module of the G-buffer pass (kept alive with the pipeline).
-    #[allow(dead_code)]
-    pub fn gbuffer_module(&self) -> &wgpu::ShaderModule {
-        &self.gbuffer_module
     }
 }

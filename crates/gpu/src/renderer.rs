@@ -101,6 +101,7 @@ pub struct Renderer {
     timer: PassTimer,
     scratch_lights: Vec<GpuLight>,
     scratch_edges: Vec<f32>,
+    scratch_draws: Vec<crate::scene::Draw>,
     light_count: usize,
     lights_camera: Option<[f32; 3]>,
     lists_uploaded: Option<(usize, u32)>,
@@ -143,6 +144,7 @@ impl Renderer {
             timer: PassTimer::new(ctx),
             scratch_lights: Vec::new(),
             scratch_edges: Vec::new(),
+            scratch_draws: Vec::new(),
             light_count: 0,
             lights_camera: None,
             lists_uploaded: None,
@@ -559,6 +561,7 @@ impl Renderer {
             .gbuffer
             .as_ref()
             .expect("G-buffer created before encoding");
+        scene.blended_back_to_front(frame.camera.position, &mut self.scratch_draws);
         let timestamps = self.timer.writes(TimedPass::Forward);
         let has_spots = self.has_spots || frame.settings.force_all_features;
         let pipeline = self.pipelines.forward(device, frame.mode, has_spots);
@@ -590,7 +593,7 @@ impl Renderer {
         pass.set_bind_group(1, self.lights_group.as_ref(), &[]);
         pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
         pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-        for draw in scene.blended_back_to_front(frame.camera.position) {
+        for draw in &self.scratch_draws {
             pass.set_bind_group(2, &scene.material_groups[draw.material as usize], &[]);
             pass.draw_indexed(
                 draw.first_index..draw.first_index + draw.index_count,

@@ -244,15 +244,16 @@ impl GpuScene {
         self.triangles
     }
 
-    /// Blended draws sorted far to near from `camera` (stable for equal distances).
-    pub(crate) fn blended_back_to_front(&self, camera: Vec3) -> Vec<Draw> {
-        let mut draws = self.blended.clone();
-        draws.sort_by(|a, b| {
+    /// Blended draws sorted far to near from `camera` (stable for equal distances), into
+    /// `out` (reused frame to frame).
+    pub(crate) fn blended_back_to_front(&self, camera: Vec3, out: &mut Vec<Draw>) {
+        out.clear();
+        out.extend_from_slice(&self.blended);
+        out.sort_by(|a, b| {
             b.center
                 .distance_squared(camera)
                 .total_cmp(&a.center.distance_squared(camera))
         });
-        draws
     }
 }
 
