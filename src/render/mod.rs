@@ -1,6 +1,7 @@
 //! Rendering glue: scenes and models into the renderer's inputs, a viewer that assigns and
 //! renders frames, and the pipelined frame loop.
 
+mod depth_buffer;
 mod geometry;
 mod pipelined;
 mod pixel_stats;
@@ -8,9 +9,10 @@ mod setup;
 mod skips;
 mod viewer;
 
+pub use depth_buffer::{fitted_grid, mark_active};
 pub use geometry::scene_geometry;
 pub use pipelined::{FRAMES_IN_FLIGHT, GpuStage, LoopReport, StageTimes, run_frames};
 pub use pixel_stats::{PixelStats, pixel_stats};
 pub use setup::{DEFAULT_GRID, RenderScene};
-pub use skips::{SkipFrame, Skips, fitted_grid, mark_active};
+pub use skips::{SkipFrame, Skips};
 pub use viewer::{Shading, Viewer, ViewerFrame, grid_of, light_columns};
