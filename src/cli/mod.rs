@@ -22,7 +22,12 @@ use std::process::ExitCode;
 
 /// Clustered shading with very many lights: scene files, light assignment, accuracy and speed.
 #[derive(Parser, Debug)]
-#[command(name = "myriad", version, about)]
+#[command(
+    name = "myriad",
+    version,
+    about,
+    after_help = "Without a command: the main job, `myriad render` with its defaults (the default scene, 1000 lights, 1536x768, into out/)."
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
