@@ -12,8 +12,10 @@
 //!    `[c ± R] × [da, db]` of the sphere's part inside the band — and then the tiles whose plane
 //!    slopes overlap that range, by searching the x- and y-plane sets (`search.rs`).
 //! 3. **refinement** (method `refined`): per slice, the sphere shrunk to the slab is bounded by a
-//!    cylinder of radius `R_k`; per row of that slice, the row's y-band cuts the cylinder's
-//!    half-width to `w = sqrt(R_k² − dy²)`, and only the x tiles of `[cx ± w]` are kept.
+//!    cylinder of radius `R_k`; a cluster of the slab is kept when its column's and row's gaps to
+//!    the centre satisfy `dx² + dy² ≤ R_k²` (the x tiles of `[cx ± sqrt(R_k² − dy²)]`), decided per
+//!    row by counting, against the per-slice squared column gaps — no square root, division or
+//!    plane search per row.
 
 use crate::search::FramePlanes;
 
@@ -146,7 +148,19 @@ pub(crate) fn cluster_box(
 }
 
 /// Refinement of one slice `k` of a light's box: calls `row(j, i0, i1)` for every row of the slice
-/// the sphere (shrunk to the slab) can touch, with the tightened x tile span.
+/// the sphere (shrunk to the slab) can touch, with the tightened x tile span. `gaps` is scratch of
+/// at least twice the box's columns.
+///
+/// A cluster `(i, j)` of the slab is kept when `dx² ≤ R_k² − dy²`, where `dx` (`dy`) is the distance
+/// from the centre to the column's (row's) band of x (y) over the slab's depths `[ka, kb]` — the
+/// same test as intersecting the row's half-width `w = sqrt(R_k² − dy²)` with the columns' slopes,
+/// without a square root, a division or a search per row. Columns left of the centre are ordered
+/// by distance (their gaps fall as `i` grows, rounding included: products and `max` are monotone),
+/// and so are those right of it, so the kept columns of a row are the box's columns less a prefix
+/// and a suffix, which are *counted* branch-free over the per-slice squared gaps. In f32 the
+/// radius padding grows `(R_k − dy)(R_k + dy)` by about `2·R_k·PAD·|c|`, far above the few ulps
+/// the squares and products round by. (It replaced a square root and a plane search per row:
+/// identical lists on `paper` 1000 and `uniform` 100k/1M, `paper` 1000 `refined` 1.35× faster.)
 #[allow(clippy::too_many_arguments)] // One light's columns, passed by value in the hot loop.
 #[inline(always)]
 pub(crate) fn refine_slice(
@@ -157,6 +171,7 @@ pub(crate) fn refine_slice(
     b: &ClusterBox,
     k: u32,
     planes: &FramePlanes<'_>,
+    gaps: &mut [f32],
     mut row: impl FnMut(u32, u32, u32),
 ) {
     let sets = planes.sets;
@@ -166,22 +181,27 @@ pub(crate) fn refine_slice(
         return;
     }
     let rk = band_radius(dc, r, ka, kb);
-    // Per-row slopes multiply by these instead of dividing (a rounding of ~1 ulp more, far inside
-    // the radius padding; it shortens the latency chain of every row).
-    let (inv_a, inv_b) = (1.0 / ka, 1.0 / kb);
-    let slopes = |lo: f32, hi: f32| {
-        let min = lo * if lo >= 0.0 { inv_b } else { inv_a };
-        let max = hi * if hi >= 0.0 { inv_a } else { inv_b };
-        (min, max)
-    };
-    let (sy0, sy1) = slopes(cy - rk, cy + rk);
-    let Some((j0, j1)) = planes.rows(sy0, sy1) else {
-        return;
-    };
-    let (j0, j1) = (j0.max(b.j0), j1.min(b.j1));
-    // Rows whose y-band holds the centre see the full cross-section: one search serves them all.
-    let mut full_width = None;
-    for j in j0..=j1 {
+    let columns = (b.i1 - b.i0 + 1) as usize;
+    let (left, right) = gaps.split_at_mut(columns);
+    let right = &mut right[..columns];
+    let xs = &sets.x_slopes[b.i0 as usize..][..columns + 1];
+    // Squared gap of each column wholly left (right) of the centre, −∞ for the others.
+    for (c, (l, r)) in left.iter_mut().zip(right.iter_mut()).enumerate() {
+        let (s0, s1) = (xs[c], xs[c + 1]);
+        let gap_left = cx - (s1 * ka).max(s1 * kb);
+        let gap_right = (s0 * ka).min(s0 * kb) - cx;
+        *l = if gap_left > 0.0 {
+            gap_left * gap_left
+        } else {
+            f32::NEG_INFINITY
+        };
+        *r = if gap_right > 0.0 {
+            gap_right * gap_right
+        } else {
+            f32::NEG_INFINITY
+        };
+    }
+    for j in b.j0..=b.j1 {
         let top = sets.y_slopes[j as usize];
         let bottom = sets.y_slopes[j as usize + 1];
         let y_lo = (bottom * ka).min(bottom * kb);
@@ -190,21 +210,12 @@ pub(crate) fn refine_slice(
         if dy > rk {
             continue;
         }
-        let columns = if dy == 0.0 {
-            *full_width.get_or_insert_with(|| {
-                let (sx0, sx1) = slopes(cx - rk, cx + rk);
-                planes.columns(sx0, sx1)
-            })
-        } else {
-            let w = ((rk - dy) * (rk + dy)).sqrt();
-            let (sx0, sx1) = slopes(cx - w, cx + w);
-            planes.columns(sx0, sx1)
-        };
-        if let Some((i0, i1)) = columns {
-            let (i0, i1) = (i0.max(b.i0), i1.min(b.i1));
-            if i0 <= i1 {
-                row(j, i0, i1);
-            }
+        let room = (rk - dy) * (rk + dy);
+        let cut_left: u32 = left.iter().map(|&g| (g > room) as u32).sum();
+        let cut_right: u32 = right.iter().map(|&g| (g > room) as u32).sum();
+        let (i0, i1) = (b.i0 + cut_left, b.i1 - cut_right);
+        if cut_left + cut_right < columns as u32 {
+            row(j, i0, i1);
         }
     }
 }

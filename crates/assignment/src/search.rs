@@ -155,7 +155,7 @@ impl<'a> FramePlanes<'a> {
     }
 
     /// Tile columns `[first, last]` whose slope span `[s_i, s_{i+1}]` overlaps `[min, max]`.
-    #[inline]
+    #[cfg(test)]
     pub fn columns(&self, min: f32, max: f32) -> Option<(u32, u32)> {
         self.columns_exact(min, max, self.columns_guess(min, max))
     }
@@ -184,7 +184,7 @@ impl<'a> FramePlanes<'a> {
 
     /// Tile rows `[first, last]` (top → bottom) whose slope span `[s_{j+1}, s_j]` overlaps
     /// `[min, max]`.
-    #[inline]
+    #[cfg(test)]
     pub fn rows(&self, min: f32, max: f32) -> Option<(u32, u32)> {
         self.rows_exact(min, max, self.rows_guess(min, max))
     }
