@@ -16,12 +16,6 @@
 
 override MODE: u32 = 0u;
 
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
-}
-
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) rel_position: vec3<f32>,

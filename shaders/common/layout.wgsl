@@ -61,3 +61,11 @@ struct ClusterCheck {
     _pad: u32,
     grid_dims: vec4<u32>,
 }
+
+// One scene vertex, world space (vertex buffer of the G-buffer and forward passes; its Rust twin
+// is `Vertex`, whose attribute layout `Vertex::LAYOUT` names these locations).
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+}

@@ -108,6 +108,62 @@ fn color_target(
     })
 }
 
+/// What differs between the renderer's pipelines; [`build_pipeline`] fills in the rest.
+struct PipelineSpec<'a> {
+    label: &'static str,
+    bind_groups: &'a [Option<&'a wgpu::BindGroupLayout>],
+    module: &'a wgpu::ShaderModule,
+    vertex_entry: &'static str,
+    vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    depth: Option<wgpu::DepthStencilState>,
+    targets: &'a [Option<wgpu::ColorTargetState>],
+    /// Pipeline-overridable constants of the fragment stage.
+    constants: &'a [(&'a str, f64)],
+}
+
+fn build_pipeline(device: &wgpu::Device, spec: PipelineSpec<'_>) -> wgpu::RenderPipeline {
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(spec.label),
+        bind_group_layouts: spec.bind_groups,
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(spec.label),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: spec.module,
+            entry_point: Some(spec.vertex_entry),
+            compilation_options: Default::default(),
+            buffers: spec.vertex_buffers,
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: spec.depth,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: spec.module,
+            entry_point: Some("fs_main"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: spec.constants,
+                zero_initialize_workgroup_memory: false,
+            },
+            targets: spec.targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// Depth-tested against the G-buffer depth (`Less`), writing it or not.
+fn depth_test(write: bool) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
 impl Pipelines {
     pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
@@ -153,42 +209,23 @@ impl Pipelines {
         let deferred_module = PassShader::Deferred.module(device);
         let forward_module = PassShader::Forward.module(device);
 
-        let gbuffer_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
-            immediate_size: 0,
-        });
-        let gbuffer = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer"),
-            layout: Some(&gbuffer_layout),
-            vertex: wgpu::VertexState {
+        let gbuffer = build_pipeline(
+            device,
+            PipelineSpec {
+                label: "gbuffer",
+                bind_groups: &[Some(&frame_layout), Some(&material_layout)],
                 module: &gbuffer_module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(Vertex::LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &gbuffer_module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
+                vertex_entry: "vs_main",
+                vertex_buffers: &[Some(Vertex::LAYOUT)],
+                depth: depth_test(true),
                 targets: &[
                     color_target(ALBEDO_FORMAT, None),
                     color_target(NORMAL_FORMAT, None),
                     color_target(MATERIAL_FORMAT, None),
                 ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                constants: &[],
+            },
+        );
         Self {
             output_format,
             frame_layout,
@@ -217,44 +254,27 @@ impl Pipelines {
             has_spots,
         };
         if !self.deferred.contains_key(&key) {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("deferred"),
-                bind_group_layouts: &[
-                    Some(&self.deferred_inputs_layout),
-                    Some(&self.lights_layout),
-                ],
-                immediate_size: 0,
-            });
             let constants = [
                 ("MODE", mode.constant()),
                 ("HEAT_MAP", f64::from(u8::from(heat_map))),
                 ("HAS_SPOTS", f64::from(u8::from(has_spots))),
             ];
-            let options = wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                zero_initialize_workgroup_memory: false,
-            };
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("deferred"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
+            let pipeline = build_pipeline(
+                device,
+                PipelineSpec {
+                    label: "deferred",
+                    bind_groups: &[
+                        Some(&self.deferred_inputs_layout),
+                        Some(&self.lights_layout),
+                    ],
                     module: &self.deferred_module,
-                    entry_point: Some("vs_fullscreen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &self.deferred_module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: options,
+                    vertex_entry: "vs_fullscreen",
+                    vertex_buffers: &[],
+                    depth: None,
                     targets: &[color_target(self.output_format, None)],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+                    constants: &constants,
+                },
+            );
             self.deferred.insert(key, pipeline);
         }
         &self.deferred[&key]
@@ -269,53 +289,30 @@ impl Pipelines {
     ) -> &wgpu::RenderPipeline {
         let key = ForwardKey { mode, has_spots };
         if !self.forward.contains_key(&key) {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("forward"),
-                bind_group_layouts: &[
-                    Some(&self.frame_layout),
-                    Some(&self.lights_layout),
-                    Some(&self.material_layout),
-                ],
-                immediate_size: 0,
-            });
             let constants = [
                 ("MODE", mode.constant()),
                 ("HAS_SPOTS", f64::from(u8::from(has_spots))),
             ];
-            let options = wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                zero_initialize_workgroup_memory: false,
-            };
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("forward"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
+            let pipeline = build_pipeline(
+                device,
+                PipelineSpec {
+                    label: "forward",
+                    bind_groups: &[
+                        Some(&self.frame_layout),
+                        Some(&self.lights_layout),
+                        Some(&self.material_layout),
+                    ],
                     module: &self.forward_module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(Vertex::LAYOUT)],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &self.forward_module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: options,
+                    vertex_entry: "vs_main",
+                    vertex_buffers: &[Some(Vertex::LAYOUT)],
+                    depth: depth_test(false),
                     targets: &[color_target(
                         self.output_format,
                         Some(wgpu::BlendState::ALPHA_BLENDING),
                     )],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+                    constants: &constants,
+                },
+            );
             self.forward.insert(key, pipeline);
         }
         &self.forward[&key]
