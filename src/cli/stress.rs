@@ -64,8 +64,8 @@ use myriad::cluster_math::glam::DVec3;
 use myriad::cluster_math::oracle::{self, Cell, SpotVolume};
 use myriad::cluster_math::{Camera, ClusterGrid};
 use myriad::evaluate::compare;
-use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError, ShadingMode};
-use myriad::render::{RenderScene, Viewer, grid_of, light_columns};
+use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
+use myriad::render::{RenderScene, Viewer, cluster_lists, grid_of, light_columns};
 use myriad::scene::{DepthSlicing, Lights};
 use rand::SeedableRng;
 use rayon::prelude::*;
@@ -247,18 +247,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
             let ctx = GpuContext::headless()?;
             let mut viewer = Viewer::new(ctx, &scene)?;
             let empty = vec![0u32; grid.cluster_count()];
+            let no_lists = ClusterLists {
+                offsets: &empty,
+                counts: &empty,
+                indices: &[],
+            };
             let warm_up = FrameDesc {
-                camera: &scene.camera,
-                grid: &grid,
-                mode: ShadingMode::Lists,
-                heat_map: false,
-                lights: Some(light_columns(&scene.lights)),
-                lists: Some(ClusterLists {
-                    offsets: &empty,
-                    counts: &empty,
-                    indices: &[],
-                }),
                 settings: viewer.settings,
+                ..FrameDesc::clustered(&scene.camera, &grid, light_columns(&scene.lights), no_lists)
             };
             viewer
                 .renderer
@@ -274,17 +270,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // 4. Upload (+ encode and submit) of the measured frame.
     progress.start("upload + encode + submit");
     let frame = FrameDesc {
-        camera: &scene.camera,
-        grid: &grid,
-        mode: ShadingMode::Lists,
-        heat_map: false,
-        lights: Some(light_columns(&scene.lights)),
-        lists: Some(ClusterLists {
-            offsets: &lists.offsets,
-            counts: &lists.counts,
-            indices: &lists.indices,
-        }),
         settings: viewer.settings,
+        ..FrameDesc::clustered(
+            &scene.camera,
+            &grid,
+            light_columns(&scene.lights),
+            cluster_lists(&lists),
+        )
     };
     let report = viewer
         .renderer

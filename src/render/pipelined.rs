@@ -15,14 +15,13 @@
 //! pipelines and buffers, left out).
 
 use super::setup::RenderScene;
-use super::viewer::{grid_of, light_columns};
+use super::viewer::{cluster_lists, grid_of, light_columns};
 use crate::light_input;
 use anyhow::{Context, Result};
 use crossbeam::channel;
 use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
 use myriad_gpu::{
-    ClusterLists, FrameDesc, GpuContext, GpuScene, HeadlessTarget, PassTimes, Renderer,
-    ShadingMode, ShadingSettings,
+    FrameDesc, GpuContext, GpuScene, HeadlessTarget, PassTimes, Renderer, ShadingSettings,
 };
 use myriad_scene::Lights;
 use myriad_scene::systems::{Orbits, animate_orbits};
@@ -184,17 +183,13 @@ impl GpuStage<'_> {
     fn run(&mut self, scene: &RenderScene, work: &FrameWork) -> Result<StageTimes> {
         let grid = grid_of(&work.stats, &scene.grid);
         let frame = FrameDesc {
-            camera: &scene.camera,
-            grid: &grid,
-            mode: ShadingMode::Lists,
-            heat_map: false,
-            lights: Some(light_columns(&work.lights)),
-            lists: Some(ClusterLists {
-                offsets: &work.lists.offsets,
-                counts: &work.lists.counts,
-                indices: &work.lists.indices,
-            }),
             settings: self.settings,
+            ..FrameDesc::clustered(
+                &scene.camera,
+                &grid,
+                light_columns(&work.lights),
+                cluster_lists(&work.lists),
+            )
         };
         let report = self
             .renderer

@@ -24,11 +24,11 @@
 
 use super::depth_buffer::{fitted_grid, mark_active};
 use super::setup::RenderScene;
-use super::viewer::{Viewer, grid_of, light_columns};
+use super::viewer::{Viewer, cluster_lists, grid_of, light_columns};
 use crate::light_input;
 use anyhow::{Context, Result};
 use myriad_assignment::{ActiveClusters, AssignStats, Method};
-use myriad_gpu::{ClusterLists, FrameDesc, FrameReport, ShadingMode, ShadingSettings};
+use myriad_gpu::{FrameDesc, FrameReport, ShadingMode, ShadingSettings};
 use myriad_scene::systems::{Visibility, cull_lights};
 use myriad_scene::{Camera, ClusterGrid, Lights};
 use std::time::Instant;
@@ -263,17 +263,13 @@ impl Viewer {
         frame.stats = Some(stats);
 
         let desc = FrameDesc {
-            camera: &scene.camera,
-            grid: &frame.grid,
-            mode: ShadingMode::Lists,
-            heat_map: false,
-            lights: Some(light_columns(assigned)),
-            lists: Some(ClusterLists {
-                offsets: &self.lists.offsets,
-                counts: &self.lists.counts,
-                indices: &self.lists.indices,
-            }),
             settings,
+            ..FrameDesc::clustered(
+                &scene.camera,
+                &frame.grid,
+                light_columns(assigned),
+                cluster_lists(&self.lists),
+            )
         };
         frame.report = if skips.needs_prepass() {
             self.renderer

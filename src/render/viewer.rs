@@ -70,6 +70,15 @@ pub fn light_columns(lights: &Lights) -> LightColumns<'_> {
     }
 }
 
+/// The GPU's borrowed view of CSR lists.
+pub fn cluster_lists(lists: &LightLists) -> ClusterLists<'_> {
+    ClusterLists {
+        offsets: &lists.offsets,
+        counts: &lists.counts,
+        indices: &lists.indices,
+    }
+}
+
 /// The grid lists were built for: `grid`, coarsened as many times as the stats say.
 pub fn grid_of(stats: &AssignStats, grid: &ClusterGrid) -> ClusterGrid {
     (0..stats.coarsened).fold(*grid, |g, _| coarser_grid(&g))
@@ -147,11 +156,7 @@ impl Viewer {
             grid = grid_of(&s, &grid);
             stats = Some(s);
         }
-        let lists = (shading != Shading::BruteForce).then(|| ClusterLists {
-            offsets: &self.lists.offsets,
-            counts: &self.lists.counts,
-            indices: &self.lists.indices,
-        });
+        let lists = (shading != Shading::BruteForce).then(|| cluster_lists(&self.lists));
         let frame = FrameDesc {
             camera: &scene.camera,
             grid: &grid,

@@ -68,6 +68,27 @@ pub struct FrameDesc<'a> {
     pub settings: ShadingSettings,
 }
 
+impl<'a> FrameDesc<'a> {
+    /// A clustered (or, with a one-slice grid, tiled) frame that uploads `lights` and `lists`,
+    /// lit image, default look: the common case, to adjust with struct update syntax.
+    pub fn clustered(
+        camera: &'a Camera,
+        grid: &'a ClusterGrid,
+        lights: LightColumns<'a>,
+        lists: ClusterLists<'a>,
+    ) -> Self {
+        Self {
+            camera,
+            grid,
+            mode: ShadingMode::Lists,
+            heat_map: false,
+            lights: Some(lights),
+            lists: Some(lists),
+            settings: ShadingSettings::default(),
+        }
+    }
+}
+
 /// What a frame cost on the CPU side, and what it moved.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameReport {
