@@ -5,19 +5,19 @@
 //! The caller builds the mask — from a depth buffer (every covered pixel's cluster) and from the
 //! screen boxes of transparent geometry (the forward pass shades clusters the depth buffer does
 //! not show) — and passes it to [`crate::Assigner::assign_active`]. The assignment then counts
-//! and writes pairs only for active clusters, skipping whole rows of a slice that hold none. A
-//! cluster outside the mask ends with an empty list, so the mask must cover every cluster the
+//! and writes pairs only for active clusters: a light's row of clusters with no active one is
+//! dropped as it is emitted (an O(1) test against a prefix count of the flags, [`ActiveView`]).
+//! A cluster outside the mask ends with an empty list, so the mask must cover every cluster the
 //! frame shades: that is the caller's contract, and the one way this can lose a light.
 
 use glam::UVec3;
 use myriad_cluster_math::ClusterGrid;
 
-/// One flag per cluster of a grid, plus one per (slice, row) that says whether the row has any.
+/// One flag per cluster of a grid.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ActiveClusters {
     dims: UVec3,
     cluster: Vec<bool>,
-    row: Vec<bool>,
     active: usize,
 }
 
@@ -34,8 +34,6 @@ impl ActiveClusters {
         self.dims = grid.dims;
         self.cluster.clear();
         self.cluster.resize(grid.cluster_count(), false);
-        self.row.clear();
-        self.row.resize((grid.dims.y * grid.dims.z) as usize, false);
         self.active = 0;
     }
 
@@ -50,7 +48,6 @@ impl ActiveClusters {
         let c = id as usize;
         if !self.cluster[c] {
             self.cluster[c] = true;
-            self.row[c / self.dims.x as usize] = true;
             self.active += 1;
         }
     }
@@ -71,7 +68,6 @@ impl ActiveClusters {
     /// Marks every cluster.
     pub fn mark_all(&mut self) {
         self.cluster.fill(true);
-        self.row.fill(true);
         self.active = self.cluster.len();
     }
 
@@ -81,15 +77,19 @@ impl ActiveClusters {
         self.cluster[id as usize]
     }
 
-    /// Whether any cluster of row `row` (= `j + Y·k`) is active.
-    #[inline]
-    pub(crate) fn row_has_any(&self, row: usize) -> bool {
-        self.row[row]
-    }
-
-    /// Per-cluster flags.
-    pub(crate) fn flags(&self) -> &[bool] {
-        &self.cluster
+    /// The mask with its prefix count, built into `before` (reused scratch) for one frame.
+    pub(crate) fn view<'a>(&'a self, before: &'a mut Vec<u32>) -> ActiveView<'a> {
+        before.clear();
+        before.push(0);
+        let mut running = 0u32;
+        before.extend(self.cluster.iter().map(|&on| {
+            running += on as u32;
+            running
+        }));
+        ActiveView {
+            flags: &self.cluster,
+            before,
+        }
     }
 
     /// Number of active clusters.
@@ -100,6 +100,24 @@ impl ActiveClusters {
     /// Number of clusters of the grid.
     pub fn cluster_count(&self) -> usize {
         self.cluster.len()
+    }
+}
+
+/// A frame's read-only view of the mask: the flags, and how many clusters before each id are
+/// active, so a run of clusters' active count costs two loads.
+#[derive(Clone, Copy)]
+pub(crate) struct ActiveView<'a> {
+    /// One flag per cluster.
+    pub flags: &'a [bool],
+    /// `before[c]`: active clusters among ids `0..c` (one entry more than clusters).
+    before: &'a [u32],
+}
+
+impl ActiveView<'_> {
+    /// Active clusters among ids `first .. first + len`.
+    #[inline]
+    pub fn count(&self, first: u32, len: u32) -> u32 {
+        self.before[(first + len) as usize] - self.before[first as usize]
     }
 }
 
@@ -117,10 +135,14 @@ mod tests {
         m.mark(grid.cluster_id(1, 2, 1));
         assert_eq!(m.active_count(), 1);
         assert!(m.is_active(grid.cluster_id(1, 2, 1)));
-        assert!(m.row_has_any(2 + 3));
-        assert!(!m.row_has_any(2));
+        let mut before = Vec::new();
+        let row = grid.cluster_id(0, 2, 1);
+        assert_eq!(m.view(&mut before).count(row, 4), 1);
+        assert_eq!(m.view(&mut before).count(grid.cluster_id(0, 2, 0), 4), 0);
         m.mark_box([0, 9], [0, 0], [0, 0]);
         assert_eq!(m.active_count(), 5);
+        assert_eq!(m.view(&mut before).count(0, 24), 5);
+        assert_eq!(m.view(&mut before).count(1, 2), 2);
         m.mark_all();
         assert_eq!(m.active_count(), 24);
         m.reset(&grid);

@@ -3,23 +3,37 @@
 //! The clusters are split into *parts*: groups of consecutive depth slices, so each part is a
 //! contiguous range of cluster ids and, after the prefix sum, a contiguous range of the output.
 //! Every span is one row of one slice, so it lies inside a single part, and the tasks already
-//! bucket their spans by part while emitting them. Then:
+//! bucket their spans by part while emitting them — adding up each bucket's pairs as they go
+//! ([`Bucket::push`]). So where every part's lists start in the output is known as soon as the
+//! tasks are done (a prefix sum over parts × tasks, [`part_bases`]), and each part is then built
+//! whole, in parallel over parts, with no second pass over the frame:
 //!
-//! 1. **Count**, in parallel over parts: a part walks the tasks' buckets for it in task order and
-//!    counts into its own chunk of `counts` — as a difference array (+1 at a span's start, −1
-//!    just past its end: O(spans), not O(pairs)) closed by one running sum.
-//! 2. **Prefix**: `offsets` is the exclusive prefix sum of `counts` (one pass over the clusters).
-//! 3. **Fill**, in parallel over parts: a part walks the same buckets again, in the same order, and
-//!    writes light indices at per-cluster cursors into *its own* slice of `indices`.
+//! 1. **count**: walk the tasks' buckets for the part in task order and count into its own chunk
+//!    of `counts` as a difference array (+1 at a span's start, −1 just past its end: O(spans),
+//!    not O(pairs));
+//! 2. **scan**: one pass over the part's clusters closes the difference array and writes each
+//!    list's start into `offsets` (the part's base + a running sum);
+//! 3. **fill**: walk the same buckets again, in the same order, writing light indices into *its
+//!    own* slice of `indices`, with `offsets` as the per-cluster cursors, while it is all in cache;
+//! 4. **close**: the cursors now hold each list's end, so `counts` is the difference of
+//!    neighbouring ends and `offsets` the previous end — a pass the compiler vectorises.
+//!
+//! The scan is a serial chain (two running sums) and stores once per cluster; the counts and
+//! cursors it used to write as well made it store-bound (three stores per cluster: 21 µs of the
+//! `uniform` 250-light frame, whose 27 648 clusters hold 737 pairs).
 //!
 //! Nothing is shared between threads while it is written: each part owns disjoint chunks of
-//! `counts`, of the cursors and of `indices` (plain `&mut` splits — no atomics, no `unsafe`, and
-//! no cache line written by two threads, which an earlier per-task fill suffered from: a
+//! `counts`, `offsets` and `indices` (plain `&mut` splits — no atomics, no `unsafe`,
+//! and no cache line written by two threads, which an earlier per-task fill suffered from: a
 //! cluster's list of ~10 entries is one cache line, and all tasks wrote into it). Lists come out
 //! in ascending light order, because tasks are contiguous light ranges walked in order: the
 //! output is identical for any number of tasks, parts or threads.
+//!
+//! (It replaced a count over all parts, a prefix sum over all clusters, then a fill over all
+//! parts: three passes over the clusters and three pool regions per frame instead of one pass
+//! and one region. `paper` 1000 lights, serial: count + fill 33 → 28 µs; see the issue log.)
 
-use crate::ActiveClusters;
+use crate::active::ActiveView;
 use crate::jobs::TaskOutput;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -32,6 +46,36 @@ pub(crate) struct Span {
     pub len: u32,
 }
 
+/// One task's spans in one part, and the pairs they hold.
+#[derive(Default)]
+pub(crate) struct Bucket {
+    pub spans: Vec<Span>,
+    /// Pairs of the spans (active clusters only, under a mask).
+    pub pairs: u64,
+}
+
+impl Bucket {
+    /// Empties the bucket, keeping its storage.
+    pub fn clear(&mut self) {
+        self.spans.clear();
+        self.pairs = 0;
+    }
+
+    /// Adds `span`. Under a mask only its active clusters count, and a span without any is
+    /// dropped here: no later pass visits it.
+    #[inline]
+    pub fn push(&mut self, span: Span, active: Option<&ActiveView<'_>>) {
+        let pairs = match active {
+            None => span.len,
+            Some(a) => a.count(span.first, span.len),
+        };
+        if pairs > 0 {
+            self.pairs += pairs as u64;
+            self.spans.push(span);
+        }
+    }
+}
+
 /// How the clusters are split into parts.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Parts {
@@ -41,180 +85,203 @@ pub(crate) struct Parts {
     pub clusters: usize,
 }
 
-/// Step 1: counts every part's spans into `counts`; returns the total number of pairs, so the
-/// caller can check it against its budget before anything is written.
-pub(crate) fn count_all(
-    tasks: &[TaskOutput],
-    parts: Parts,
-    parallel: bool,
-    active: Option<&ActiveClusters>,
-    counts: &mut [u32],
-) -> u64 {
-    crate::profiling::profile_span!("append count");
-    let count_part =
-        |(p, counts): (usize, &mut [u32])| count(tasks, p, p * parts.clusters, active, counts);
-    if parallel {
-        counts
-            .par_chunks_mut(parts.clusters)
-            .enumerate()
-            .for_each(count_part);
-    } else {
-        counts
-            .chunks_mut(parts.clusters)
-            .enumerate()
-            .for_each(count_part);
+/// Where each part's lists start in `indices`: `bases[p]` for part `p`, and the total pairs last
+/// (`bases` gets `parts + 1` entries). Returns the total, so the caller can check it against its
+/// budget before anything is written.
+pub(crate) fn part_bases(tasks: &[TaskOutput], parts: Parts, bases: &mut Vec<u64>) -> u64 {
+    bases.clear();
+    let mut total = 0u64;
+    for p in 0..parts.count {
+        bases.push(total);
+        total += tasks.iter().map(|t| t.buckets[p].pairs).sum::<u64>();
     }
-    counts.iter().map(|&n| n as u64).sum()
+    bases.push(total);
+    total
 }
 
-/// Steps 2–3: `offsets` from `counts`, then every part's fill. `total` (from [`count_all`]) must
-/// fit u32 offsets. `cursors` is reused scratch.
-#[allow(clippy::too_many_arguments)] // The output's three arrays, the scratch and the plan.
-pub(crate) fn fill_all(
+/// Builds every part's lists into `out` (sized for `clusters` clusters): count, scan, fill and
+/// close, part by part, in parallel over parts when `parallel`. `bases` comes from
+/// [`part_bases`], whose total must fit u32 offsets.
+pub(crate) fn build_lists(
     tasks: &[TaskOutput],
     parts: Parts,
     parallel: bool,
-    active: Option<&ActiveClusters>,
-    total: u64,
-    counts: &[u32],
-    offsets: &mut [u32],
-    indices: &mut Vec<u32>,
-    cursors: &mut Vec<u32>,
+    active: Option<&ActiveView<'_>>,
+    bases: &[u64],
+    clusters: usize,
+    out: &mut crate::LightLists,
 ) {
-    crate::profiling::profile_span!("append fill");
+    crate::profiling::profile_span!("append");
+    let total = bases[parts.count];
     assert!(
         total <= u32::MAX as u64,
         "{total} pairs do not fit u32 offsets"
     );
-    let mut running = 0u32;
-    for (offset, &n) in offsets.iter_mut().zip(counts) {
-        *offset = running;
-        running += n;
-    }
+    out.resize_for(clusters);
     // Every entry is about to be written: only growth needs filling (`resize` leaves the rest).
-    indices.resize(total as usize, 0);
-    cursors.clear();
-    cursors.extend_from_slice(offsets);
-    let job = FillJob {
+    out.indices.resize(total as usize, 0);
+    let job = PartJob {
         tasks,
         parts,
-        offsets,
+        bases,
         parallel,
-        active,
+        active: active.map(|a| a.flags),
     };
-    job.fill(0..parts.count, indices, 0, cursors);
+    let chunk = Chunk {
+        counts: &mut out.counts,
+        offsets: &mut out.offsets,
+        indices: &mut out.indices,
+    };
+    job.run(0..parts.count, chunk);
 }
 
-/// Step 1 for one part: count its spans into its chunk of `counts` (clusters from `base`).
-/// With an `active` mask, spans in rows without an active cluster are skipped and inactive
-/// clusters end with a count of 0.
-fn count(
-    tasks: &[TaskOutput],
-    part: usize,
-    base: usize,
-    active: Option<&ActiveClusters>,
-    counts: &mut [u32],
-) {
-    counts.fill(0);
-    let len = counts.len();
-    let row_width = active.map_or(1, |a| a.dims().x) as usize;
-    for task in tasks {
-        for s in &task.buckets[part] {
-            if let Some(a) = active
-                && !a.row_has_any(s.first as usize / row_width)
-            {
-                continue;
-            }
-            let start = s.first as usize - base;
-            counts[start] = counts[start].wrapping_add(1);
-            let end = start + s.len as usize;
-            if end < len {
-                counts[end] = counts[end].wrapping_sub(1);
-            }
-        }
-    }
-    let mut running = 0u32;
-    for n in counts.iter_mut() {
-        running = running.wrapping_add(*n);
-        *n = running;
-    }
-    if let Some(a) = active {
-        for (n, &on) in counts.iter_mut().zip(&a.flags()[base..base + len]) {
-            *n = if on { *n } else { 0 };
-        }
+/// The output arrays of a range of parts.
+struct Chunk<'a> {
+    counts: &'a mut [u32],
+    offsets: &'a mut [u32],
+    indices: &'a mut [u32],
+}
+
+impl<'a> Chunk<'a> {
+    /// Splits after `clusters` clusters and `pairs` pairs.
+    fn split_at(self, clusters: usize, pairs: usize) -> (Chunk<'a>, Chunk<'a>) {
+        let (c0, c1) = self.counts.split_at_mut(clusters);
+        let (o0, o1) = self.offsets.split_at_mut(clusters);
+        let (i0, i1) = self.indices.split_at_mut(pairs);
+        (
+            Chunk {
+                counts: c0,
+                offsets: o0,
+                indices: i0,
+            },
+            Chunk {
+                counts: c1,
+                offsets: o1,
+                indices: i1,
+            },
+        )
     }
 }
 
-/// Step 3, split recursively over the parts so each gets its own `&mut` slices.
-struct FillJob<'a> {
+/// Steps 1–4, split recursively over the parts so each gets its own `&mut` slices.
+struct PartJob<'a> {
     tasks: &'a [TaskOutput],
     parts: Parts,
-    offsets: &'a [u32],
+    bases: &'a [u64],
     parallel: bool,
-    active: Option<&'a ActiveClusters>,
+    /// The mask's per-cluster flags.
+    active: Option<&'a [bool]>,
 }
 
-impl FillJob<'_> {
-    /// Fills parts `range`, whose pairs are `indices` (starting at pair `base`) and whose
-    /// clusters' cursors are `cursors`.
-    fn fill(
-        &self,
-        range: std::ops::Range<usize>,
-        indices: &mut [u32],
-        base: usize,
-        cursors: &mut [u32],
-    ) {
+impl PartJob<'_> {
+    /// Builds parts `range`, whose arrays are `chunk`.
+    fn run(&self, range: std::ops::Range<usize>, chunk: Chunk<'_>) {
         if range.len() > 1 {
             let mid = range.start + range.len() / 2;
-            let first_cluster = mid * self.parts.clusters;
-            let split = self.offsets[first_cluster] as usize - base;
-            let (left, right) = indices.split_at_mut(split);
-            let (left_cursors, right_cursors) =
-                cursors.split_at_mut((mid - range.start) * self.parts.clusters);
+            let clusters = (mid - range.start) * self.parts.clusters;
+            let pairs = (self.bases[mid] - self.bases[range.start]) as usize;
+            let (left, right) = chunk.split_at(clusters, pairs);
             if self.parallel {
                 rayon::join(
-                    || self.fill(range.start..mid, left, base, left_cursors),
-                    || self.fill(mid..range.end, right, base + split, right_cursors),
+                    || self.run(range.start..mid, left),
+                    || self.run(mid..range.end, right),
                 );
             } else {
-                self.fill(range.start..mid, left, base, left_cursors);
-                self.fill(mid..range.end, right, base + split, right_cursors);
+                self.run(range.start..mid, left);
+                self.run(mid..range.end, right);
             }
             return;
         }
-        let part = range.start;
+        self.part(range.start, chunk);
+    }
+
+    /// One part: count, scan, fill, close.
+    fn part(&self, part: usize, chunk: Chunk<'_>) {
+        let Chunk {
+            counts,
+            offsets,
+            indices,
+        } = chunk;
         let first_cluster = part * self.parts.clusters;
+        let buckets = || self.tasks.iter().map(move |t| &t.buckets[part].spans);
+        // 1. Count, as a difference array closed by the scan.
+        counts.fill(0);
+        let len = counts.len();
+        for spans in buckets() {
+            for s in spans {
+                let start = s.first as usize - first_cluster;
+                counts[start] = counts[start].wrapping_add(1);
+                let end = start + s.len as usize;
+                if end < len {
+                    counts[end] = counts[end].wrapping_sub(1);
+                }
+            }
+        }
+        // 2. Scan: each list's start.
+        let base = self.bases[part] as u32;
+        let mut running = 0u32;
+        let mut at = base;
         match self.active {
             None => {
-                for task in self.tasks {
-                    for s in &task.buckets[part] {
+                for (&n, offset) in counts.iter().zip(offsets.iter_mut()) {
+                    running = running.wrapping_add(n);
+                    *offset = at;
+                    at += running;
+                }
+            }
+            Some(flags) => {
+                let flags = &flags[first_cluster..first_cluster + len];
+                for ((&n, offset), &on) in counts.iter().zip(offsets.iter_mut()).zip(flags) {
+                    running = running.wrapping_add(n);
+                    *offset = at;
+                    at += if on { running } else { 0 };
+                }
+            }
+        }
+        assert_eq!(
+            (at - base) as usize,
+            indices.len(),
+            "part {part}: the spans hold {} pairs, their buckets said {}",
+            at - base,
+            indices.len()
+        );
+        // 3. Fill, with the offsets as cursors (relative to the part's slice by `base`).
+        match self.active {
+            None => {
+                for spans in buckets() {
+                    for s in spans {
                         let start = s.first as usize - first_cluster;
-                        for cursor in &mut cursors[start..start + s.len as usize] {
-                            indices[*cursor as usize - base] = s.light;
-                            *cursor += 1;
+                        let row = &mut offsets[start..start + s.len as usize];
+                        // The stores, then the cursors' increments as one vector pass.
+                        for &at in row.iter() {
+                            indices[(at - base) as usize] = s.light;
                         }
+                        row.iter_mut().for_each(|c| *c += 1);
                     }
                 }
             }
-            Some(active) => {
-                let (flags, row_width) = (active.flags(), active.dims().x as usize);
-                for task in self.tasks {
-                    for s in &task.buckets[part] {
-                        let first = s.first as usize;
-                        if !active.row_has_any(first / row_width) {
-                            continue;
-                        }
-                        let (start, len) = (first - first_cluster, s.len as usize);
+            Some(flags) => {
+                for spans in buckets() {
+                    for s in spans {
+                        let (first, len) = (s.first as usize, s.len as usize);
+                        let start = first - first_cluster;
                         let on = &flags[first..first + len];
-                        for (cursor, &on) in cursors[start..start + len].iter_mut().zip(on) {
+                        for (cursor, &on) in offsets[start..start + len].iter_mut().zip(on) {
                             if on {
-                                indices[*cursor as usize - base] = s.light;
+                                indices[(*cursor - base) as usize] = s.light;
                                 *cursor += 1;
                             }
                         }
                     }
                 }
             }
+        }
+        // 4. Close: every cursor is its list's end, and a list starts where the previous ends.
+        let mut start = base;
+        for (n, offset) in counts.iter_mut().zip(offsets.iter_mut()) {
+            let end = *offset;
+            (*n, *offset) = (end - start, start);
+            start = end;
         }
     }
 }
@@ -243,7 +310,7 @@ impl AtomicCounters {
         let counters = &self.counters[..clusters];
         counters.iter().for_each(|c| c.store(0, Relaxed));
         let count = |task: &crate::jobs::TaskOutput| {
-            for s in task.buckets.iter().flatten() {
+            for s in task.buckets.iter().flat_map(|b| &b.spans) {
                 for c in &counters[s.first as usize..(s.first + s.len) as usize] {
                     c.fetch_add(1, Relaxed);
                 }
@@ -274,7 +341,7 @@ impl AtomicCounters {
         out.indices.resize(running as usize, 0);
         let shared = SharedIndices::new(&mut out.indices);
         let fill = |task: &crate::jobs::TaskOutput| {
-            for s in task.buckets.iter().flatten() {
+            for s in task.buckets.iter().flat_map(|b| &b.spans) {
                 for c in &counters[s.first as usize..(s.first + s.len) as usize] {
                     let at = c.fetch_add(1, Relaxed);
                     // SAFETY: `fetch_add` hands every caller a distinct slot of the cluster's

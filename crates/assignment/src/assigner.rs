@@ -117,7 +117,10 @@ const LIGHTS_PER_TASK: usize = 256;
 pub struct Assigner {
     planes: PlaneSets,
     tasks: Vec<TaskOutput>,
-    cursors: Vec<u32>,
+    /// Where each part's pairs start (see `append::part_bases`).
+    part_bases: Vec<u64>,
+    /// The active mask's prefix count (see `ActiveClusters::view`).
+    active_before: Vec<u32>,
     cluster_spheres: Vec<Vec4>,
     spheres_key: Option<(glam::Vec2, ClusterGrid)>,
     linear: LinearScratch,
@@ -258,7 +261,9 @@ impl Assigner {
             self.tasks.resize_with(tasks, TaskOutput::default);
         }
         let parts = plan_parts(grid, tasks);
+        let view = active.map(|a| a.view(&mut self.active_before));
         let ctx = FrameContext {
+            active: view,
             method,
             exact: jobs::ExactFrame::new(camera),
             parts: parts.count,
@@ -284,22 +289,19 @@ impl Assigner {
                     jobs::run_task(&ctx, begin, end, task);
                 };
                 for_each_task(&mut self.tasks[..tasks], parallel, gather);
-                out.resize_for(clusters);
                 let work = &self.tasks[..tasks];
-                let total = append::count_all(work, parts, parallel, active, &mut out.counts);
+                let total = append::part_bases(work, parts, &mut self.part_bases);
                 if total > budget {
                     return Err(total);
                 }
-                append::fill_all(
+                append::build_lists(
                     work,
                     parts,
                     parallel,
-                    active,
-                    total,
-                    &out.counts,
-                    &mut out.offsets,
-                    &mut out.indices,
-                    &mut self.cursors,
+                    view.as_ref(),
+                    &self.part_bases,
+                    clusters,
+                    out,
                 );
                 total as usize
             }

@@ -9,7 +9,8 @@
 //! 4. **emit**: the box's rows as spans (`binary`), the refined rows (`refined`), each row cut by the
 //!    cone test for spot lights, or each candidate cluster checked by the f64 oracle (`exact`).
 
-use crate::append::Span;
+use crate::active::ActiveView;
+use crate::append::{Bucket, Span};
 use crate::geometry::{self, ClusterBox};
 use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
@@ -30,6 +31,8 @@ pub(crate) struct FrameContext<'a> {
     pub cluster_spheres: &'a [Vec4],
     /// The f64 view transform and projection of the `exact` method, computed once per frame.
     pub exact: ExactFrame,
+    /// The active-cluster mask, if any: spans without an active cluster are dropped as emitted.
+    pub active: Option<ActiveView<'a>>,
     /// Number of parts (groups of consecutive slices) the spans are bucketed by.
     pub parts: usize,
     /// Slices per part (the last part may have fewer).
@@ -74,7 +77,7 @@ impl ExactFrame {
 /// slices, see `append.rs`), so that each part can later be counted and filled on its own.
 #[derive(Default)]
 pub(crate) struct TaskOutput {
-    pub buckets: Vec<Vec<Span>>,
+    pub buckets: Vec<Bucket>,
     /// Scratch of the refinement: two squared gaps per tile column.
     gaps: Vec<f32>,
     pub rejected: u32,
@@ -101,7 +104,7 @@ struct SpotView {
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     crate::profiling::profile_span!("assign task");
     if out.buckets.len() < ctx.parts {
-        out.buckets.resize_with(ctx.parts, Vec::new);
+        out.buckets.resize_with(ctx.parts, Bucket::default);
     }
     for bucket in &mut out.buckets[..ctx.parts] {
         bucket.clear();
@@ -250,15 +253,15 @@ fn emit(
     r: f32,
     bx: &ClusterBox,
     spot: &SpotView,
-    buckets: &mut [Vec<Span>],
+    buckets: &mut [Bucket],
     gaps: &mut [f32],
 ) {
     let grid = ctx.grid;
-    let push_row = |spans: &mut Vec<Span>, first: u32, len: u32| {
+    let push_row = |bucket: &mut Bucket, first: u32, len: u32| {
         if spot.active {
-            push_spot_row(ctx, spot, spans, light, first, len);
+            push_spot_row(ctx, spot, bucket, light, first, len);
         } else {
-            spans.push(Span { light, first, len });
+            bucket.push(Span { light, first, len }, ctx.active.as_ref());
         }
     };
     // Only boxes at least two tiles wide and two tall are refined: that is where the corner
@@ -271,20 +274,20 @@ fn emit(
     match ctx.method {
         Method::Binary | Method::Refined if !refine => {
             for k in bx.z.k0..=bx.z.k1 {
-                let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
+                let bucket = &mut buckets[(k / ctx.slices_per_part) as usize];
                 let mut first = grid.cluster_id(bx.i0, bx.j0, k);
                 for _ in bx.j0..=bx.j1 {
-                    push_row(spans, first, bx.i1 - bx.i0 + 1);
+                    push_row(bucket, first, bx.i1 - bx.i0 + 1);
                     first += width;
                 }
             }
         }
         Method::Binary | Method::Refined => {
             for k in bx.z.k0..=bx.z.k1 {
-                let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
+                let bucket = &mut buckets[(k / ctx.slices_per_part) as usize];
                 let slice_first = grid.cluster_id(0, 0, k);
                 geometry::refine_slice(cx, cy, dc, r, bx, k, &ctx.planes, gaps, |j, i0, i1| {
-                    push_row(spans, slice_first + j * width + i0, i1 - i0 + 1)
+                    push_row(bucket, slice_first + j * width + i0, i1 - i0 + 1)
                 });
             }
         }
@@ -299,12 +302,12 @@ fn emit(
 fn push_spot_row(
     ctx: &FrameContext<'_>,
     spot: &SpotView,
-    spans: &mut Vec<Span>,
+    bucket: &mut Bucket,
     light: u32,
     first: u32,
     len: u32,
 ) {
-    push_filtered(spans, light, first, len, |c| {
+    push_filtered(ctx, bucket, light, first, len, |c| {
         let s = ctx.cluster_spheres[c as usize];
         geometry::cone_may_touch_sphere(
             spot.apex,
@@ -320,7 +323,8 @@ fn push_spot_row(
 /// Pushes the maximal runs of `first .. first + len` whose clusters pass `keep`.
 #[inline]
 fn push_filtered(
-    spans: &mut Vec<Span>,
+    ctx: &FrameContext<'_>,
+    bucket: &mut Bucket,
     light: u32,
     first: u32,
     len: u32,
@@ -331,27 +335,29 @@ fn push_filtered(
         match (keep(c), run_start) {
             (true, None) => run_start = Some(c),
             (false, Some(s)) => {
-                spans.push(Span {
+                let span = Span {
                     light,
                     first: s,
                     len: c - s,
-                });
+                };
+                bucket.push(span, ctx.active.as_ref());
                 run_start = None;
             }
             _ => {}
         }
     }
     if let Some(s) = run_start {
-        spans.push(Span {
+        let span = Span {
             light,
             first: s,
             len: first + len - s,
-        });
+        };
+        bucket.push(span, ctx.active.as_ref());
     }
 }
 
 /// The `exact` method: every cluster of a generously padded box, tested with the f64 oracle.
-fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut [Vec<Span>]) {
+fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut [Bucket]) {
     let g = light as usize;
     let l = &ctx.lights;
     let world = DVec3::new(l.x[g] as f64, l.y[g] as f64, l.z[g] as f64);
@@ -379,8 +385,8 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
         let depths = [z[k as usize], z[k as usize + 1]];
         for j in bx.j0..=bx.j1 {
             let first = grid.cluster_id(bx.i0, j, k);
-            let spans = &mut buckets[(k / ctx.slices_per_part) as usize];
-            push_filtered(spans, light, first, bx.i1 - bx.i0 + 1, |c| {
+            let bucket = &mut buckets[(k / ctx.slices_per_part) as usize];
+            push_filtered(ctx, bucket, light, first, bx.i1 - bx.i0 + 1, |c| {
                 let i = bx.i0 + (c - first);
                 let (x, y) = (grid.dims.x, grid.dims.y);
                 let cell = Cell::of_tile(ctx.exact.tan_half_fov, x, y, i, j, depths);
