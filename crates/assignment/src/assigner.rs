@@ -99,13 +99,15 @@ impl AssignStats {
     }
 }
 
-/// Below this many lights the frame runs as one task on the calling thread. A parallel frame
-/// opens three pool regions (phases, count, fill), and when the pool's workers have gone to sleep
-/// between frames each costs a wake-up: measured with `myriad bench` on the 2-core CI machine,
-/// 1000 `uniform` lights took 33–55 µs in parallel (depending on whether the workers were awake)
-/// and a steady 45 µs serially; 3000 lights took 65 µs in parallel and 103 µs serially. Serial
-/// below 2048 keeps small frames fast *and* predictable.
-pub const SERIAL_LIGHTS: usize = 2048;
+/// Below this many lights the frame runs as one task on the calling thread (below two tasks'
+/// worth there is nothing to split). A parallel frame opens two pool regions (phases, append).
+/// Measured with `myriad bench` on the 2-core CI machine, medians of interleaved runs with the
+/// pool's workers awake (as in a frame loop that keeps the pool busy), serial → parallel:
+/// `paper` 500 lights 52 → 27 µs, 1000 lights `binary` 62 → 36 µs and `refined` 87 → 49 µs;
+/// `uniform` 500 lights 27 → 21 µs, 1000 lights 42 → 25 µs. When the workers have gone to sleep
+/// between frames, the first region pays their wake-up: after 2 ms idle, `paper` 1000 ran about
+/// as fast in parallel as serially (both slower than warm, the cold caches costing as much).
+pub const SERIAL_LIGHTS: usize = 512;
 /// Lights per task at least, so a task's fixed costs (its bucket set, a rayon job) stay small next
 /// to the lights' work.
 const LIGHTS_PER_TASK: usize = 256;
