@@ -83,6 +83,8 @@ pub(crate) struct Parts {
     pub count: usize,
     /// Clusters per part (the last part may have fewer).
     pub clusters: usize,
+    /// log₂ of the slices per part: slice `k` lies in part `k >> slice_shift`.
+    pub slice_shift: u32,
 }
 
 /// Where each part's lists start in `indices`: `bases[p]` for part `p`, and the total pairs last

@@ -269,7 +269,7 @@ impl Assigner {
             method,
             exact: jobs::ExactFrame::new(camera),
             parts: parts.count,
-            slices_per_part: (parts.clusters / (grid.dims.x * grid.dims.y) as usize) as u32,
+            slice_shift: parts.slice_shift,
             lights: *lights,
             camera,
             grid,
@@ -343,7 +343,8 @@ pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
 }
 
 /// Splits the clusters into parts of whole depth slices: one part when serial, else about four
-/// per thread (for work stealing), never more than the slices.
+/// per thread (for work stealing), never more than the slices. A part holds a power of two of
+/// slices, so a slice's part is a shift, not a division, in the emit's innermost loop.
 fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
     let slices = grid.dims.z as usize;
     let wanted = if tasks > 1 {
@@ -351,11 +352,12 @@ fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
     } else {
         1
     };
-    let slices_per_part = slices.div_ceil(wanted.clamp(1, slices));
+    let slices_per_part = slices.div_ceil(wanted.clamp(1, slices)).next_power_of_two();
     let per_slice = grid.dims.x as usize * grid.dims.y as usize;
     Parts {
         count: slices.div_ceil(slices_per_part),
         clusters: slices_per_part * per_slice,
+        slice_shift: slices_per_part.trailing_zeros(),
     }
 }
 

@@ -35,8 +35,8 @@ pub(crate) struct FrameContext<'a> {
     pub active: Option<ActiveView<'a>>,
     /// Number of parts (groups of consecutive slices) the spans are bucketed by.
     pub parts: usize,
-    /// Slices per part (the last part may have fewer).
-    pub slices_per_part: u32,
+    /// log₂ of the slices per part (the last part may have fewer): slice `k` is in part `k >> slice_shift`.
+    pub slice_shift: u32,
     /// Unit normals of the frustum's left, right, top and bottom planes (x-plane 0 and X, y-plane
     /// 0 and Y), each pointing right or up, for the cheap early cull.
     pub side_normals: [Vec3; 4],
@@ -274,7 +274,7 @@ fn emit(
     match ctx.method {
         Method::Binary | Method::Refined if !refine => {
             for k in bx.z.k0..=bx.z.k1 {
-                let bucket = &mut buckets[(k / ctx.slices_per_part) as usize];
+                let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
                 let mut first = grid.cluster_id(bx.i0, bx.j0, k);
                 for _ in bx.j0..=bx.j1 {
                     push_row(bucket, first, bx.i1 - bx.i0 + 1);
@@ -284,7 +284,7 @@ fn emit(
         }
         Method::Binary | Method::Refined => {
             for k in bx.z.k0..=bx.z.k1 {
-                let bucket = &mut buckets[(k / ctx.slices_per_part) as usize];
+                let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
                 let slice_first = grid.cluster_id(0, 0, k);
                 geometry::refine_slice(cx, cy, dc, r, bx, k, &ctx.planes, gaps, |j, i0, i1| {
                     push_row(bucket, slice_first + j * width + i0, i1 - i0 + 1)
@@ -385,7 +385,7 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
         let depths = [z[k as usize], z[k as usize + 1]];
         for j in bx.j0..=bx.j1 {
             let first = grid.cluster_id(bx.i0, j, k);
-            let bucket = &mut buckets[(k / ctx.slices_per_part) as usize];
+            let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
             push_filtered(ctx, bucket, light, first, bx.i1 - bx.i0 + 1, |c| {
                 let i = bx.i0 + (c - first);
                 let (x, y) = (grid.dims.x, grid.dims.y);

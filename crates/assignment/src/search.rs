@@ -27,15 +27,16 @@ pub(crate) fn partition_from(items: &[f32], guess: usize, pred: impl Fn(f32) -> 
 }
 
 /// A float index guess, clamped into `0..=max` (NaN → 0, ±∞ → the ends).
+///
+/// Clamped and floored as a float, then read from the bits of `t + 2²³` (whose mantissa is then
+/// the integer itself): all plain vector arithmetic. A saturating `as usize` took about a dozen
+/// instructions per guess — 73 per light, the largest line of the `uniform` 100k profile — and
+/// `as i32` still seven. `max` is a plane count, far below 2²³.
 #[inline]
 fn clamp_index(t: f32, max: usize) -> usize {
-    if t >= max as f32 {
-        max
-    } else if t > 0.0 {
-        t as usize
-    } else {
-        0
-    }
+    const TWO_23: f32 = (1u32 << 23) as f32;
+    let t = t.max(0.0).min(max as f32).floor();
+    ((t + TWO_23).to_bits() & 0x007F_FFFF) as usize
 }
 
 /// log₂ from the float's exponent plus a rational fit of the mantissa's log (Mineiro's
