@@ -187,6 +187,17 @@ impl Assigner {
                 "active-cluster mask is for another grid"
             );
         }
+        if method != Method::Linear
+            && rayon::current_thread_index().is_none()
+            && plan_tasks(lights.len(), method) > 1
+        {
+            // Called from outside the pool (an engine's main thread, a benchmark loop): move the
+            // whole frame onto a worker in one hand-off. Otherwise each parallel region would
+            // inject its jobs and park this thread until they finish — a cross-thread wake-up
+            // per region (criterion, from the main thread: `paper` 1000 `binary` 45 µs where
+            // `myriad bench`, whose loop runs inside the pool, took 35 µs).
+            return rayon::scope(|_| self.assign_active(method, lights, camera, grid, active, out));
+        }
         let budget = self
             .pair_budget
             .unwrap_or(u32::MAX as u64)

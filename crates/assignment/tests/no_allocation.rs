@@ -1,5 +1,6 @@
 //! Steady-state frames allocate nothing: a counting global allocator watches a third frame after
-//! two warm-up frames with the same sizes, on every method and on the thread pool.
+//! two warm-up frames with the same sizes, on every method, called inside a thread pool and from
+//! outside one (where the assigner hands the frame to the global pool).
 
 mod common;
 
@@ -57,13 +58,18 @@ fn steady_state_frames_do_not_allocate() {
         .num_threads(2)
         .build()
         .unwrap();
-    for spots in [false, true] {
+    for (spots, in_pool) in [(false, true), (true, true), (true, false)] {
         for method in [Method::Linear, Method::Binary, Method::Refined] {
             let mut assigner = Assigner::new();
             let mut lists = LightLists::new();
             let input = scene.lights.input(spots);
             let frame = |a: &mut Assigner, l: &mut LightLists| {
-                pool.install(|| a.assign(method, &input, &scene.camera, &scene.grid, l))
+                let mut assign = || a.assign(method, &input, &scene.camera, &scene.grid, l);
+                if in_pool {
+                    pool.install(assign)
+                } else {
+                    assign()
+                }
             };
             frame(&mut assigner, &mut lists);
             frame(&mut assigner, &mut lists);
@@ -75,7 +81,7 @@ fn steady_state_frames_do_not_allocate() {
             assert_eq!(
                 ALLOCATIONS.load(Ordering::SeqCst),
                 0,
-                "{method} (spots: {spots}) allocated in a steady-state frame"
+                "{method} (spots: {spots}, in a pool: {in_pool}) allocated in a steady-state frame"
             );
         }
     }
