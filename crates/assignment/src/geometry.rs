@@ -182,9 +182,27 @@ pub(crate) fn refine_slice(
     }
     let rk = band_radius(dc, r, ka, kb);
     let columns = (b.i1 - b.i0 + 1) as usize;
+    let xs = &sets.x_slopes[b.i0 as usize..][..columns + 1];
+    // The farthest column and row sit at the box's ends (the gaps fall towards the centre). When
+    // the slab's disc reaches that corner nothing can be cut: every row whole, no per-row work.
+    let row_gap = |j: u32| {
+        let (top, bottom) = (sets.y_slopes[j as usize], sets.y_slopes[j as usize + 1]);
+        let y_lo = (bottom * ka).min(bottom * kb);
+        let y_hi = (top * ka).max(top * kb);
+        (y_lo - cy).max(cy - y_hi).max(0.0)
+    };
+    let dy = row_gap(b.j0).max(row_gap(b.j1));
+    let gap_first = cx - (xs[1] * ka).max(xs[1] * kb);
+    let gap_last = (xs[columns - 1] * ka).min(xs[columns - 1] * kb) - cx;
+    let dx = gap_first.max(gap_last).max(0.0);
+    if dy <= rk && dx * dx <= (rk - dy) * (rk + dy) {
+        for j in b.j0..=b.j1 {
+            row(j, b.i0, b.i1);
+        }
+        return;
+    }
     let (left, right) = gaps.split_at_mut(columns);
     let right = &mut right[..columns];
-    let xs = &sets.x_slopes[b.i0 as usize..][..columns + 1];
     // Squared gap of each column wholly left (right) of the centre, −∞ for the others.
     for (c, (l, r)) in left.iter_mut().zip(right.iter_mut()).enumerate() {
         let (s0, s1) = (xs[c], xs[c + 1]);
