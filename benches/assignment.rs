@@ -21,9 +21,12 @@
 //!     cost a long measurement for a number the 100k row already predicts.
 //! * **`targets`** — exactly the issue's target configurations, with each preset's own grid:
 //!   `paper` 1000 lights (`linear`, `binary`, `refined`; the paper's 1.04 ms reference),
-//!   `uniform` 100k `refined` on the default rayon pool and on a 1-thread pool (thread scaling),
-//!   `uniform` 1M `refined`, `sphere` 100k (`binary`, `refined`; the single-threaded engine
-//!   reference of 1.5–2.1 ms).
+//!   `uniform` 100k `refined` on a pool of one worker per core and on a 1-thread pool (thread
+//!   scaling), `uniform` 1M `refined`, `sphere` 100k (`binary`, `refined`; the single-threaded
+//!   engine reference of 1.5–2.1 ms). These run as a frame job would, on a pool worker (the timed
+//!   loop inside `ThreadPool::install`); `paper/*-from-outside` time the same calls from the
+//!   benchmark's own thread, which pays the hand-off to rayon's pool and back every frame.
+//!   `scaling` calls from outside too.
 //!
 //! ## What is timed
 //! One `Assigner::assign` call into a reused `LightLists`: the steady state of a frame, where the
@@ -86,15 +89,27 @@ fn timing(group: &mut BenchmarkGroup<'_, WallTime>, method: Method, lights: usiz
         .measurement_time(Duration::from_secs_f64(measurement));
 }
 
+/// Where the timed calls come from.
+#[derive(Clone, Copy)]
+enum Caller<'a> {
+    /// A worker of this pool, as a frame job of an engine's job system: the whole timed loop runs
+    /// inside `ThreadPool::install`, so the assignment's parallel regions start on the spot.
+    Worker(&'a rayon::ThreadPool),
+    /// The benchmark's own thread, outside any pool: each parallel frame is handed to rayon's
+    /// global pool and this thread woken when it is done (`Assigner` does it in one hand-off).
+    Outside,
+}
+
 /// Times `method` on `lights` lights of `preset` (generated on first use into `scene`, then kept
-/// for the other benchmarks) with the preset's grid or `grid`: one reused `Assigner` and
-/// `LightLists`, warmed up before timing.
+/// for the other benchmarks) with the preset's grid or `grid`, called by `caller`: one reused
+/// `Assigner` and `LightLists`, warmed up before timing.
 fn bench_assign(
     group: &mut BenchmarkGroup<'_, WallTime>,
     id: BenchmarkId,
     method: Method,
     (preset, lights, scene): (Preset, usize, &OnceCell<Scene>),
     grid: Option<ClusterGrid>,
+    caller: Caller<'_>,
 ) {
     timing(group, method, lights);
     group.throughput(Throughput::Elements(lights as u64));
@@ -104,10 +119,18 @@ fn bench_assign(
         let input = myriad::light_input(&scene.lights);
         let mut assigner = Assigner::new();
         let mut lists = LightLists::new();
-        assigner.assign(method, &input, &scene.camera, &grid, &mut lists);
-        b.iter(|| {
-            black_box(assigner.assign(method, black_box(&input), &scene.camera, &grid, &mut lists))
-        });
+        let mut timed = || {
+            let mut run = || {
+                let lists = &mut lists;
+                assigner.assign(method, black_box(&input), &scene.camera, &grid, lists)
+            };
+            run();
+            b.iter(|| black_box(run()));
+        };
+        match caller {
+            Caller::Worker(pool) => pool.install(timed),
+            Caller::Outside => timed(),
+        }
         black_box(&lists);
     });
 }
@@ -127,7 +150,7 @@ fn scaling(c: &mut Criterion) {
             for method in METHODS.into_iter().filter(|&m| measured(m, lights)) {
                 let id = BenchmarkId::new(method.name(), lights);
                 let source = (Preset::Uniform, lights, scene);
-                bench_assign(&mut group, id, method, source, Some(grid));
+                bench_assign(&mut group, id, method, source, Some(grid), Caller::Outside);
             }
         }
         group.finish();
@@ -136,56 +159,42 @@ fn scaling(c: &mut Criterion) {
 
 fn targets(c: &mut Criterion) {
     let mut group = c.benchmark_group("targets");
+    // One worker per core, as rayon's global pool has; and one worker, for the thread scaling.
+    let pool = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("cannot start a rayon pool")
+    };
+    let (all_cores, one_thread) = (pool(0), pool(1));
+    let worker = Caller::Worker(&all_cores);
 
     let paper = (Preset::Paper, 1_000, &OnceCell::new());
     for method in [Method::Linear, Method::Binary, Method::Refined] {
         let id = BenchmarkId::new(format!("paper/{}", method.name()), 1_000);
-        bench_assign(&mut group, id, method, paper, None);
+        bench_assign(&mut group, id, method, paper, None, worker);
+    }
+    // The same from outside any pool: what a 1000-light frame pays for the hand-off.
+    for method in [Method::Binary, Method::Refined] {
+        let id = BenchmarkId::new(format!("paper/{}-from-outside", method.name()), 1_000);
+        bench_assign(&mut group, id, method, paper, None, Caller::Outside);
     }
 
     let uniform_100k = (Preset::Uniform, 100_000, &OnceCell::new());
     let id = BenchmarkId::new("uniform/refined", 100_000);
-    bench_assign(&mut group, id, Method::Refined, uniform_100k, None);
-    // The same on a 1-thread pool: the whole timed loop runs inside the pool, so each assignment
-    // sees one worker thread (the default pool, above, has one per core).
-    let one_thread = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("cannot start a 1-thread rayon pool");
-    timing(&mut group, Method::Refined, 100_000);
-    group.throughput(Throughput::Elements(100_000));
+    bench_assign(&mut group, id, Method::Refined, uniform_100k, None, worker);
     let id = BenchmarkId::new("uniform/refined-1-thread", 100_000);
-    group.bench_function(id, |b| {
-        let (preset, lights, scene) = uniform_100k;
-        let scene = scene.get_or_init(|| preset.generate(lights, SEED));
-        let input = myriad::light_input(&scene.lights);
-        let mut assigner = Assigner::new();
-        let mut lists = LightLists::new();
-        one_thread.install(|| {
-            let mut run = || {
-                let lists = &mut lists;
-                assigner.assign(
-                    Method::Refined,
-                    black_box(&input),
-                    &scene.camera,
-                    &scene.grid,
-                    lists,
-                )
-            };
-            run();
-            b.iter(|| black_box(run()));
-        });
-        black_box(&lists);
-    });
+    let single = Caller::Worker(&one_thread);
+    bench_assign(&mut group, id, Method::Refined, uniform_100k, None, single);
 
     let uniform_1m = (Preset::Uniform, 1_000_000, &OnceCell::new());
     let id = BenchmarkId::new("uniform/refined", 1_000_000);
-    bench_assign(&mut group, id, Method::Refined, uniform_1m, None);
+    bench_assign(&mut group, id, Method::Refined, uniform_1m, None, worker);
 
     let sphere = (Preset::Sphere, 100_000, &OnceCell::new());
     for method in [Method::Binary, Method::Refined] {
         let id = BenchmarkId::new(format!("sphere/{}", method.name()), 100_000);
-        bench_assign(&mut group, id, method, sphere, None);
+        bench_assign(&mut group, id, method, sphere, None, worker);
     }
     group.finish();
 }
