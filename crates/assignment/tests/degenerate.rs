@@ -1,6 +1,6 @@
 //! Degenerate scenes through [`Assigner::assign`] with every method: 0 and 1 lights, every light
-//! outside the frustum, 100k lights in one cluster, one light covering everything, grids 1×1×1
-//! and 128×128×128, resolutions 1×1 and 16384×16384. Each checks the CSR invariants
+//! outside the frustum, 100k lights in one cluster, one light covering everything, grids 1×1×1,
+//! 128×128×128 and wider or taller than 65 535 tiles, resolutions 1×1 and 16384×16384. Each checks the CSR invariants
 //! ([`LightLists::assert_well_formed`]), the counts the scene implies, and conservativeness
 //! against the f64 oracle — over every cluster where that is affordable, over a seeded sample of
 //! clusters for the 2M-cluster grid.
@@ -215,6 +215,30 @@ fn one_light_covering_everything() {
             assert!(
                 lists.counts.iter().all(|&c| c == 1),
                 "{method}, radius {r}: every cluster has the light"
+            );
+        }
+    }
+}
+
+/// Grids 70 000 tiles wide and 70 000 tall (past any 16-bit tile index; one slice: 70k clusters,
+/// checked cluster by cluster against the oracle): one light covering everything plus random
+/// ones lose nothing.
+#[test]
+fn grids_wider_and_taller_than_16_bits() {
+    let cam = camera(1536, 768);
+    for dims in [UVec3::new(70_000, 1, 1), UVec3::new(1, 70_000, 1)] {
+        let grid = ClusterGrid::new(dims, DepthSlicing::Log, 0.1, 100.0);
+        let mut lights = random_lights(&cam, 40, 17);
+        lights.push(cam.position, 500.0);
+        let truth = brute_force(&lights, false, &cam, &grid);
+        for method in [Method::Binary, Method::Refined] {
+            let (lists, _) = assign(method, &lights, &cam, &grid);
+            let (exact, _) = assert_conservative(method.name(), &lists, &truth, "wide grid");
+            assert!(exact >= 70_000, "{method}: the big light alone fills every cluster");
+            let big = (lights.len() - 1) as u32;
+            assert!(
+                (0..grid.cluster_count()).all(|c| lists.lights_of(c).contains(&big)),
+                "{method} {dims}: the covering light is in every cluster"
             );
         }
     }
