@@ -127,6 +127,8 @@ pub(crate) fn build_lists(
         parts,
         bases,
         parallel,
+        // About four pieces of work per thread, for the work stealing to even out.
+        grain: (total + clusters as u64) / (4 * rayon::current_num_threads() as u64),
         active: active.map(|a| a.flags),
     };
     let chunk = Chunk {
@@ -171,6 +173,8 @@ struct PartJob<'a> {
     parts: Parts,
     bases: &'a [u64],
     parallel: bool,
+    /// Work below which a range of parts is not split further (see [`PartJob::work`]).
+    grain: u64,
     /// The mask's per-cluster flags.
     active: Option<&'a [bool]>,
 }
@@ -178,23 +182,34 @@ struct PartJob<'a> {
 impl PartJob<'_> {
     /// Builds parts `range`, whose arrays are `chunk`.
     fn run(&self, range: std::ops::Range<usize>, chunk: Chunk<'_>) {
-        if range.len() > 1 {
-            let mid = range.start + range.len() / 2;
-            let clusters = (mid - range.start) * self.parts.clusters;
-            let pairs = (self.bases[mid] - self.bases[range.start]) as usize;
+        let (start, end) = (range.start, range.end);
+        if self.parallel && range.len() > 1 && self.work(end) - self.work(start) > self.grain {
+            // Halve the work, not the parts: the pairs crowd into the far slices (`uniform` 1M:
+            // 87% of them in the last 8 of 48 slices).
+            let half = (self.work(start) + self.work(end)) / 2;
+            let mid = (start + 1..end)
+                .find(|&p| self.work(p) >= half)
+                .unwrap_or(end - 1);
+            let clusters = (mid - start) * self.parts.clusters;
+            let pairs = (self.bases[mid] - self.bases[start]) as usize;
             let (left, right) = chunk.split_at(clusters, pairs);
-            if self.parallel {
-                rayon::join(
-                    || self.run(range.start..mid, left),
-                    || self.run(mid..range.end, right),
-                );
-            } else {
-                self.run(range.start..mid, left);
-                self.run(mid..range.end, right);
-            }
+            rayon::join(|| self.run(start..mid, left), || self.run(mid..end, right));
             return;
         }
-        self.part(range.start, chunk);
+        let mut rest = chunk;
+        for part in range {
+            let clusters = self.parts.clusters.min(rest.counts.len());
+            let pairs = (self.bases[part + 1] - self.bases[part]) as usize;
+            let (this, next) = rest.split_at(clusters, pairs);
+            self.part(part, this);
+            rest = next;
+        }
+    }
+
+    /// Work before part `p`: its pairs (a scattered store each) plus its clusters (a scan step
+    /// each) — a cost model good enough to balance the halves.
+    fn work(&self, p: usize) -> u64 {
+        self.bases[p] + (p * self.parts.clusters) as u64
     }
 
     /// One part: count, scan, fill, close.

@@ -353,17 +353,17 @@ pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
     ClusterGrid::new(dims, grid.slicing, grid.near(), grid.far())
 }
 
-/// Splits the clusters into parts of whole depth slices: one part when serial, else about four
-/// per thread (for work stealing), never more than the slices. A part holds a power of two of
-/// slices, so a slice's part is a shift, not a division, in the emit's innermost loop.
+/// Splits the clusters into parts of whole depth slices: one part when serial; else one per slice,
+/// which the append groups into pieces of about equal work (the pairs crowd into a few slices).
+/// A part holds a power of two of slices, so a slice's part is a shift, not a division, in the
+/// emit's innermost loop.
 fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
     let slices = grid.dims.z as usize;
-    let wanted = if tasks > 1 {
-        4 * rayon::current_num_threads()
-    } else {
+    let slices_per_part = if tasks > 1 {
         1
+    } else {
+        slices.next_power_of_two()
     };
-    let slices_per_part = slices.div_ceil(wanted.clamp(1, slices)).next_power_of_two();
     let per_slice = grid.dims.x as usize * grid.dims.y as usize;
     Parts {
         count: slices.div_ceil(slices_per_part),

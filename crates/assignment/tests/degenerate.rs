@@ -234,7 +234,10 @@ fn grids_wider_and_taller_than_16_bits() {
         for method in [Method::Binary, Method::Refined] {
             let (lists, _) = assign(method, &lights, &cam, &grid);
             let (exact, _) = assert_conservative(method.name(), &lists, &truth, "wide grid");
-            assert!(exact >= 70_000, "{method}: the big light alone fills every cluster");
+            assert!(
+                exact >= 70_000,
+                "{method}: the big light alone fills every cluster"
+            );
             let big = (lights.len() - 1) as u32;
             assert!(
                 (0..grid.cluster_count()).all(|c| lists.lights_of(c).contains(&big)),
