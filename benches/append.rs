@@ -1,10 +1,10 @@
 //! # Append strategies: partitioned by depth vs shared atomic counters
 //!
 //! The lock-free per-cluster append can be built two ways (`myriad_assignment::AppendStrategy`):
-//! * `PartitionedByDepth` (the default): spans are bucketed by parts (groups of depth slices);
-//!   per part, in parallel, counts as difference arrays, one prefix sum, then a fill into the
-//!   part's own slice of the output — no atomics, no cache line written by two threads, ascending
-//!   lists by construction;
+//! * `PartitionedByDepth` (the default): spans are bucketed by parts (depth slices); per part, in
+//!   parallel, a count as a difference array, a scan into list starts and a fill into the part's
+//!   own slice of the output — no atomics, no cache line written by two threads, ascending lists
+//!   by construction;
 //! * `AtomicCounters`: one shared counter per cluster with `fetch_add` in the count and the fill
 //!   passes, then a sort of each list to make the output deterministic.
 //!

@@ -23,10 +23,11 @@
 //!    closed-form guess so they finish in one or two probes, `search.rs`) — then the light's
 //!    rows of clusters as spans, tightened (`refined`), cut by cone tests (spot lights) or checked
 //!    by the oracle (`exact`).
-//! 3. **Lock-free append** (`append.rs`): spans are bucketed by parts (groups of depth slices);
-//!    per part, in parallel, a count (difference arrays), then one prefix sum, then a fill into
-//!    the part's own slice of the output. Lists come out in ascending light order, so the output
-//!    is identical for any number of threads.
+//! 3. **Lock-free append** (`append.rs`): spans are bucketed by parts (depth slices), which add
+//!    up their pairs, so each part's place in the output is known; then per part, in parallel
+//!    over runs of equal work, a count (difference array), a scan into list starts and a fill
+//!    into the part's own slice of the output. Lists come out in ascending light order, so the
+//!    output is identical for any number of threads.
 //!
 //! ## Correctness
 //! f32 paths pad every radius by a few hundred ulps of the light's distance, which covers the
