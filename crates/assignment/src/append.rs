@@ -16,11 +16,11 @@
 //! 3. **fill**: walk the same buckets again, in the same order, writing light indices into *its
 //!    own* slice of `indices`, with `offsets` as the per-cluster cursors, while it is all in cache;
 //! 4. **close**: the cursors now hold each list's end, so `counts` is the difference of
-//!    neighbouring ends and `offsets` the previous end — a pass the compiler vectorises.
+//!    neighbouring ends and `offsets` the previous end — a pass without a dependency chain.
 //!
-//! The scan is a serial chain (two running sums) and stores once per cluster; the counts and
-//! cursors it used to write as well made it store-bound (three stores per cluster: 21 µs of the
-//! `uniform` 250-light frame, whose 27 648 clusters hold 737 pairs).
+//! The scan is a serial chain (two running sums) and stores once per cluster. When it also wrote
+//! the counts and separate cursors (three stores per cluster), the append took 21 µs of the
+//! `uniform` 250-light frame, whose 27 648 clusters hold only 737 pairs.
 //!
 //! Nothing is shared between threads while it is written: each part owns disjoint chunks of
 //! `counts`, `offsets` and `indices` (plain `&mut` splits — no atomics, no `unsafe`,
@@ -30,8 +30,8 @@
 //! output is identical for any number of tasks, parts or threads.
 //!
 //! (It replaced a count over all parts, a prefix sum over all clusters, then a fill over all
-//! parts: three passes over the clusters and three pool regions per frame instead of one pass
-//! and one region. `paper` 1000 lights, serial: count + fill 33 → 28 µs; see the issue log.)
+//! parts: more passes over the clusters, and two pool regions per frame instead of one.
+//! `myriad bench`, serial: `uniform` 250 lights 28 → 19.5 µs, 1000 lights 50 → 42 µs.)
 
 use crate::active::ActiveView;
 use crate::jobs::TaskOutput;

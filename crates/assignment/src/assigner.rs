@@ -194,8 +194,8 @@ impl Assigner {
             // Called from outside the pool (an engine's main thread, a benchmark loop): move the
             // whole frame onto a worker in one hand-off. Otherwise each parallel region would
             // inject its jobs and park this thread until they finish — a cross-thread wake-up
-            // per region (criterion, from the main thread: `paper` 1000 `binary` 45 µs where
-            // `myriad bench`, whose loop runs inside the pool, took 35 µs).
+            // per region. Even one costs: criterion times `paper` 1000 `binary` at 46–63 µs from
+            // outside the pool against 33–59 µs on a worker (`benches/assignment.rs`).
             return rayon::scope(|_| self.assign_active(method, lights, camera, grid, active, out));
         }
         let budget = self

@@ -35,7 +35,7 @@ pub(crate) struct FrameContext<'a> {
     pub active: Option<ActiveView<'a>>,
     /// Number of parts (groups of consecutive slices) the spans are bucketed by.
     pub parts: usize,
-    /// log₂ of the slices per part (the last part may have fewer): slice `k` is in part `k >> slice_shift`.
+    /// log₂ of the slices per part: slice `k` is in part `k >> slice_shift`.
     pub slice_shift: u32,
     /// Unit normals of the frustum's left, right, top and bottom planes (x-plane 0 and X, y-plane
     /// 0 and Y), each pointing right or up, for the cheap early cull.
