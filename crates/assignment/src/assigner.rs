@@ -168,9 +168,10 @@ impl Assigner {
     }
 
     /// [`Assigner::assign`] for only the `active` clusters (see [`ActiveClusters`]): every other
-    /// cluster gets an empty list, and neither counting nor filling visits it (rows of a slice
-    /// with no active cluster are skipped whole). `None` is every cluster. When the pair budget
-    /// coarsens the grid, the mask no longer fits and is dropped: the coarser lists are full.
+    /// cluster gets an empty list, and neither counting nor filling visits it (a light's row of
+    /// clusters with no active one is dropped as it is emitted). `None` is every cluster. When
+    /// the pair budget coarsens the grid, the mask no longer fits and is dropped: the coarser
+    /// lists are full.
     pub fn assign_active(
         &mut self,
         method: Method,
