@@ -14,7 +14,10 @@
 //! 2. **scan**: one pass over the part's clusters closes the difference array and writes each
 //!    list's start into `offsets` (the part's base + a running sum);
 //! 3. **fill**: walk the same buckets again, in the same order, writing light indices into *its
-//!    own* slice of `indices`, with `offsets` as the per-cluster cursors, while it is all in cache;
+//!    own* slice of `indices`, with `offsets` as the per-cluster cursors (relative to the part's
+//!    slice, so a pair is a load, a store and an increment), while it is all in cache. Storing a
+//!    row first and bumping its cursors in a second, vectorised pass cost 13% more instructions on
+//!    `paper` 1000 `binary` (its rows are 2–5 clusters long) and 23% more time serially;
 //! 4. **close**: the cursors now hold each list's end, so `counts` is the difference of
 //!    neighbouring ends and `offsets` the previous end — a pass without a dependency chain.
 //!
@@ -234,10 +237,11 @@ impl PartJob<'_> {
                 }
             }
         }
-        // 2. Scan: each list's start.
+        // 2. Scan: each list's start, relative to the part's slice of `indices` (the close adds
+        // the part's base back), so the fill indexes with the cursor itself.
         let base = self.bases[part] as u32;
         let mut running = 0u32;
-        let mut at = base;
+        let mut at = 0u32;
         match self.active {
             None => {
                 for (&n, offset) in counts.iter().zip(offsets.iter_mut()) {
@@ -256,24 +260,21 @@ impl PartJob<'_> {
             }
         }
         assert_eq!(
-            (at - base) as usize,
+            at as usize,
             indices.len(),
-            "part {part}: the spans hold {} pairs, their buckets said {}",
-            at - base,
+            "part {part}: the spans hold {at} pairs, their buckets said {}",
             indices.len()
         );
-        // 3. Fill, with the offsets as cursors (relative to the part's slice by `base`).
+        // 3. Fill, with the offsets as cursors.
         match self.active {
             None => {
                 for spans in buckets() {
                     for s in spans {
                         let start = s.first as usize - first_cluster;
-                        let row = &mut offsets[start..start + s.len as usize];
-                        // The stores, then the cursors' increments as one vector pass.
-                        for &at in row.iter() {
-                            indices[(at - base) as usize] = s.light;
+                        for cursor in &mut offsets[start..start + s.len as usize] {
+                            indices[*cursor as usize] = s.light;
+                            *cursor += 1;
                         }
-                        row.iter_mut().for_each(|c| *c += 1);
                     }
                 }
             }
@@ -285,7 +286,7 @@ impl PartJob<'_> {
                         let on = &flags[first..first + len];
                         for (cursor, &on) in offsets[start..start + len].iter_mut().zip(on) {
                             if on {
-                                indices[(*cursor - base) as usize] = s.light;
+                                indices[*cursor as usize] = s.light;
                                 *cursor += 1;
                             }
                         }
@@ -294,10 +295,10 @@ impl PartJob<'_> {
             }
         }
         // 4. Close: every cursor is its list's end, and a list starts where the previous ends.
-        let mut start = base;
+        let mut start = 0;
         for (n, offset) in counts.iter_mut().zip(offsets.iter_mut()) {
             let end = *offset;
-            (*n, *offset) = (end - start, start);
+            (*n, *offset) = (end - start, base + start);
             start = end;
         }
     }
