@@ -157,7 +157,9 @@ pub(crate) fn cluster_box(
 /// without a square root, a division or a search per row. Columns left of the centre are ordered
 /// by distance (their gaps fall as `i` grows, rounding included: products and `max` are monotone),
 /// and so are those right of it, so the kept columns of a row are the box's columns less a prefix
-/// and a suffix, which are *counted* branch-free over the per-slice squared gaps. In f32 the
+/// and a suffix: the leading (trailing) run of per-slice squared gaps above the row's room. (Walking
+/// those runs replaced counting the whole columns branch-free: `paper` 1000 serial 75 → 65 µs,
+/// `uniform` 100k 3% slower, `myriad bench --threads 1`, interleaved builds.) In f32 the
 /// radius padding grows `(R_k − dy)(R_k + dy)` by about `2·R_k·PAD·|c|`, far above the few ulps
 /// the squares and products round by. (It replaced a square root and a plane search per row:
 /// identical lists on `paper` 1000 and `uniform` 100k/1M, `paper` 1000 `refined` 1.35× faster.)
@@ -229,8 +231,8 @@ pub(crate) fn refine_slice(
             continue;
         }
         let room = (rk - dy) * (rk + dy);
-        let cut_left: u32 = left.iter().map(|&g| (g > room) as u32).sum();
-        let cut_right: u32 = right.iter().map(|&g| (g > room) as u32).sum();
+        let cut_left = left.iter().take_while(|&&g| g > room).count() as u32;
+        let cut_right = right.iter().rev().take_while(|&&g| g > room).count() as u32;
         let (i0, i1) = (b.i0 + cut_left, b.i1 - cut_right);
         if cut_left + cut_right < columns as u32 {
             row(j, i0, i1);
