@@ -79,6 +79,22 @@ impl Bucket {
     }
 }
 
+impl Bucket {
+    /// Adds `rows` spans of `len` clusters, the first starting at cluster `first` and each next
+    /// one `stride` further — a light's whole box in one slice, unmasked.
+    #[inline]
+    pub fn push_rows(&mut self, light: u32, first: u32, len: u32, rows: u32, stride: u32) {
+        self.pairs += rows as u64 * len as u64;
+        for r in 0..rows {
+            self.spans.push(Span {
+                light,
+                first: first + r * stride,
+                len,
+            });
+        }
+    }
+}
+
 /// How the clusters are split into parts.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Parts {

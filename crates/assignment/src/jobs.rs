@@ -271,14 +271,21 @@ fn emit(
     // (`myriad bench`, 1 thread).
     let refine = ctx.method == Method::Refined && bx.i1 > bx.i0 && bx.j1 > bx.j0;
     let width = grid.dims.x;
+    // A point light without a mask pushes whole boxes without per-row checks (`paper` 1000
+    // `binary` serial 53 → 47 µs; the same for the refined rows measured no faster).
+    let plain = !spot.active && ctx.active.is_none();
     match ctx.method {
         Method::Binary | Method::Refined if !refine => {
+            let (len, rows) = (bx.i1 - bx.i0 + 1, bx.j1 - bx.j0 + 1);
             for k in bx.z.k0..=bx.z.k1 {
                 let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
-                let mut first = grid.cluster_id(bx.i0, bx.j0, k);
-                for _ in bx.j0..=bx.j1 {
-                    push_row(bucket, first, bx.i1 - bx.i0 + 1);
-                    first += width;
+                let first = grid.cluster_id(bx.i0, bx.j0, k);
+                if !plain {
+                    for r in 0..rows {
+                        push_row(bucket, first + r * width, len);
+                    }
+                } else {
+                    bucket.push_rows(light, first, len, rows, width);
                 }
             }
         }
