@@ -373,24 +373,37 @@ fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
     }
 }
 
-/// Runs `f` over the tasks, on the pool when `parallel`.
+/// Runs `f` over the tasks, on the pool when `parallel`: one job per task (`with_max_len(1)`), so
+/// the pool's work stealing moves single tasks between workers. Without it rayon's splitter hands
+/// each worker one contiguous piece of tasks, run in one go.
 fn for_each_task<F>(tasks: &mut [TaskOutput], parallel: bool, f: F)
 where
     F: Fn((usize, &mut TaskOutput)) + Sync + Send,
 {
     if parallel {
-        tasks.par_iter_mut().enumerate().for_each(f);
+        tasks.par_iter_mut().enumerate().with_max_len(1).for_each(f);
     } else {
         tasks.iter_mut().enumerate().for_each(f);
     }
 }
 
-/// How many contiguous light ranges to split a frame into.
+/// How many contiguous light ranges to split a frame into: four per thread (at least
+/// [`LIGHTS_PER_TASK`] lights each), each its own stealable job (see [`for_each_task`]), so a
+/// worker that finishes early takes whole tasks off a slower one.
+///
+/// Measured on the 2-vCPU CI machine while its second vCPU ran about 1.4× slower than the first:
+/// with two tasks per thread the fast worker sat idle for the last 0.6 ms of a 2.2 ms `uniform`
+/// 100k task phase (an instrumented build), because rayon's splitter had handed each worker two
+/// tasks as one piece. Four per thread, one job each, against two per thread in one process,
+/// alternating calls (`refined`, medians of 200 calls each, three runs): `uniform` 100k
+/// −1% / 0% / −3%, `sphere` 100k −11% / −15% / 0%; on one thread, +0.3% and −0.4% (the overhead).
+/// Eight per thread gained more in a single run (`uniform` 100k −10%) but cost 2–4% on one
+/// thread (`uniform` +1.9%, `sphere` +3.6%).
 fn plan_tasks(lights: usize, method: Method) -> usize {
     if lights < SERIAL_LIGHTS && method != Method::Exact {
         return 1;
     }
     let threads = rayon::current_num_threads();
     let by_work = lights.div_ceil(LIGHTS_PER_TASK).max(1);
-    (2 * threads).min(by_work).max(1)
+    (4 * threads).min(by_work).max(1)
 }
