@@ -77,9 +77,7 @@ impl Bucket {
             self.spans.push(span);
         }
     }
-}
 
-impl Bucket {
     /// Adds `rows` spans of `len` clusters, the first starting at cluster `first` and each next
     /// one `stride` further — a light's whole box in one slice, unmasked.
     #[inline]
