@@ -300,6 +300,75 @@ mod tests {
         }
     }
 
+    /// `refine_slice` keeps exactly the clusters of its definition, tested cluster by cluster:
+    /// `dy ≤ R_k` and `dx² ≤ (R_k − dy)(R_k + dy)`, with `dx`, `dy` the column's and row's gaps
+    /// over the slab. Walking the cut runs (and the whole-slice shortcut) must neither keep more
+    /// nor fewer clusters than that.
+    #[test]
+    fn refine_slice_keeps_exactly_the_clusters_of_its_definition() {
+        use crate::search::FramePlanes;
+        use glam::{UVec3, Vec3};
+        use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, PlaneSets};
+        use rand::{Rng, SeedableRng};
+        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, 0.1, 60.0);
+        let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 60.0);
+        let sets = PlaneSets::new(&cam, &grid);
+        let planes = FramePlanes::new(&sets, &grid);
+        let mut gaps = vec![0.0; 2 * grid.dims.x as usize];
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let (mut kept, mut cut, mut whole_slices) = (0usize, 0usize, 0usize);
+        for _ in 0..3000 {
+            let dc = rng.random_range(0.5..50.0f32);
+            let (cx, cy) = (rng.random_range(-dc..dc), rng.random_range(-dc..dc) * 0.5);
+            let r = 10f32.powf(rng.random_range(-1.0..1.0));
+            let Some(b) = cluster_box(cx, cy, dc, r, &planes) else {
+                continue;
+            };
+            for k in b.z.k0..=b.z.k1 {
+                let mut got = Vec::new();
+                refine_slice(cx, cy, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
+                    got.extend((i0..=i1).map(|i| (j, i)))
+                });
+                let ka = sets.z_depths[k as usize].max(b.z.da);
+                let kb = sets.z_depths[k as usize + 1].min(b.z.db);
+                let mut want = Vec::new();
+                if ka <= kb {
+                    let rk = band_radius(dc, r, ka, kb);
+                    for j in b.j0..=b.j1 {
+                        let (top, bottom) =
+                            (sets.y_slopes[j as usize], sets.y_slopes[j as usize + 1]);
+                        let y_lo = (bottom * ka).min(bottom * kb);
+                        let y_hi = (top * ka).max(top * kb);
+                        let dy = (y_lo - cy).max(cy - y_hi).max(0.0);
+                        for i in b.i0..=b.i1 {
+                            let (s0, s1) =
+                                (sets.x_slopes[i as usize], sets.x_slopes[i as usize + 1]);
+                            let left = cx - (s1 * ka).max(s1 * kb);
+                            let right = (s0 * ka).min(s0 * kb) - cx;
+                            let dx = left.max(right).max(0.0);
+                            if dy <= rk && dx * dx <= (rk - dy) * (rk + dy) {
+                                want.push((j, i));
+                            }
+                        }
+                    }
+                }
+                assert_eq!(
+                    got, want,
+                    "light ({cx}, {cy}, {dc}, r {r}), slice {k}, box {b:?}"
+                );
+                let area = ((b.i1 - b.i0 + 1) * (b.j1 - b.j0 + 1)) as usize;
+                kept += got.len();
+                cut += area - got.len();
+                whole_slices += (got.len() == area) as usize;
+            }
+        }
+        // The draw must exercise both the cuts and the whole-slice shortcut.
+        assert!(
+            cut > 1000 && kept > cut && whole_slices > 100,
+            "kept {kept}, cut {cut}, slices kept whole {whole_slices}"
+        );
+    }
+
     #[test]
     fn band_radius_is_the_widest_cross_section() {
         assert_eq!(band_radius(5.0, 2.0, 4.0, 6.0), 2.0);
