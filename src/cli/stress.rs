@@ -27,9 +27,9 @@
 //!      [`myriad::evaluate::compare`];
 //!    * above, **`--sample K` clusters** (2000, seeded), each checked on its own: every light is
 //!      tested against the cluster's cell with the f64 oracle itself
-//!      ([`oracle::sphere_intersects_cell`], [`oracle::spot_intersects_cell`] on
-//!      [`Cell::of_cluster`], the lights converted as the `exact` method and the assignment
-//!      tests' brute force convert them), after a depth window and a test against the cell's
+//!      ([`LightVolume::intersects_cell`] on [`Cell::of_cluster`], the lights read by
+//!      [`OracleView::light`] as the `exact` method and the assignment tests' brute force read
+//!      them), after a depth window and a test against the cell's
 //!      four walls, which only drop lights the oracle rejects too (their slack is far wider
 //!      than the oracle's tolerance). Every light the oracle accepts must be in the list.
 //!
@@ -60,8 +60,8 @@ use super::render::parse_size;
 use super::scene::parse_grid;
 use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
-use myriad::cluster_math::glam::DVec3;
-use myriad::cluster_math::oracle::{self, Cell, SpotVolume};
+use myriad::cluster_math::glam::{DVec3, Vec3};
+use myriad::cluster_math::oracle::{Cell, LightVolume, OracleView};
 use myriad::cluster_math::{Camera, ClusterGrid};
 use myriad::evaluate::compare;
 use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
@@ -437,81 +437,48 @@ pub(crate) fn sample_clusters(count: usize, k: usize, seed: u64) -> Vec<u32> {
 /// One valid light in f64 view space.
 #[derive(Clone, Copy, Debug)]
 struct ViewLight {
+    volume: LightVolume,
+    /// Centre and radius of the volume's bounding ball, for the cheap filters.
     centre: DVec3,
     radius: f64,
     /// Index into the input columns.
     index: u32,
-    /// Index into [`OracleLights::spots`], or `u32::MAX` for a ball.
-    spot: u32,
 }
 
-/// The lights as the oracle sees them — view-space centres in f64, spot volumes — sorted by
-/// depth, so one cluster's candidates are a window of the array.
+/// The lights as the oracle sees them ([`OracleView::light`], as the `exact` method reads them),
+/// sorted by depth, so one cluster's candidates are a window of the array. Invalid lights are
+/// left out, since no method may assign them.
 pub(crate) struct OracleLights {
     lights: Vec<ViewLight>,
     /// `-centre.z` of each light, ascending.
     depths: Vec<f64>,
-    spots: Vec<SpotVolume>,
     max_radius: f64,
 }
 
 impl OracleLights {
-    /// Converts the lights exactly as the `exact` method does: the f64 view transform of the
-    /// f32 position, the spot axis rotated and normalised, cones of more than 90° (f64) — and
-    /// zero or non-finite axes — as balls; invalid lights (non-finite, radius ≤ 0) left out,
-    /// since no method may assign them.
     pub(crate) fn new(lights: &Lights, camera: &Camera) -> Self {
-        let rotation = camera.view_rotation_f64();
+        let view = OracleView::new(camera);
         let spots_present = lights.has_spots();
-        let converted: Vec<(ViewLight, Option<SpotVolume>)> = (0..lights.len())
+        let mut sorted: Vec<ViewLight> = (0..lights.len())
             .into_par_iter()
             .filter_map(|l| {
-                let world = DVec3::new(lights.x[l] as f64, lights.y[l] as f64, lights.z[l] as f64);
-                let radius = lights.radius[l] as f64;
-                if !(world.is_finite() && radius.is_finite() && radius > 0.0) {
-                    return None;
-                }
-                let centre = camera.view_from_world_point_f64(world);
-                let spot = spots_present
-                    .then(|| {
-                        let angle = lights.spot_angle[l] as f64;
-                        let axis = (rotation
-                            * DVec3::new(
-                                lights.spot_dir_x[l] as f64,
-                                lights.spot_dir_y[l] as f64,
-                                lights.spot_dir_z[l] as f64,
-                            ))
-                        .normalize_or_zero();
-                        (angle.is_finite()
-                            && angle > 0.0
-                            && angle <= std::f64::consts::FRAC_PI_2
-                            && axis != DVec3::ZERO)
-                            .then_some(SpotVolume {
-                                apex: centre,
-                                direction: axis,
-                                range: radius,
-                                angle,
-                            })
-                    })
-                    .flatten();
-                let light = ViewLight {
+                let position = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
+                let spot = spots_present.then(|| {
+                    let direction = Vec3::new(
+                        lights.spot_dir_x[l],
+                        lights.spot_dir_y[l],
+                        lights.spot_dir_z[l],
+                    );
+                    (direction, lights.spot_angle[l])
+                });
+                let volume = view.light(position, lights.radius[l], spot)?;
+                let (centre, radius) = volume.bounding_ball();
+                Some(ViewLight {
+                    volume,
                     centre,
                     radius,
                     index: l as u32,
-                    spot: u32::MAX,
-                };
-                Some((light, spot))
-            })
-            .collect();
-        let mut spots = Vec::new();
-        let mut sorted: Vec<ViewLight> = converted
-            .into_iter()
-            .map(|(mut light, spot)| {
-                if let Some(s) = spot {
-                    light.spot = spots.len() as u32;
-                    spots.push(s);
-                }
-                light
+                })
             })
             .collect();
         sorted.par_sort_unstable_by(|a, b| (-a.centre.z).total_cmp(&-b.centre.z));
@@ -519,7 +486,6 @@ impl OracleLights {
             depths: sorted.iter().map(|l| -l.centre.z).collect(),
             max_radius: sorted.iter().map(|l| l.radius).fold(0.0, f64::max),
             lights: sorted,
-            spots,
         }
     }
 
@@ -552,11 +518,7 @@ impl OracleLights {
             {
                 continue;
             }
-            let hit = match self.spots.get(light.spot as usize) {
-                Some(s) => oracle::spot_intersects_cell(s, cell),
-                None => oracle::sphere_intersects_cell(c, light.radius, cell),
-            };
-            if hit {
+            if light.volume.intersects_cell(cell) {
                 out.push(light.index);
             }
         }

@@ -16,7 +16,7 @@ use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
 use crate::{LightInput, Method};
 use glam::{DVec3, Mat3, Vec3, Vec4};
-use myriad_cluster_math::oracle::{self, Cell, SpotVolume};
+use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, SpotCone, spot_bounding_sphere};
 
 /// What the tasks of one frame share, read-only.
@@ -60,14 +60,14 @@ impl FrameContext<'_> {
 
 /// What the `exact` method needs of the camera, in f64.
 pub(crate) struct ExactFrame {
-    pub view_from_world: glam::DMat3,
+    pub view: OracleView,
     pub tan_half_fov: (f64, f64),
 }
 
 impl ExactFrame {
     pub fn new(camera: &Camera) -> Self {
         Self {
-            view_from_world: camera.view_rotation_f64(),
+            view: OracleView::new(camera),
             tan_half_fov: camera.tan_half_fov_f64(),
         }
     }
@@ -367,25 +367,15 @@ fn push_filtered(
 fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut [Bucket]) {
     let g = light as usize;
     let l = &ctx.lights;
-    let world = DVec3::new(l.x[g] as f64, l.y[g] as f64, l.z[g] as f64);
-    let centre = ctx.exact.view_from_world * (world - ctx.camera.position.as_dvec3());
-    let range = l.radius[g] as f64;
-    let spot = l.spot.as_ref().and_then(|s| {
-        let angle = s.angle[g] as f64;
-        let axis = ctx.exact.view_from_world
-            * DVec3::new(s.dir_x[g] as f64, s.dir_y[g] as f64, s.dir_z[g] as f64);
-        let axis = axis.normalize_or_zero();
-        (angle.is_finite()
-            && angle > 0.0
-            && angle <= std::f64::consts::FRAC_PI_2
-            && axis != DVec3::ZERO)
-            .then_some(SpotVolume {
-                apex: centre,
-                direction: axis,
-                range,
-                angle,
-            })
+    let spot = l.spot.as_ref().map(|s| {
+        let direction = Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g]);
+        (direction, s.angle[g])
     });
+    let position = Vec3::new(l.x[g], l.y[g], l.z[g]);
+    // Phase 0 passed only valid lights.
+    let Some(volume) = ctx.exact.view.light(position, l.radius[g], spot) else {
+        return;
+    };
     let grid = ctx.grid;
     let z = &ctx.planes.sets.z_depths;
     for k in bx.z.k0..=bx.z.k1 {
@@ -397,10 +387,7 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
                 let i = bx.i0 + (c - first);
                 let (x, y) = (grid.dims.x, grid.dims.y);
                 let cell = Cell::of_tile(ctx.exact.tan_half_fov, x, y, i, j, depths);
-                match &spot {
-                    Some(s) => oracle::spot_intersects_cell(s, &cell),
-                    None => oracle::sphere_intersects_cell(centre, range, &cell),
-                }
+                volume.intersects_cell(&cell)
             });
         }
     }

@@ -1,9 +1,9 @@
 //! Scene generation and the brute-force oracle shared by the assignment tests.
 #![allow(dead_code)] // Each test binary uses a different part of this module.
 
-use glam::{DVec3, UVec3, Vec3};
+use glam::{UVec3, Vec3};
 use myriad_assignment::{LightInput, LightLists, SpotInput};
-use myriad_cluster_math::oracle::{self, Cell, SpotVolume};
+use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 use rand::{Rng, SeedableRng};
 
@@ -71,39 +71,18 @@ pub fn brute_force(
         })
         .collect();
     let mut out = vec![Vec::new(); (d.x * d.y * d.z) as usize];
-    let rot = camera.view_rotation_f64();
+    let view = OracleView::new(camera);
     for l in 0..lights.len() {
-        let p = DVec3::new(lights.x[l] as f64, lights.y[l] as f64, lights.z[l] as f64);
-        let r = lights.radius[l] as f64;
-        if !(p.is_finite() && r.is_finite() && r > 0.0) {
+        let position = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
+        let spot = spots.then(|| {
+            let direction = Vec3::new(lights.dir_x[l], lights.dir_y[l], lights.dir_z[l]);
+            (direction, lights.angle[l])
+        });
+        let Some(volume) = view.light(position, lights.radius[l], spot) else {
             continue;
-        }
-        let centre = camera.view_from_world_point_f64(p);
-        let spot = spots
-            .then(|| {
-                let angle = lights.angle[l] as f64;
-                let axis = (rot
-                    * DVec3::new(
-                        lights.dir_x[l] as f64,
-                        lights.dir_y[l] as f64,
-                        lights.dir_z[l] as f64,
-                    ))
-                .normalize_or_zero();
-                (angle > 0.0 && angle <= std::f64::consts::FRAC_PI_2 && axis != DVec3::ZERO)
-                    .then_some(SpotVolume {
-                        apex: centre,
-                        direction: axis,
-                        range: r,
-                        angle,
-                    })
-            })
-            .flatten();
+        };
         for (c, cell) in cells.iter().enumerate() {
-            let hit = match &spot {
-                Some(s) => oracle::spot_intersects_cell(s, cell),
-                None => oracle::sphere_intersects_cell(centre, r, cell),
-            };
-            if hit {
+            if volume.intersects_cell(cell) {
                 out[c].push(l as u32);
             }
         }

@@ -139,15 +139,8 @@ fn distance_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::oracle::cell_point;
     use rand::{Rng, SeedableRng};
-
-    /// A point of the cell from three unit parameters (x slope, y slope, depth).
-    fn cell_point(cell: &Cell, u: f64, v: f64, w: f64) -> DVec3 {
-        let d = cell.depths[0] + (cell.depths[1] - cell.depths[0]) * w;
-        let sx = cell.x_slopes[0] + (cell.x_slopes[1] - cell.x_slopes[0]) * u;
-        let sy = cell.y_slopes[0] + (cell.y_slopes[1] - cell.y_slopes[0]) * v;
-        DVec3::new(sx * d, sy * d, -d)
-    }
 
     #[test]
     fn distance_matches_dense_boundary_sampling() {

@@ -12,12 +12,26 @@
 //! * [`sphere_intersects_cell`]: `distance_to_cell(centre) <= radius`.
 //! * [`spot_intersects_cell`]: the spot volume (sphere ∩ cone, half-angle ≤ 90°) against a cell,
 //!   by GJK on support functions (see `spot.rs`).
+//! * [`OracleView`] and [`LightVolume`]: a light's f32 columns read as one of those two volumes,
+//!   the same way by everything that judges against the oracle (`light.rs`).
 
 mod cell;
+mod light;
 mod spot;
 
 pub use cell::{Cell, distance_to_cell, sphere_intersects_cell};
+pub use light::{LightVolume, OracleView};
 pub use spot::{SpotVolume, spot_intersects_cell};
+
+/// A point of `cell` from three unit parameters (x slope, y slope, depth); parameters outside
+/// `[0, 1]` give points outside it. For the oracle's tests (`cell.rs` and `spot.rs`).
+#[cfg(test)]
+pub(crate) fn cell_point(cell: &Cell, u: f64, v: f64, w: f64) -> glam::DVec3 {
+    let d = cell.depths[0] + (cell.depths[1] - cell.depths[0]) * w;
+    let sx = cell.x_slopes[0] + (cell.x_slopes[1] - cell.x_slopes[0]) * u;
+    let sy = cell.y_slopes[0] + (cell.y_slopes[1] - cell.y_slopes[0]) * v;
+    glam::DVec3::new(sx * d, sy * d, -d)
+}
 
 /// Random cells for the oracle's tests (shared by `cell.rs` and `spot.rs`).
 #[cfg(test)]

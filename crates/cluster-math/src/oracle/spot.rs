@@ -653,19 +653,10 @@ fn project_origin(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::oracle::{random_cell, sphere_intersects_cell};
+    use crate::oracle::{cell_point, random_cell, sphere_intersects_cell};
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
     use std::f64::consts::{PI, TAU};
-
-    /// A point of the cell from three unit parameters (x slope, y slope, depth); parameters outside
-    /// `[0, 1]` give points outside it.
-    fn cell_point(cell: &Cell, u: f64, v: f64, w: f64) -> DVec3 {
-        let d = cell.depths[0] + (cell.depths[1] - cell.depths[0]) * w;
-        let sx = cell.x_slopes[0] + (cell.x_slopes[1] - cell.x_slopes[0]) * u;
-        let sy = cell.y_slopes[0] + (cell.y_slopes[1] - cell.y_slopes[0]) * v;
-        DVec3::new(sx * d, sy * d, -d)
-    }
 
     fn diameter(cell: &Cell) -> f64 {
         let corners = cell.corners();
