@@ -8,9 +8,9 @@
 mod common;
 
 use common::*;
-use glam::{DVec3, UVec3, Vec3};
+use glam::{UVec3, Vec3};
 use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
-use myriad_cluster_math::oracle::{self, Cell};
+use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 use rand::{Rng, SeedableRng};
 
@@ -75,14 +75,15 @@ fn assert_conservative_on(
     grid: &ClusterGrid,
     sample: impl Iterator<Item = u32>,
 ) {
+    let view = OracleView::new(camera);
     for c in sample {
         let v = grid.cluster_coords(c);
         let cell = Cell::of_cluster(camera, grid, v.x, v.y, v.z);
         let got = lists.lights_of(c as usize);
         for l in 0..lights.len() {
-            let p = DVec3::new(lights.x[l] as f64, lights.y[l] as f64, lights.z[l] as f64);
-            let centre = camera.view_from_world_point_f64(p);
-            if oracle::sphere_intersects_cell(centre, lights.radius[l] as f64, &cell) {
+            let position = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
+            let volume = view.light(position, lights.radius[l], None);
+            if volume.is_some_and(|v| v.intersects_cell(&cell)) {
                 assert!(
                     got.binary_search(&(l as u32)).is_ok(),
                     "{name}: light {l} missing from cluster {c} {v}"
