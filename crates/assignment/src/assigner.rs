@@ -296,14 +296,14 @@ impl Assigner {
             ],
         };
         let parallel = tasks > 1;
+        let gather = |(t, task): (usize, &mut TaskOutput)| {
+            let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
+            jobs::run_task(&ctx, begin, end, task);
+        };
+        for_each_task(&mut self.tasks[..tasks], parallel, gather);
+        let work = &self.tasks[..tasks];
         let pairs = match self.append {
             AppendStrategy::PartitionedByDepth => {
-                let gather = |(t, task): (usize, &mut TaskOutput)| {
-                    let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
-                    jobs::run_task(&ctx, begin, end, task);
-                };
-                for_each_task(&mut self.tasks[..tasks], parallel, gather);
-                let work = &self.tasks[..tasks];
                 let total = append::part_bases(work, parts, &mut self.part_bases);
                 if total > budget {
                     return Err(total);
@@ -320,14 +320,7 @@ impl Assigner {
                 total as usize
             }
             AppendStrategy::AtomicCounters => {
-                let gather = |(t, task): (usize, &mut TaskOutput)| {
-                    let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
-                    jobs::run_task(&ctx, begin, end, task);
-                };
-                for_each_task(&mut self.tasks[..tasks], parallel, gather);
-                let pairs =
-                    self.atomic
-                        .assign(&self.tasks[..tasks], clusters, parallel, budget, out)?;
+                let pairs = self.atomic.assign(work, clusters, parallel, budget, out)?;
                 match active {
                     Some(a) => {
                         out.retain_active(a);
@@ -337,7 +330,7 @@ impl Assigner {
                 }
             }
         };
-        for task in &self.tasks[..tasks] {
+        for task in work {
             stats.rejected += task.rejected;
             stats.culled += task.culled;
         }
