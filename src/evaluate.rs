@@ -1,7 +1,7 @@
 //! Accuracy and speed of assignment methods: pair-by-pair comparison with the exact method, and
 //! the "time against error" measurement behind `myriad bench`.
 
-use myriad_assignment::{AssignStats, Assigner, LightInput, LightLists, Method};
+use myriad_assignment::{AssignStats, Assigner, LightInput, LightLists, Method, Parallelism};
 use myriad_cluster_math::{Camera, ClusterGrid};
 use serde::Serialize;
 use std::time::Instant;
@@ -88,20 +88,78 @@ pub struct MethodResult {
     pub visible_lights: u32,
 }
 
-/// Times `method` (median of `runs` after one warm-up) and compares its output with `exact`.
+/// How the calling thread spends the time between two timed calls.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Idle {
+    /// Calls back to back.
+    #[default]
+    None,
+    /// Sleeps: the whole process idles, as an engine blocked on vsync.
+    Sleep(std::time::Duration),
+    /// Spins: the calling thread stays busy, as an engine's frame thread doing other work, while
+    /// the pool's other workers idle.
+    Busy(std::time::Duration),
+}
+
+impl Idle {
+    fn wait(self) {
+        match self {
+            Idle::None => {}
+            Idle::Sleep(time) => std::thread::sleep(time),
+            Idle::Busy(time) => {
+                let start = Instant::now();
+                while start.elapsed() < time {
+                    std::hint::spin_loop();
+                }
+            }
+        }
+    }
+}
+
+/// How [`measure`] times a method.
+#[derive(Clone, Copy, Debug)]
+pub struct Timing {
+    /// Timed calls (the median is reported).
+    pub runs: usize,
+    /// What the calling thread does before each timed call (untimed).
+    pub idle: Idle,
+    /// When the assigner runs a split frame on the pool.
+    pub parallelism: Parallelism,
+}
+
+impl Timing {
+    /// `runs` calls back to back, the assigner's default pacing.
+    pub fn back_to_back(runs: usize) -> Self {
+        Self {
+            runs,
+            idle: Idle::None,
+            parallelism: Parallelism::default(),
+        }
+    }
+}
+
+/// Times `method` (median of `timing.runs` after one warm-up) and compares its output with
+/// `exact`. With a non-zero [`Idle`] the calling thread waits before each timed call, as an
+/// engine's frames are apart: the pool's other workers go to sleep in between.
 pub fn measure(
     method: Method,
     lights: &LightInput<'_>,
     camera: &Camera,
     grid: &ClusterGrid,
     exact: &LightLists,
-    runs: usize,
+    timing: Timing,
 ) -> MethodResult {
-    let mut assigner = Assigner::new();
+    let Timing {
+        runs,
+        idle,
+        parallelism,
+    } = timing;
+    let mut assigner = Assigner::new().with_parallelism(parallelism);
     let mut lists = LightLists::new();
     let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
     let mut times = Vec::with_capacity(runs);
     for _ in 0..runs.max(1) {
+        idle.wait();
         let start = Instant::now();
         stats = assigner.assign(method, lights, camera, grid, &mut lists);
         times.push(start.elapsed().as_secs_f64() * 1e6);

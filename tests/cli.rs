@@ -459,6 +459,28 @@ fn bench_json_reports_every_method_without_misses() {
         .map(|m| m["method"].as_str().unwrap())
         .collect();
     assert_eq!(names, ["binary", "refined"]);
+
+    // Frames apart, slept through or spun through, paced or always on the pool: the same lists.
+    let mut pairs = Vec::new();
+    for extra in [
+        &["--idle-us", "200"][..],
+        &["--idle-us", "200", "--busy"],
+        &["--idle-us", "200", "--busy", "--always-parallel"],
+    ] {
+        let mut args = vec!["bench", "--preset", "paper", "--lights", "800"];
+        args.extend(["--methods", "binary,refined", "--runs", "3", "--json"]);
+        args.extend(extra);
+        let report: Value = serde_json::from_str(&stdout(&myriad_ok(&args))).unwrap();
+        for m in report["methods"].as_array().unwrap() {
+            assert_eq!(u64_field(m, "misses"), 0, "{extra:?}: {m}");
+            pairs.push(u64_field(m, "pairs"));
+        }
+    }
+    assert!(pairs[0] > 0 && pairs[1] > 0);
+    assert_eq!(pairs[..2], pairs[2..4]);
+    assert_eq!(pairs[..2], pairs[4..6]);
+    let out = myriad_fails(&["bench", "--preset", "paper", "--busy"]);
+    assert_mentions(&out, &["--idle-us"]);
 }
 
 #[test]

@@ -3,11 +3,12 @@
 use super::assign::parse_method;
 use super::source::{SceneSource, thread_pool};
 use anyhow::Result;
-use myriad::assignment::{Assigner, LightLists, Method};
-use myriad::evaluate::{MethodResult, measure};
+use myriad::assignment::{Assigner, LightLists, Method, Parallelism};
+use myriad::evaluate::{Idle, MethodResult, Timing, measure};
 use myriad::scene::Scene;
 use serde::Serialize;
 use std::process::ExitCode;
+use std::time::Duration;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -22,6 +23,18 @@ pub struct Args {
     /// Timed runs per method (the median is reported).
     #[arg(long, default_value_t = 21)]
     runs: usize,
+    /// Wait this many microseconds before each timed call, as an engine's frames are apart (the
+    /// pool's workers fall asleep in between; 0 = calls back to back). The thread sleeps, unless
+    /// --busy.
+    #[arg(long, default_value_t = 0)]
+    idle_us: u64,
+    /// Spin through --idle-us instead of sleeping: the calling thread stays busy, as an engine's
+    /// frame thread doing other work.
+    #[arg(long, requires = "idle_us")]
+    busy: bool,
+    /// Run every frame split into tasks on the pool, never paced onto the calling thread.
+    #[arg(long)]
+    always_parallel: bool,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
@@ -46,7 +59,23 @@ pub fn run(args: Args) -> Result<ExitCode> {
             .collect::<Result<_>>()?
     };
     let (scene, name) = args.source.load()?;
-    let report = bench(&scene, name, &methods, args.threads, args.runs)?;
+    let time = Duration::from_micros(args.idle_us);
+    let idle = match (args.idle_us, args.busy) {
+        (0, _) => Idle::None,
+        (_, false) => Idle::Sleep(time),
+        (_, true) => Idle::Busy(time),
+    };
+    let parallelism = if args.always_parallel {
+        Parallelism::Always
+    } else {
+        Parallelism::Paced
+    };
+    let timing = Timing {
+        runs: args.runs,
+        idle,
+        parallelism,
+    };
+    let report = bench(&scene, name, &methods, args.threads, timing)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -60,7 +89,7 @@ fn bench(
     name: String,
     methods: &[Method],
     threads: usize,
-    runs: usize,
+    timing: Timing,
 ) -> Result<Report> {
     let pool = thread_pool(threads)?;
     let input = myriad::light_input(&scene.lights);
@@ -78,11 +107,12 @@ fn bench(
             .map(|&m| {
                 // The oracle-backed and the paper's method are slow on big scenes: fewer runs.
                 let runs = if matches!(m, Method::Exact) {
-                    runs.min(3)
+                    timing.runs.min(3)
                 } else {
-                    runs
+                    timing.runs
                 };
-                measure(m, &input, &scene.camera, &scene.grid, &exact, runs)
+                let timing = Timing { runs, ..timing };
+                measure(m, &input, &scene.camera, &scene.grid, &exact, timing)
             })
             .collect();
         let d = scene.grid.dims;

@@ -18,7 +18,7 @@ use super::source::thread_pool;
 use anyhow::{Context, Result, anyhow, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::UVec3;
-use myriad::evaluate::{MethodResult, measure};
+use myriad::evaluate::{MethodResult, Timing, measure};
 use myriad::scene::{ClusterGrid, Preset};
 use plotters::coord::Shift;
 use plotters::drawing::DrawingAreaErrorKind;
@@ -176,7 +176,14 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
                     Method::Exact => args.runs.min(EXACT_RUNS),
                     _ => args.runs,
                 };
-                let result = measure(method, &input, camera, &grid, &exact, runs);
+                let result = measure(
+                    method,
+                    &input,
+                    camera,
+                    &grid,
+                    &exact,
+                    Timing::back_to_back(runs),
+                );
                 // `measure` keeps its lists to itself; one more assignment gives them back for the
                 // shading cost (exact's are the reference itself).
                 let method_lists = if method == Method::Exact {

@@ -4,12 +4,14 @@ use crate::ActiveClusters;
 use crate::append::{self, Parts};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
+use crate::pacing::{Pacing, Parallelism};
 use crate::profiling::profile_span;
 use crate::search::FramePlanes;
 use crate::{LightInput, LightLists};
 use glam::Vec4;
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets};
 use rayon::prelude::*;
+use std::time::Instant;
 
 /// Light assignment methods; all are conservative (never miss a light that touches a cluster).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -80,8 +82,11 @@ pub struct AssignStats {
     pub culled: u32,
     /// Cluster–light pairs written.
     pub pairs: u64,
-    /// Parallel tasks the lights were split into (1 = serial).
+    /// Tasks the lights were split into (1 = one serial task).
     pub tasks: u32,
+    /// Whether the tasks ran on the pool; `false`: one after another on the calling thread, as
+    /// a small frame after idle does (see [`Assigner::assign`]). The lists are the same either way.
+    pub parallel: bool,
     /// Dimensions of the grid the lists were built for: the requested grid's, unless the pair
     /// budget forced a coarser one (see [`Assigner::with_pair_budget`]).
     pub grid_dims: [u32; 3],
@@ -105,8 +110,8 @@ impl AssignStats {
 /// pool's workers awake (as in a frame loop that keeps the pool busy), serial → parallel:
 /// `paper` 500 lights 52 → 27 µs, 1000 lights `binary` 62 → 36 µs and `refined` 87 → 49 µs;
 /// `uniform` 500 lights 27 → 21 µs, 1000 lights 42 → 25 µs. When the workers have gone to sleep
-/// between frames, the first region pays their wake-up: after 2 ms idle, `paper` 1000 ran about
-/// as fast in parallel as serially (both slower than warm, the cold caches costing as much).
+/// between frames they arrive too late for a small frame, which then runs its tasks serially
+/// (see `pacing.rs` for when, and the measurements).
 pub const SERIAL_LIGHTS: usize = 512;
 /// Lights per task at least, so a task's fixed costs (its bucket set, a rayon job) stay small next
 /// to the lights' work.
@@ -127,6 +132,9 @@ pub struct Assigner {
     spheres_key: Option<(glam::Vec2, ClusterGrid)>,
     linear: LinearScratch,
     append: AppendStrategy,
+    /// When the previous frame ended and how big it was: whether the next runs in parallel.
+    pacing: Pacing,
+    parallelism: Parallelism,
     atomic: append::AtomicCounters,
     pair_budget: Option<u64>,
 }
@@ -143,6 +151,13 @@ impl Assigner {
         self
     }
 
+    /// Selects when a frame split into tasks runs them on the pool (the default paces them; see
+    /// [`Assigner::assign`]).
+    pub fn with_parallelism(mut self, parallelism: Parallelism) -> Self {
+        self.parallelism = parallelism;
+        self
+    }
+
     /// Caps the lists at `pairs` cluster–light pairs (`8·clusters + 4·pairs` bytes of CSR). A
     /// frame that would exceed it is assigned again on [`coarser_grid`]s until it fits — fewer,
     /// bigger clusters, so more false positives but never a missed light — and
@@ -156,6 +171,14 @@ impl Assigner {
     /// Assigns `lights` to the clusters of `grid` seen by `camera` with `method`, refilling `out`.
     /// The lists are for `grid`, or for a coarser grid when the pair budget demands it: check
     /// [`AssignStats::coarsened`] (and rebuild that grid with [`coarser_grid`]).
+    ///
+    /// From [`SERIAL_LIGHTS`] lights the frame is split into tasks, which run on the current
+    /// rayon pool — unless the previous call of this assigner ended more than 20 µs ago and was
+    /// small (under about 250 µs of work): then the pool's workers are asleep and would arrive
+    /// too late to help, so the tasks run one after another on the calling thread
+    /// ([`AssignStats::parallel`]; the measurements are in `pacing.rs`). Calls back to back, as
+    /// in a benchmark loop or several views in a row, and big frames run in parallel;
+    /// [`Parallelism::Always`] runs every split frame in parallel.
     pub fn assign(
         &mut self,
         method: Method,
@@ -188,7 +211,10 @@ impl Assigner {
                 "active-cluster mask is for another grid"
             );
         }
-        if method != Method::Linear
+        let start = Instant::now();
+        let parallel = method != Method::Linear
+            && (self.parallelism == Parallelism::Always || self.pacing.parallel(start));
+        let stats = if parallel
             && rayon::current_thread_index().is_none()
             && plan_tasks(lights.len(), method) > 1
         {
@@ -197,8 +223,32 @@ impl Assigner {
             // inject its jobs and park this thread until they finish — a cross-thread wake-up
             // per region. Even one costs: criterion times `paper` 1000 `binary` at 46–63 µs from
             // outside the pool against 33–59 µs on a worker (`benches/assignment.rs`).
-            return rayon::scope(|_| self.assign_active(method, lights, camera, grid, active, out));
-        }
+            rayon::scope(|_| self.assign_frame(method, lights, camera, grid, active, true, out))
+        } else {
+            self.assign_frame(method, lights, camera, grid, active, parallel, out)
+        };
+        let threads = if stats.parallel {
+            (stats.tasks as usize).min(rayon::current_num_threads())
+        } else {
+            1
+        };
+        self.pacing.record(start, Instant::now(), threads);
+        stats
+    }
+
+    /// One frame, its tasks on the pool when `parallel` (and there are several): the grid
+    /// coarsened until the pairs fit the budget.
+    #[allow(clippy::too_many_arguments)] // The frame's inputs, the mask, the choice, the output.
+    fn assign_frame(
+        &mut self,
+        method: Method,
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+        active: Option<&ActiveClusters>,
+        parallel: bool,
+        out: &mut LightLists,
+    ) -> AssignStats {
         let budget = self
             .pair_budget
             .unwrap_or(u32::MAX as u64)
@@ -210,8 +260,9 @@ impl Assigner {
             let last_resort = grid.dims == glam::UVec3::ONE;
             let limit = if last_resort { u32::MAX as u64 } else { budget };
             let mask = if coarsened == 0 { active } else { None };
-            if let Ok(mut stats) = self.assign_once(method, lights, camera, &grid, mask, limit, out)
-            {
+            let attempt =
+                self.assign_once(method, lights, camera, &grid, mask, parallel, limit, out);
+            if let Ok(mut stats) = attempt {
                 stats.grid_dims = grid.dims.to_array();
                 stats.coarsened = coarsened;
                 stats.over_budget = stats.pairs > budget;
@@ -223,7 +274,7 @@ impl Assigner {
     }
 
     /// One attempt on one grid: `Err(pairs)` (nothing written) when the pairs exceed `budget`.
-    #[allow(clippy::too_many_arguments)] // The frame's inputs, the mask, the budget, the output.
+    #[allow(clippy::too_many_arguments)] // The frame's inputs, the mask, the choice, the budget, the output.
     fn assign_once(
         &mut self,
         method: Method,
@@ -231,6 +282,7 @@ impl Assigner {
         camera: &Camera,
         grid: &ClusterGrid,
         active: Option<&ActiveClusters>,
+        parallel: bool,
         budget: u64,
         out: &mut LightLists,
     ) -> Result<AssignStats, u64> {
@@ -295,7 +347,7 @@ impl Assigner {
                 self.planes.y_plane_normal(grid.dims.y as usize),
             ],
         };
-        let parallel = tasks > 1;
+        let parallel = parallel && tasks > 1;
         let gather = |(t, task): (usize, &mut TaskOutput)| {
             let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
             jobs::run_task(&ctx, begin, end, task);
@@ -336,6 +388,7 @@ impl Assigner {
         }
         stats.pairs = pairs as u64;
         stats.tasks = tasks as u32;
+        stats.parallel = parallel;
         Ok(stats)
     }
 }

@@ -1,0 +1,134 @@
+//! Whether a frame runs its tasks on the pool or on the calling thread, decided from when the
+//! previous frame of the same [`crate::Assigner`] ended and how much work it was.
+//!
+//! A parallel frame only pays off if the pool's other workers join it promptly. Between frames
+//! they go to sleep, and a sleeping worker (on the 2-vCPU CI machine, one whose vCPU the host has
+//! parked) arrives late. Timed with the calling thread busy for 5 ms before each call while the
+//! other worker idles (`myriad bench --idle-us 5000 --busy`, 301 calls, three interleaved runs),
+//! running every split frame on the pool (`--always-parallel`) against pacing it:
+//! * `paper` 1000 `binary` 57.7–77.4 µs against 48.4–48.9 µs; `refined` 82.6–113.4 against
+//!   65.7–66.9 µs — one thread's times: two threads were *slower* than one;
+//! * `sphere` 1000 `binary` 14.8–19.3 against 6.2–7.0 µs; `uniform` 2000 `refined` 71.5–81.8
+//!   against 62.4–67.9 µs;
+//! * about 250 µs of work is where a late worker stops costing more than it saves (an earlier
+//!   per-call probe: `uniform` 8000, 240 µs serially, ran 228 µs on two threads after idle;
+//!   32 000 lights ran 1.6× faster).
+//!
+//! With the whole process asleep between calls (`--idle-us 2000` without `--busy`) every frame
+//! ran 1.5–3× slower than warm and the two choices were within the noise of each other (`paper`
+//! 1000 `refined` medians 120–206 µs paced, 110–124 µs always; `sphere` 1000 `binary` 7–10
+//! against 11–24 µs). Frames called back to back gain 1.8× on the pool (`paper` 1000 `binary`
+//! 26.5 against 46.5 µs) and keep it. So a frame runs in parallel when:
+//! * it is this assigner's first, or
+//! * the previous one ended less than [`WARM_GAP`] ago: calls come back to back, the workers are
+//!   awake (or, after a serial frame, worth waking for the frames that follow), or
+//! * the previous one was big: its work, measured as wall time × the threads it could use, was at
+//!   least [`COLD_PARALLEL_WORK`] — enough for a late worker still to help.
+//!
+//! Only *whether the tasks run on the pool* changes, never how the lights are split into tasks
+//! (`plan_tasks`), so the lists are identical either way (as they are for any thread count).
+
+use std::time::{Duration, Instant};
+
+/// Calls closer together than this find the workers still awake. Measured on the CI machine with
+/// `paper` 1000 `binary` on the pool, the calling thread busy in between (a per-call probe, as
+/// `myriad bench --idle-us N --busy --always-parallel`): 26.3 µs after 5 µs of idle, 40.0 µs
+/// after 20 µs, 50.7 µs after 50 µs (serial: 46.5 µs).
+pub(crate) const WARM_GAP: Duration = Duration::from_micros(20);
+
+/// Work (wall time × threads used) from which a frame runs in parallel even after idle: where a
+/// late worker stopped costing more than it saves (`uniform` 8000 lights, 240 µs serially, ran
+/// as fast on two threads after idle; 32 000 lights ran 1.6× faster).
+pub(crate) const COLD_PARALLEL_WORK: Duration = Duration::from_micros(250);
+
+/// When a frame split into tasks runs them on the pool ([`crate::Assigner::with_parallelism`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Parallelism {
+    /// On the pool unless the previous frame was small (under 250 µs of work) and ended over
+    /// 20 µs ago: its workers have gone to sleep and would arrive too late to help.
+    #[default]
+    Paced,
+    /// Always on the pool: for a job system that keeps its workers awake between frames.
+    Always,
+}
+
+/// The previous frame, as far as the decision needs it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Pacing {
+    previous: Option<Frame>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    end: Instant,
+    work: Duration,
+}
+
+impl Pacing {
+    /// Whether a frame starting `now` should run its tasks in parallel.
+    pub fn parallel(&self, now: Instant) -> bool {
+        match self.previous {
+            None => true,
+            Some(frame) => {
+                now.saturating_duration_since(frame.end) < WARM_GAP
+                    || frame.work >= COLD_PARALLEL_WORK
+            }
+        }
+    }
+
+    /// Records a frame that ran from `start` to `end` on `threads` threads (1 when serial).
+    pub fn record(&mut self, start: Instant, end: Instant, threads: usize) {
+        let wall = end.saturating_duration_since(start);
+        self.previous = Some(Frame {
+            end,
+            work: wall * threads.max(1) as u32,
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_frame_is_parallel() {
+        assert!(Pacing::default().parallel(Instant::now()));
+    }
+
+    #[test]
+    fn back_to_back_frames_stay_parallel_whatever_their_size() {
+        let t0 = Instant::now();
+        let mut pacing = Pacing::default();
+        // A small serial frame, then a call right after it: wake the workers for what follows.
+        pacing.record(t0, t0 + Duration::from_micros(30), 1);
+        assert!(pacing.parallel(t0 + Duration::from_micros(35)));
+        pacing.record(t0, t0 + Duration::from_micros(30), 2);
+        assert!(pacing.parallel(t0 + Duration::from_micros(30) + WARM_GAP / 2));
+    }
+
+    #[test]
+    fn small_frames_after_idle_run_serially() {
+        let t0 = Instant::now();
+        let mut pacing = Pacing::default();
+        // 40 µs on two threads is 80 µs of work at most: not worth a late worker.
+        pacing.record(t0, t0 + Duration::from_micros(40), 2);
+        let later = t0 + Duration::from_millis(16);
+        assert!(!pacing.parallel(later));
+        pacing.record(t0, t0 + Duration::from_micros(200), 1);
+        assert!(!pacing.parallel(later));
+        // Just past the gap counts as idle.
+        let end = t0 + Duration::from_micros(200);
+        assert!(!pacing.parallel(end + WARM_GAP));
+    }
+
+    #[test]
+    fn big_frames_after_idle_stay_parallel() {
+        let t0 = Instant::now();
+        let mut pacing = Pacing::default();
+        pacing.record(t0, t0 + Duration::from_micros(300), 1);
+        assert!(pacing.parallel(t0 + Duration::from_millis(16)));
+        // 130 µs on two threads: up to 260 µs of work.
+        pacing.record(t0, t0 + Duration::from_micros(130), 2);
+        assert!(pacing.parallel(t0 + Duration::from_millis(16)));
+    }
+}

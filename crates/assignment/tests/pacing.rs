@@ -1,0 +1,70 @@
+//! Small frames after idle run their tasks on the calling thread; the lists do not change.
+//! (The decision itself is unit-tested in `pacing.rs`; this checks the assigner acts on it.)
+
+mod common;
+
+use common::*;
+use glam::UVec3;
+use myriad_assignment::{Assigner, LightLists, Method};
+use std::time::Duration;
+
+#[test]
+fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
+    let scene = make_scene(&SceneParams {
+        seed: 11,
+        fov_deg: 60.0,
+        aspect: 2.0,
+        near: 0.5,
+        far_ratio: 200.0,
+        eye_scale: 0.0,
+        dims: UVec3::new(24, 12, 16),
+        slicing: 0,
+        lights: 1500,
+        spots: false,
+    });
+    // The generator's radii reach 1000× the near plane; small lights make a small frame.
+    let mut lights = Columns::default();
+    for l in 0..scene.lights.len() {
+        let p = glam::Vec3::new(scene.lights.x[l], scene.lights.y[l], scene.lights.z[l]);
+        lights.push(p, scene.lights.radius[l].min(0.05));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    for method in [Method::Binary, Method::Refined] {
+        let input = lights.input(false);
+        let mut assigner = Assigner::new();
+        let mut frame = |lists: &mut LightLists| {
+            pool.install(|| assigner.assign(method, &input, &scene.camera, &scene.grid, lists))
+        };
+        let mut first = LightLists::new();
+        let stats = frame(&mut first);
+        assert!(stats.tasks > 1, "1500 lights are split into tasks");
+        assert!(stats.pairs > 1000, "{method}: only {} pairs", stats.pairs);
+        assert!(stats.parallel, "an assigner's first frame runs on the pool");
+        let tasks = stats.tasks;
+        // A frame of this size takes microseconds to tens of microseconds; the idle time
+        // between calls is 5 ms. A machine stalled for more than ~100 µs in the middle of a
+        // frame would make it look big once, so a few tries are allowed.
+        let mut serial = None;
+        for _ in 0..5 {
+            std::thread::sleep(Duration::from_millis(5));
+            let mut lists = LightLists::new();
+            let stats = frame(&mut lists);
+            assert_eq!(
+                stats.tasks, tasks,
+                "where the tasks run never changes the split"
+            );
+            if !stats.parallel {
+                serial = Some(lists);
+                break;
+            }
+        }
+        let serial = serial.expect("a small frame after 5 ms idle should run serially");
+        assert!(
+            serial == first,
+            "{method}: serial and parallel lists differ"
+        );
+    }
+}
