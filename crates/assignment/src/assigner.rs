@@ -331,7 +331,7 @@ impl Assigner {
         let ctx = FrameContext {
             active: view,
             method,
-            exact: jobs::ExactFrame::new(camera),
+            exact: (method == Method::Exact).then(|| jobs::ExactFrame::new(camera)),
             parts: parts.count,
             slice_shift: parts.slice_shift,
             lights: *lights,

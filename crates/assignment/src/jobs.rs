@@ -29,8 +29,9 @@ pub(crate) struct FrameContext<'a> {
     pub view_from_world: Mat3,
     /// View-space bounding spheres of the clusters (for spot cone tests); empty without spots.
     pub cluster_spheres: &'a [Vec4],
-    /// The f64 view transform and projection of the `exact` method, computed once per frame.
-    pub exact: ExactFrame,
+    /// The f64 view transform and projection of the `exact` method, computed once per frame
+    /// (`None` for the other methods, which never need them).
+    pub exact: Option<ExactFrame>,
     /// The active-cluster mask, if any: spans without an active cluster are dropped as emitted.
     pub active: Option<ActiveView<'a>>,
     /// Number of parts (groups of consecutive slices) the spans are bucketed by.
@@ -298,7 +299,13 @@ fn emit(
                 });
             }
         }
-        Method::Exact => emit_exact(ctx, light, bx, buckets),
+        Method::Exact => {
+            let exact = ctx
+                .exact
+                .as_ref()
+                .expect("the exact method's frame has its f64 view");
+            emit_exact(ctx, exact, light, bx, buckets)
+        }
         Method::Linear => unreachable!("the linear method has its own serial path"),
     }
 }
@@ -364,7 +371,13 @@ fn push_filtered(
 }
 
 /// The `exact` method: every cluster of a generously padded box, tested with the f64 oracle.
-fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut [Bucket]) {
+fn emit_exact(
+    ctx: &FrameContext<'_>,
+    exact: &ExactFrame,
+    light: u32,
+    bx: &ClusterBox,
+    buckets: &mut [Bucket],
+) {
     let g = light as usize;
     let l = &ctx.lights;
     let spot = l.spot.as_ref().map(|s| {
@@ -373,7 +386,7 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
     });
     let position = Vec3::new(l.x[g], l.y[g], l.z[g]);
     // Phase 0 passed only valid lights.
-    let Some(volume) = ctx.exact.view.light(position, l.radius[g], spot) else {
+    let Some(volume) = exact.view.light(position, l.radius[g], spot) else {
         return;
     };
     let grid = ctx.grid;
@@ -386,7 +399,7 @@ fn emit_exact(ctx: &FrameContext<'_>, light: u32, bx: &ClusterBox, buckets: &mut
             push_filtered(ctx, bucket, light, first, bx.i1 - bx.i0 + 1, |c| {
                 let i = bx.i0 + (c - first);
                 let (x, y) = (grid.dims.x, grid.dims.y);
-                let cell = Cell::of_tile(ctx.exact.tan_half_fov, x, y, i, j, depths);
+                let cell = Cell::of_tile(exact.tan_half_fov, x, y, i, j, depths);
                 volume.intersects_cell(&cell)
             });
         }
