@@ -86,6 +86,9 @@ pub struct MethodResult {
     pub effective_gb_s: f64,
     /// Lights visible (not culled or rejected).
     pub visible_lights: u32,
+    /// Timed calls whose tasks ran on the pool ([`AssignStats::parallel`]); the rest ran one
+    /// after another on the calling thread (a serial frame, or a small frame after idle).
+    pub pooled_runs: usize,
 }
 
 /// How the calling thread spends the time between two timed calls.
@@ -158,11 +161,13 @@ pub fn measure(
     let mut lists = LightLists::new();
     let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
     let mut times = Vec::with_capacity(runs);
+    let mut pooled_runs = 0;
     for _ in 0..runs.max(1) {
         idle.wait();
         let start = Instant::now();
         stats = assigner.assign(method, lights, camera, grid, &mut lists);
         times.push(start.elapsed().as_secs_f64() * 1e6);
+        pooled_runs += usize::from(stats.parallel);
     }
     times.sort_by(f64::total_cmp);
     let median_us = times[times.len() / 2];
@@ -179,6 +184,7 @@ pub fn measure(
         bytes,
         effective_gb_s: bytes as f64 / (median_us * 1e-6) / 1e9,
         visible_lights: stats.visible(),
+        pooled_runs,
     }
 }
 

@@ -437,6 +437,11 @@ fn bench_json_reports_every_method_without_misses() {
     }
     let exact = &methods[0];
     assert_eq!(exact["false_positive_ratio"].as_f64(), Some(0.0));
+    // 300 lights are one task (below SERIAL_LIGHTS) and `linear` is serial: never on the pool.
+    for m in &methods[1..] {
+        assert_eq!(u64_field(m, "runs"), 3, "{m}");
+        assert_eq!(u64_field(m, "pooled_runs"), 0, "{m}");
+    }
 
     // A chosen subset of methods on a scene file.
     let dir = work_dir("bench_json");
@@ -467,13 +472,25 @@ fn bench_json_reports_every_method_without_misses() {
         &["--idle-us", "200", "--busy"],
         &["--idle-us", "200", "--busy", "--always-parallel"],
     ] {
-        let mut args = vec!["bench", "--preset", "paper", "--lights", "800"];
+        let mut args = vec![
+            "bench",
+            "--preset",
+            "paper",
+            "--lights",
+            "800",
+            "--threads",
+            "2",
+        ];
         args.extend(["--methods", "binary,refined", "--runs", "3", "--json"]);
         args.extend(extra);
         let report: Value = serde_json::from_str(&stdout(&myriad_ok(&args))).unwrap();
         for m in report["methods"].as_array().unwrap() {
             assert_eq!(u64_field(m, "misses"), 0, "{extra:?}: {m}");
             pairs.push(u64_field(m, "pairs"));
+            // 800 lights on two threads are split into tasks: always on the pool when asked.
+            if extra.contains(&"--always-parallel") {
+                assert_eq!(u64_field(m, "pooled_runs"), 3, "{extra:?}: {m}");
+            }
         }
     }
     assert!(pairs[0] > 0 && pairs[1] > 0);

@@ -133,12 +133,12 @@ fn print_table(report: &Report) {
         report.scene, report.lights, report.threads
     );
     println!(
-        "{:<8} {:>12} {:>12} {:>10} {:>9} {:>7} {:>11} {:>8}",
-        "method", "median µs", "min µs", "pairs", "fp ratio", "misses", "bytes", "GB/s"
+        "{:<8} {:>12} {:>12} {:>10} {:>9} {:>7} {:>11} {:>8} {:>11}",
+        "method", "median µs", "min µs", "pairs", "fp ratio", "misses", "bytes", "GB/s", "on pool"
     );
     for m in &report.methods {
         println!(
-            "{:<8} {:>12.1} {:>12.1} {:>10} {:>9.4} {:>7} {:>11} {:>8.2}",
+            "{:<8} {:>12.1} {:>12.1} {:>10} {:>9.4} {:>7} {:>11} {:>8.2} {:>11}",
             m.method,
             m.median_us,
             m.min_us,
@@ -146,7 +146,8 @@ fn print_table(report: &Report) {
             m.false_positive_ratio,
             m.misses,
             m.bytes,
-            m.effective_gb_s
+            m.effective_gb_s,
+            format!("{}/{}", m.pooled_runs, m.runs)
         );
     }
     if let Some(linear) = report.methods.iter().find(|m| m.method == "linear") {
