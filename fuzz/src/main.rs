@@ -20,13 +20,15 @@
 //!   hand-written triangle); every 64th input also goes through a temp file and `Model::load`.
 //! * `assign`: random camera (fov 0.5–179°, aspect 0.1–10, near 1e-4–10, far/near to 1e5, eye up
 //!   to 1e6 away, any orientation), small grid (≤ 8×6×8) and 1–60 lights (points and spots) →
-//!   every `Method` conservative against the oracle (`crates/assignment/tests/common`).
+//!   every `Method` conservative against the oracle (`crates/assignment/tests/common`). One input
+//!   in eight is a split frame instead: 512–1511 lights, grid ≤ 16×9×16, tasks on a three-worker
+//!   pool, spans bucketed by depth parts.
 
 #[path = "../../crates/assignment/tests/common/mod.rs"]
 mod common;
 
 use glam::UVec3;
-use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::assignment::{Assigner, LightLists, Method, Parallelism, SERIAL_LIGHTS};
 use myriad::scene::{LightPolicy, LoadOptions, Model, Scene, validate_json_slice};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -178,11 +180,43 @@ fn gltf_once(bytes: &[u8], through_file: Option<&std::path::Path>) {
     }
 }
 
-fn assign_once(rng: &mut Pcg64) -> String {
+/// The pools `assign` inputs run on: one worker (a single task) and three (a split frame).
+struct Pools {
+    one: rayon::ThreadPool,
+    three: rayon::ThreadPool,
+}
+
+impl Pools {
+    fn new() -> Self {
+        let pool = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("cannot start a rayon pool")
+        };
+        Self {
+            one: pool(1),
+            three: pool(3),
+        }
+    }
+}
+
+fn assign_once(rng: &mut Pcg64, pools: &Pools) -> String {
     let eye_scale = match rng.random_range(0..3) {
         0 => 0.0,
         1 => 10f32.powf(rng.random_range(0.0..3.0)),
         _ => 1.0e6,
+    };
+    // One input in eight splits the frame into tasks (more lights than `SERIAL_LIGHTS`, on a
+    // pool of three workers, never paced off it): depth parts filled in parallel.
+    let split = rng.random_bool(0.125);
+    let (max_dims, lights) = if split {
+        (
+            UVec3::new(17, 10, 17),
+            rng.random_range(SERIAL_LIGHTS..SERIAL_LIGHTS + 1000),
+        )
+    } else {
+        (UVec3::new(9, 7, 9), rng.random_range(1..61))
     };
     let params = common::SceneParams {
         seed: rng.random(),
@@ -192,12 +226,12 @@ fn assign_once(rng: &mut Pcg64) -> String {
         far_ratio: 10f32.powf(rng.random_range(0.2..5.0)),
         eye_scale,
         dims: UVec3::new(
-            rng.random_range(1..9),
-            rng.random_range(1..7),
-            rng.random_range(1..9),
+            rng.random_range(1..max_dims.x),
+            rng.random_range(1..max_dims.y),
+            rng.random_range(1..max_dims.z),
         ),
         slicing: rng.random_range(0..3),
-        lights: rng.random_range(1..61),
+        lights,
         spots: rng.random_bool(0.5),
     };
     let context = format!(
@@ -215,18 +249,27 @@ fn assign_once(rng: &mut Pcg64) -> String {
     );
     let scene = common::make_scene(&params);
     let truth = common::brute_force(&scene.lights, params.spots, &scene.camera, &scene.grid);
-    let mut assigner = Assigner::new();
-    let mut lists = LightLists::new();
-    for method in Method::ALL {
-        assigner.assign(
-            method,
-            &scene.lights.input(params.spots),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
-        common::assert_conservative(method.name(), &lists, &truth, &context);
-    }
+    let pool = if split { &pools.three } else { &pools.one };
+    pool.install(|| {
+        let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
+        let mut lists = LightLists::new();
+        for method in Method::ALL {
+            let stats = assigner.assign(
+                method,
+                &scene.lights.input(params.spots),
+                &scene.camera,
+                &scene.grid,
+                &mut lists,
+            );
+            common::assert_conservative(method.name(), &lists, &truth, &context);
+            let pooled = stats.parallel && stats.tasks > 1;
+            assert!(
+                method == Method::Linear || pooled == split,
+                "{}: split {split}, ran on the pool {pooled} ({context})",
+                method.name()
+            );
+        }
+    });
     context
 }
 
@@ -277,6 +320,7 @@ fn main() {
             std::process::exit(2);
         }
     };
+    let pools = Pools::new();
     let temp = std::env::temp_dir().join(format!("myriad-fuzz-{}", std::process::id()));
     std::fs::create_dir_all(&temp).expect("temp folder");
     let limit = Duration::from_secs_f64(args.seconds);
@@ -288,7 +332,7 @@ fn main() {
         let (input, outcome) = if args.target == "assign" {
             let mut r = Pcg64::seed_from_u64(rng.random());
             let outcome = catch_unwind(AssertUnwindSafe(|| {
-                assign_once(&mut r);
+                assign_once(&mut r, &pools);
             }));
             (Vec::new(), outcome)
         } else {

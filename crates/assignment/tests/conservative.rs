@@ -1,18 +1,26 @@
 //! Every method is a superset of the exact f64 oracle (brute force over all clusters), and `exact`
-//! equals it, on proptest-generated hostile scenes and on hand-made regression cases.
+//! equals it, on proptest-generated hostile scenes and on hand-made regression cases — as one
+//! serial task (up to 60 lights) and as a frame split into tasks on a pool, bucketed by depth
+//! parts (above `SERIAL_LIGHTS`).
 
 mod common;
 
 use common::*;
 use glam::{UVec3, Vec3};
-use myriad_assignment::{Assigner, LightLists, Method};
+use myriad_assignment::{Assigner, LightLists, Method, Parallelism, SERIAL_LIGHTS};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 use proptest::prelude::*;
 
 fn check_scene(scene: &Scene, spots: bool, context: &str) {
+    check_with(&mut Assigner::new(), scene, spots, context);
+}
+
+/// Every method with `assigner` against the oracle; returns whether the split methods (all but
+/// `linear`) ran their tasks on the pool.
+fn check_with(assigner: &mut Assigner, scene: &Scene, spots: bool, context: &str) -> bool {
     let truth = brute_force(&scene.lights, spots, &scene.camera, &scene.grid);
-    let mut assigner = Assigner::new();
     let mut lists = LightLists::new();
+    let mut all_pooled = true;
     for method in Method::ALL {
         let stats = assigner.assign(
             method,
@@ -26,7 +34,11 @@ fn check_scene(scene: &Scene, spots: bool, context: &str) {
         if method == Method::Exact {
             assert_eq!(extra, 0, "exact has {extra} false positives ({context})");
         }
+        if method != Method::Linear {
+            all_pooled &= stats.parallel && stats.tasks > 1;
+        }
     }
+    all_pooled
 }
 
 proptest! {
@@ -50,6 +62,42 @@ proptest! {
         };
         let scene = make_scene(&params);
         check_scene(&scene, spots, &format!("seed {seed} fov {fov_deg} aspect {aspect} near {near} far x{far_ratio} eye {eye_scale}"));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// The same hostile scenes with enough lights to split the frame into tasks, run on a
+    /// three-worker pool: spans bucketed by depth parts, parts counted and filled in parallel.
+    #[test]
+    fn split_frames_cover_the_oracle(
+        seed in any::<u64>(),
+        fov_deg in 0.5f32..179.0,
+        aspect in 0.1f32..10.0,
+        near in 1e-4f32..10.0,
+        far_ratio in 1.5f32..1e5,
+        eye_scale in prop_oneof![Just(0.0f32), 1.0f32..100.0, Just(1.0e6)],
+        dx in 1u32..17, dy in 1u32..10, dz in 1u32..17,
+        slicing in 0u8..3,
+        extra_lights in 0usize..700,
+        spots in any::<bool>(),
+    ) {
+        let params = SceneParams {
+            seed, fov_deg, aspect, near, far_ratio, eye_scale,
+            dims: UVec3::new(dx, dy, dz), slicing, lights: SERIAL_LIGHTS + extra_lights, spots,
+        };
+        let scene = make_scene(&params);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .expect("cannot start a rayon pool");
+        let context = format!("split: seed {seed} fov {fov_deg} aspect {aspect} near {near} far x{far_ratio} eye {eye_scale} dims {dx}x{dy}x{dz} lights {}", params.lights);
+        let pooled = pool.install(|| {
+            let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
+            check_with(&mut assigner, &scene, spots, &context)
+        });
+        prop_assert!(pooled, "a method ran as one task or off the pool ({context})");
     }
 }
 
