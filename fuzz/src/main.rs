@@ -21,7 +21,7 @@
 //! * `assign`: random camera (fov 0.5–179°, aspect 0.1–10, near 1e-4–10, far/near to 1e5, eye up
 //!   to 1e6 away, any orientation), small grid (≤ 8×6×8) and 1–60 lights (points and spots) →
 //!   every `Method` conservative against the oracle (`crates/assignment/tests/common`). One input
-//!   in eight is a split frame instead: 512–1511 lights, grid ≤ 16×9×16, tasks on a three-worker
+//!   in 64 is a split frame instead: 512–1511 lights, grid ≤ 16×9×16, tasks on a three-worker
 //!   pool, spans bucketed by depth parts.
 
 #[path = "../../crates/assignment/tests/common/mod.rs"]
@@ -207,9 +207,9 @@ fn assign_once(rng: &mut Pcg64, pools: &Pools) -> String {
         1 => 10f32.powf(rng.random_range(0.0..3.0)),
         _ => 1.0e6,
     };
-    // One input in eight splits the frame into tasks (more lights than `SERIAL_LIGHTS`, on a
+    // One input in 64 splits the frame into tasks (more lights than `SERIAL_LIGHTS`, on a
     // pool of three workers, never paced off it): depth parts filled in parallel.
-    let split = rng.random_bool(0.125);
+    let split = rng.random_bool(1.0 / 64.0);
     let (max_dims, lights) = if split {
         (
             UVec3::new(17, 10, 17),
