@@ -41,27 +41,35 @@ fn check_with(assigner: &mut Assigner, scene: &Scene, spots: bool, context: &str
     all_pooled
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
-
-    #[test]
-    fn every_method_covers_the_oracle(
+prop_compose! {
+    /// A hostile random scene: any camera (fov 0.5–179°, aspect 0.1–10, near 1e-4–10, far/near
+    /// up to 1e5, eye up to 1e6 from the origin), a grid below `max_dims`, `lights` lights.
+    fn hostile_params(max_dims: UVec3, lights: std::ops::Range<usize>)(
         seed in any::<u64>(),
         fov_deg in 0.5f32..179.0,
         aspect in 0.1f32..10.0,
         near in 1e-4f32..10.0,
         far_ratio in 1.5f32..1e5,
         eye_scale in prop_oneof![Just(0.0f32), 1.0f32..100.0, Just(1.0e6)],
-        dx in 1u32..9, dy in 1u32..7, dz in 1u32..9,
+        dx in 1..max_dims.x, dy in 1..max_dims.y, dz in 1..max_dims.z,
         slicing in 0u8..3,
+        lights in lights,
         spots in any::<bool>(),
-    ) {
-        let params = SceneParams {
+    ) -> SceneParams {
+        SceneParams {
             seed, fov_deg, aspect, near, far_ratio, eye_scale,
-            dims: UVec3::new(dx, dy, dz), slicing, lights: 60, spots,
-        };
+            dims: UVec3::new(dx, dy, dz), slicing, lights, spots,
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn every_method_covers_the_oracle(params in hostile_params(UVec3::new(9, 7, 9), 60..61)) {
         let scene = make_scene(&params);
-        check_scene(&scene, spots, &format!("seed {seed} fov {fov_deg} aspect {aspect} near {near} far x{far_ratio} eye {eye_scale}"));
+        check_scene(&scene, params.spots, &format!("{params:?}"));
     }
 }
 
@@ -72,30 +80,17 @@ proptest! {
     /// three-worker pool: spans bucketed by depth parts, parts counted and filled in parallel.
     #[test]
     fn split_frames_cover_the_oracle(
-        seed in any::<u64>(),
-        fov_deg in 0.5f32..179.0,
-        aspect in 0.1f32..10.0,
-        near in 1e-4f32..10.0,
-        far_ratio in 1.5f32..1e5,
-        eye_scale in prop_oneof![Just(0.0f32), 1.0f32..100.0, Just(1.0e6)],
-        dx in 1u32..17, dy in 1u32..10, dz in 1u32..17,
-        slicing in 0u8..3,
-        extra_lights in 0usize..700,
-        spots in any::<bool>(),
+        params in hostile_params(UVec3::new(17, 10, 17), SERIAL_LIGHTS..SERIAL_LIGHTS + 700),
     ) {
-        let params = SceneParams {
-            seed, fov_deg, aspect, near, far_ratio, eye_scale,
-            dims: UVec3::new(dx, dy, dz), slicing, lights: SERIAL_LIGHTS + extra_lights, spots,
-        };
         let scene = make_scene(&params);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(3)
             .build()
             .expect("cannot start a rayon pool");
-        let context = format!("split: seed {seed} fov {fov_deg} aspect {aspect} near {near} far x{far_ratio} eye {eye_scale} dims {dx}x{dy}x{dz} lights {}", params.lights);
+        let context = format!("split frame: {params:?}");
         let pooled = pool.install(|| {
             let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
-            check_with(&mut assigner, &scene, spots, &context)
+            check_with(&mut assigner, &scene, params.spots, &context)
         });
         prop_assert!(pooled, "a method ran as one task or off the pool ({context})");
     }

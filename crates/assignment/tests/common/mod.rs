@@ -146,6 +146,7 @@ pub fn slicing_of(code: u8, near: f32, far: f32) -> DepthSlicing {
     }
 }
 
+#[derive(Clone, Debug)]
 pub struct SceneParams {
     pub seed: u64,
     pub fov_deg: f32,
