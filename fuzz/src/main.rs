@@ -234,19 +234,7 @@ fn assign_once(rng: &mut Pcg64, pools: &Pools) -> String {
         lights,
         spots: rng.random_bool(0.5),
     };
-    let context = format!(
-        "seed {} fov {} aspect {} near {} far_ratio {} eye {} dims {} slicing {} lights {} spots {}",
-        params.seed,
-        params.fov_deg,
-        params.aspect,
-        params.near,
-        params.far_ratio,
-        params.eye_scale,
-        params.dims,
-        params.slicing,
-        params.lights,
-        params.spots
-    );
+    let context = format!("{params:?}");
     let scene = common::make_scene(&params);
     let truth = common::brute_force(&scene.lights, params.spots, &scene.camera, &scene.grid);
     let pool = if split { &pools.three } else { &pools.one };
