@@ -20,6 +20,7 @@ pub use myriad_cluster_math as cluster_math;
 pub use myriad_gpu as gpu;
 pub use myriad_scene as scene;
 
+pub mod core_link;
 pub mod dump;
 pub mod evaluate;
 pub mod profiling;

@@ -442,6 +442,23 @@ fn bench_json_reports_every_method_without_misses() {
         assert_eq!(u64_field(m, "runs"), 3, "{m}");
         assert_eq!(u64_field(m, "pooled_runs"), 0, "{m}");
     }
+    // One thread has no link between threads to report.
+    let one: Value = serde_json::from_str(&stdout(&myriad_ok(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--lights",
+        "300",
+        "--methods",
+        "binary",
+        "--threads",
+        "1",
+        "--runs",
+        "3",
+        "--json",
+    ])))
+    .unwrap();
+    assert!(one["core_link"].is_null(), "{}", one["core_link"]);
 
     // A chosen subset of methods on a scene file.
     let dir = work_dir("bench_json");
@@ -484,6 +501,13 @@ fn bench_json_reports_every_method_without_misses() {
         args.extend(["--methods", "binary,refined", "--runs", "3", "--json"]);
         args.extend(extra);
         let report: Value = serde_json::from_str(&stdout(&myriad_ok(&args))).unwrap();
+        // Two threads: the link between them is measured before and after the timings.
+        for when in ["before", "after"] {
+            let link = &report["core_link"][when];
+            for field in ["round_trip_ns", "handoff_us"] {
+                assert!(link[field].as_f64().is_some_and(|v| v > 0.0), "{link}");
+            }
+        }
         for m in report["methods"].as_array().unwrap() {
             assert_eq!(u64_field(m, "misses"), 0, "{extra:?}: {m}");
             pairs.push(u64_field(m, "pairs"));

@@ -4,6 +4,7 @@ use super::assign::parse_method;
 use super::source::{SceneSource, thread_pool};
 use anyhow::Result;
 use myriad::assignment::{Assigner, LightLists, Method, Parallelism};
+use myriad::core_link::{self, CoreLink, HANDOFF_BYTES};
 use myriad::evaluate::{Idle, MethodResult, Timing, measure};
 use myriad::scene::Scene;
 use serde::Serialize;
@@ -46,7 +47,16 @@ struct Report {
     lights: usize,
     grid: [u32; 3],
     threads: usize,
+    /// The pool's thread-to-thread link just before and just after the timings (absent on one
+    /// thread): a parallel timing means little without it on a shared machine.
+    core_link: Option<LinkBeforeAfter>,
     methods: Vec<MethodResult>,
+}
+
+#[derive(Serialize)]
+struct LinkBeforeAfter {
+    before: CoreLink,
+    after: CoreLink,
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
@@ -102,6 +112,7 @@ fn bench(
             &scene.grid,
             &mut exact,
         );
+        let before = core_link::measure();
         let methods = methods
             .iter()
             .map(|&m| {
@@ -115,12 +126,16 @@ fn bench(
                 measure(m, &input, &scene.camera, &scene.grid, &exact, timing)
             })
             .collect();
+        let core_link = before
+            .zip(core_link::measure())
+            .map(|(before, after)| LinkBeforeAfter { before, after });
         let d = scene.grid.dims;
         Ok(Report {
             scene: name,
             lights: scene.lights.len(),
             grid: [d.x, d.y, d.z],
             threads: rayon::current_num_threads(),
+            core_link,
             methods,
         })
     })
@@ -132,6 +147,16 @@ fn print_table(report: &Report) {
         "{} — {} lights, grid {x}x{y}x{z}, {} threads",
         report.scene, report.lights, report.threads
     );
+    if let Some(LinkBeforeAfter { before, after }) = &report.core_link {
+        println!(
+            "thread link: round trip {:.0} / {:.0} ns, {} KiB hand-off {:.1} / {:.1} µs (before / after)",
+            before.round_trip_ns,
+            after.round_trip_ns,
+            HANDOFF_BYTES / 1024,
+            before.handoff_us,
+            after.handoff_us
+        );
+    }
     println!(
         "{:<8} {:>12} {:>12} {:>10} {:>9} {:>7} {:>11} {:>8} {:>11}",
         "method", "median µs", "min µs", "pairs", "fp ratio", "misses", "bytes", "GB/s", "on pool"

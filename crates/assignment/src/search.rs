@@ -14,6 +14,10 @@ use myriad_cluster_math::{ClusterGrid, DepthSlicing, PlaneSets};
 
 /// Partition point of `pred` over `items` (true on a prefix, false after), searched outward from
 /// `guess`. Exact for any guess; fast when the guess is close.
+///
+/// The loops branch on every probe, and the branches are well predicted: a branch-free step
+/// either way plus a check of the side moved towards (four loads, each waiting on the last)
+/// measured slower — `paper` 1000 serial `binary` 46 → 59 µs, `uniform` 100k 3.0 → 4.7 ms.
 #[inline]
 pub(crate) fn partition_from(items: &[f32], guess: usize, pred: impl Fn(f32) -> bool) -> usize {
     let mut i = guess.min(items.len());

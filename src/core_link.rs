@@ -1,0 +1,168 @@
+//! How fast the pool's first two threads pass data to each other: the context a parallel timing
+//! needs.
+//!
+//! A parallel frame hands data between cores twice: every task writes its spans, and any thread
+//! may then count and fill a part from them. So its speedup depends on what a cache line costs to
+//! move from one core to the other, and on a shared virtual machine that cost is not fixed. On
+//! the 2-vCPU CI-like VM it moved between about 100 ns and 400 ns per round trip from one minute
+//! to the next, and `paper` 1000 `binary` on two threads followed it: 26–29 µs at ~100 ns,
+//! 46–52 µs (its serial time) at ~400 ns, with the same binary (README, "Measured"). `myriad bench`
+//! therefore measures the link before and after its timings and prints it with them.
+//!
+//! Two probes, both on the current rayon pool's threads 0 and 1 (via `rayon::broadcast`, so they
+//! are the very workers the frames run on):
+//! * **round trip**: one atomic counter bounced between the two threads;
+//! * **hand-off**: one thread writes [`HANDOFF_BYTES`] (a store per cache line), the other reads
+//!   them all back, and the turn passes back — about one thread's share of the spans of a
+//!   `paper` 1000 `binary` frame.
+//!
+//! Both spin. A pool with more threads than free cores could leave the partner descheduled for a
+//! whole time slice, so each probe stops at [`PROBE_LIMIT`] and reports what it timed so far.
+
+use serde::Serialize;
+use std::hint::spin_loop;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+/// Bytes written by one thread and read by the other per hand-off.
+pub const HANDOFF_BYTES: usize = 64 * 1024;
+
+/// Longest a probe spins before it stops and reports what it has.
+pub const PROBE_LIMIT: Duration = Duration::from_millis(50);
+
+const ROUND_TRIPS: u32 = 4000;
+const HANDOFFS: u32 = 200;
+/// u32 slots per 64-byte cache line: one store (and one load) per line.
+const LINE_STRIDE: usize = 16;
+
+/// The link between the pool's threads 0 and 1, as measured.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CoreLink {
+    /// Nanoseconds for a counter to go to the other thread and back (the mean of the rounds).
+    pub round_trip_ns: f64,
+    /// Microseconds per hand-off of [`HANDOFF_BYTES`] (written, read on the other thread, turn
+    /// passed back).
+    pub handoff_us: f64,
+}
+
+/// Measures the link on the current rayon pool; `None` when it has a single thread.
+pub fn measure() -> Option<CoreLink> {
+    if rayon::current_num_threads() < 2 {
+        return None;
+    }
+    let round_trip_ns = probe(ROUND_TRIPS, |_| ()) * 1e9;
+    let lines: Vec<AtomicU32> = (0..HANDOFF_BYTES / 4).map(|_| AtomicU32::new(0)).collect();
+    let handoff_us = probe(HANDOFFS, |turn| match turn {
+        Turn::Write(i) => {
+            for slot in lines.iter().step_by(LINE_STRIDE) {
+                slot.store(i, Ordering::Relaxed);
+            }
+        }
+        Turn::Read => {
+            let sum = lines
+                .iter()
+                .step_by(LINE_STRIDE)
+                .fold(0u32, |a, s| a.wrapping_add(s.load(Ordering::Relaxed)));
+            std::hint::black_box(sum);
+        }
+    }) * 1e6;
+    Some(CoreLink {
+        round_trip_ns,
+        handoff_us,
+    })
+}
+
+/// What a thread does when the turn reaches it: thread 0 writes (round `i`), thread 1 reads.
+enum Turn {
+    Write(u32),
+    Read,
+}
+
+/// Seconds per round of `rounds` turns passed 0 → 1 → 0, each doing `work` first; stops early at
+/// [`PROBE_LIMIT`].
+fn probe(rounds: u32, work: impl Fn(Turn) + Sync) -> f64 {
+    let baton = AtomicU32::new(0);
+    let arrived = AtomicU32::new(0);
+    let stop = AtomicBool::new(false);
+    let timed = rayon::broadcast(|ctx| {
+        if ctx.index() > 1 {
+            return None;
+        }
+        // Both threads running before the clock starts (a sleeping worker takes a while to wake).
+        arrived.fetch_add(1, Ordering::AcqRel);
+        while arrived.load(Ordering::Acquire) < 2 {
+            spin_loop();
+        }
+        let start = Instant::now();
+        let mut done = 0;
+        for i in 0..rounds {
+            let (wait_for, pass) = if ctx.index() == 0 {
+                (2 * i, 2 * i + 1)
+            } else {
+                (2 * i + 1, 2 * i + 2)
+            };
+            let mut spins = 0u32;
+            while baton.load(Ordering::Acquire) != wait_for {
+                spin_loop();
+                spins = spins.wrapping_add(1);
+                if spins.is_multiple_of(1024)
+                    && (stop.load(Ordering::Relaxed) || start.elapsed() > PROBE_LIMIT)
+                {
+                    stop.store(true, Ordering::Relaxed);
+                    return (ctx.index() == 0).then(|| (start.elapsed(), done));
+                }
+            }
+            work(if ctx.index() == 0 {
+                Turn::Write(i)
+            } else {
+                Turn::Read
+            });
+            baton.store(pass, Ordering::Release);
+            done = i + 1;
+        }
+        if ctx.index() == 0 {
+            // The last round ends when the turn is back.
+            while baton.load(Ordering::Acquire) != 2 * rounds && !stop.load(Ordering::Relaxed) {
+                spin_loop();
+            }
+            return Some((start.elapsed(), done));
+        }
+        None
+    });
+    let (elapsed, rounds) = timed
+        .into_iter()
+        .flatten()
+        .next()
+        .expect("thread 0 reports its timing");
+    elapsed.as_secs_f64() / rounds.max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn a_single_thread_has_no_link() {
+        assert_eq!(pool(1).install(measure), None);
+    }
+
+    #[test]
+    fn two_threads_report_a_plausible_link() {
+        let link = pool(2).install(measure).expect("two threads have a link");
+        // A round trip is at least two cache-line transfers (tens of ns on any machine) and, on a
+        // loaded one, at most the probe's limit.
+        assert!(
+            link.round_trip_ns > 1.0 && link.round_trip_ns < PROBE_LIMIT.as_nanos() as f64,
+            "{link:?}"
+        );
+        // Moving 64 KiB takes longer than bouncing one line.
+        assert!(link.handoff_us * 1e3 > link.round_trip_ns, "{link:?}");
+    }
+}
