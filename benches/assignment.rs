@@ -168,6 +168,10 @@ fn targets(c: &mut Criterion) {
     };
     let (all_cores, one_thread) = (pool(0), pool(1));
     let worker = Caller::Worker(&all_cores);
+    // A parallel timing follows the link between the workers' cores, which a shared machine
+    // changes from minute to minute (README, "Measured"): print it with the timings.
+    let link = || all_cores.install(myriad::core_link::measure);
+    eprintln!("targets: thread link before {:?}", link());
 
     let paper = (Preset::Paper, 1_000, &OnceCell::new());
     for method in [Method::Linear, Method::Binary, Method::Refined] {
@@ -197,6 +201,7 @@ fn targets(c: &mut Criterion) {
         bench_assign(&mut group, id, method, sphere, None, worker);
     }
     group.finish();
+    eprintln!("targets: thread link after {:?}", link());
 }
 
 criterion::criterion_group!(benches, targets, scaling);
