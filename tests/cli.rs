@@ -197,10 +197,24 @@ fn validate_reports_unreadable_and_missing_files() {
         "--scene".as_ref(),
         truncated.as_os_str(),
     ]);
-    assert_mentions(&out, &[&truncated.display().to_string()]);
+    assert_mentions(
+        &out,
+        &[&truncated.display().to_string(), "cannot parse", "line "],
+    );
     let missing = dir.join("missing.json");
-    let out = myriad_fails(&["validate".as_ref(), "--scene".as_ref(), missing.as_os_str()]);
-    assert_mentions(&out, &[&missing.display().to_string()]);
+    let dump = dir.join("dump.json");
+    for command in [
+        &["validate"][..],
+        &["bench"],
+        &["assign", "--out", dump.to_str().unwrap()],
+    ] {
+        let mut args: Vec<&std::ffi::OsStr> = command.iter().map(|a| a.as_ref()).collect();
+        args.extend(["--scene".as_ref(), missing.as_os_str()]);
+        let out = myriad_fails(&args);
+        assert_mentions(&out, &[&missing.display().to_string(), "cannot read"]);
+        // The operating system's reason is printed once: the message does not repeat its source.
+        assert_eq!(out.matches("(os error").count(), 1, "{command:?}: {out}");
+    }
 }
 
 #[test]

@@ -12,16 +12,18 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// The file could not be read.
-    #[error("cannot read scene file {}: {source}", path.display())]
+    /// The file could not be read. The operating system's reason is the error's
+    /// [`source`](std::error::Error::source), not repeated in the message (so a printer of the chain, such
+    /// as `anyhow`'s `{:#}`, shows it once).
+    #[error("cannot read scene file {}", path.display())]
     Read {
         /// The file.
         path: PathBuf,
         /// What the operating system said.
         source: std::io::Error,
     },
-    /// The file could not be written.
-    #[error("cannot write scene file {}: {source}", path.display())]
+    /// The file could not be written. The reason is the error's source.
+    #[error("cannot write scene file {}", path.display())]
     Write {
         /// The file.
         path: PathBuf,
@@ -29,9 +31,9 @@ pub enum Error {
         source: std::io::Error,
     },
     /// The text is not JSON (syntax error, truncated text, invalid UTF-8, a number too large for an
-    /// f64, nesting deeper than 128), or its top level is not an object. serde_json's message
-    /// carries the line and column.
-    #[error("{origin}: cannot parse scene JSON: {source}")]
+    /// f64, nesting deeper than 128), or its top level is not an object. The error's source is
+    /// serde_json's message, with the line and column.
+    #[error("{origin}: cannot parse scene JSON")]
     Json {
         /// File path or caller-given origin name.
         origin: String,
@@ -140,7 +142,8 @@ mod tests {
             path: "/no/such/scene.json".into(),
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
         };
-        assert!(e.to_string().contains("/no/such/scene.json"), "{e}");
-        assert!(std::error::Error::source(&e).is_some());
+        assert_eq!(e.to_string(), "cannot read scene file /no/such/scene.json");
+        let reason = std::error::Error::source(&e).expect("the io error is the source");
+        assert_eq!(reason.to_string(), "entity not found");
     }
 }
