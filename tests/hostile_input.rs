@@ -11,7 +11,7 @@ use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::scene::{Error, LightPolicy, LoadOptions, Model, Scene, validate_json_slice};
 use std::path::PathBuf;
 use std::sync::mpsc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Runs `f` on a thread; fails the test if it panics or runs past `limit`.
 fn guarded<T: Send + 'static>(
@@ -152,10 +152,15 @@ fn deep_nesting_and_huge_tokens_are_errors() {
         });
         let e = strict.expect_err(what);
         assert!(e.to_string().contains("hostile.json"), "{what}: {e}");
+        // Validation agrees: a parse error naming the file, or a report of an invalid scene.
         let b = bytes.clone();
-        let _ = guarded(what, Duration::from_secs(20), move || {
-            validate_json_slice(&b, "hostile.json").map(|_| ())
+        let validated = guarded(what, Duration::from_secs(20), move || {
+            validate_json_slice(&b, "hostile.json").map(|report| report.is_valid())
         });
+        match validated {
+            Err(e) => assert!(e.to_string().contains("hostile.json"), "{what}: {e}"),
+            Ok(valid) => assert!(!valid, "{what}: validation calls it a valid scene"),
+        }
     }
 }
 
@@ -405,10 +410,9 @@ fn exponential_node_graph_is_refused_quickly() {
         (r#""nodes":[0]"#, r#""nodes":[39]"#),
     ]);
     let dir = temp_dir("dag");
-    let start = Instant::now();
+    // `load_gltf` is a hang guard (20 s): walking the 2^40 paths would never end.
     let r = load_gltf(&dir, "dag.gltf", text);
     assert!(r.is_err(), "2^39 instances accepted");
-    assert!(start.elapsed() < Duration::from_secs(10));
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -284,9 +284,12 @@ fn camera_at_1e6_with_micro_lights() {
             let grid = ClusterGrid::new(dims, DepthSlicing::Log, cam.near, cam.far);
             let mut lights = lights_on_every_plane(&cam, &grid, 1e-6);
             // And every f32 neighbour of a point on a plane: a micro light on each side.
+            // (`next_down`/`next_up` step across zero too, where bit arithmetic would make NaNs.)
             let base = lights[lights.len() / 2].0;
-            for dx in -2i32..=2 {
-                let x = f32::from_bits((base.x.to_bits() as i32 + dx) as u32);
+            let below = [base.x.next_down(), base.x.next_down().next_down()];
+            let above = [base.x.next_up(), base.x.next_up().next_up()];
+            for x in below.into_iter().chain([base.x]).chain(above) {
+                assert!(x.is_finite());
                 lights.push((Vec3::new(x, base.y, base.z), 1e-6));
             }
             let scene = points(cam, dims, DepthSlicing::Log, &lights);
