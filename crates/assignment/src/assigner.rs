@@ -178,7 +178,8 @@ impl Assigner {
     /// too late to help, so the tasks run one after another on the calling thread
     /// ([`AssignStats::parallel`]; the measurements are in `pacing.rs`). Calls back to back, as
     /// in a benchmark loop or several views in a row, and big frames run in parallel;
-    /// [`Parallelism::Always`] runs every split frame in parallel.
+    /// [`Parallelism::Always`] runs every split frame in parallel, and
+    /// [`Parallelism::PacedWith`] sets other limits.
     pub fn assign(
         &mut self,
         method: Method,
@@ -213,7 +214,10 @@ impl Assigner {
         }
         let start = Instant::now();
         let parallel = method != Method::Linear
-            && (self.parallelism == Parallelism::Always || self.pacing.parallel(start));
+            && self
+                .parallelism
+                .limits()
+                .is_none_or(|limits| self.pacing.parallel(start, limits));
         let stats = if parallel
             && rayon::current_thread_index().is_none()
             && plan_tasks(lights.len(), method) > 1

@@ -53,4 +53,4 @@ pub use active::ActiveClusters;
 pub use assigner::{AppendStrategy, AssignStats, Assigner, Method, SERIAL_LIGHTS, coarser_grid};
 pub use input::{LightInput, SpotInput};
 pub use lists::LightLists;
-pub use pacing::Parallelism;
+pub use pacing::{PacingLimits, Parallelism};

@@ -45,11 +45,51 @@ pub(crate) const COLD_PARALLEL_WORK: Duration = Duration::from_micros(250);
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Parallelism {
     /// On the pool unless the previous frame was small (under 250 µs of work) and ended over
-    /// 20 µs ago: its workers have gone to sleep and would arrive too late to help.
+    /// 20 µs ago: its workers have gone to sleep and would arrive too late to help. The same as
+    /// `PacedWith(PacingLimits::MEASURED)`.
     #[default]
     Paced,
+    /// Paced with other limits: the defaults were measured on one 2-vCPU machine, and an
+    /// engine whose workers wake faster or slower (or that measures its own) can set its own.
+    PacedWith(PacingLimits),
     /// Always on the pool: for a job system that keeps its workers awake between frames.
     Always,
+}
+
+impl Parallelism {
+    /// The pacing limits, or `None` for [`Parallelism::Always`].
+    pub fn limits(self) -> Option<PacingLimits> {
+        match self {
+            Parallelism::Paced => Some(PacingLimits::MEASURED),
+            Parallelism::PacedWith(limits) => Some(limits),
+            Parallelism::Always => None,
+        }
+    }
+}
+
+/// The two thresholds of the pacing rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PacingLimits {
+    /// A frame that starts less than this after the previous one ended runs on the pool: the
+    /// workers are still awake.
+    pub warm_gap: Duration,
+    /// A frame after a previous one with at least this much work (its wall time × the threads it
+    /// used) runs on the pool even after idle: enough work for a late worker still to help.
+    pub cold_work: Duration,
+}
+
+impl PacingLimits {
+    /// [`WARM_GAP`] and [`COLD_PARALLEL_WORK`], measured on the CI machine (see the module docs).
+    pub const MEASURED: PacingLimits = PacingLimits {
+        warm_gap: WARM_GAP,
+        cold_work: COLD_PARALLEL_WORK,
+    };
+}
+
+impl Default for PacingLimits {
+    fn default() -> Self {
+        Self::MEASURED
+    }
 }
 
 /// The previous frame, as far as the decision needs it.
@@ -65,13 +105,13 @@ struct Frame {
 }
 
 impl Pacing {
-    /// Whether a frame starting `now` should run its tasks in parallel.
-    pub fn parallel(&self, now: Instant) -> bool {
+    /// Whether a frame starting `now` should run its tasks in parallel under `limits`.
+    pub fn parallel(&self, now: Instant, limits: PacingLimits) -> bool {
         match self.previous {
             None => true,
             Some(frame) => {
-                now.saturating_duration_since(frame.end) < WARM_GAP
-                    || frame.work >= COLD_PARALLEL_WORK
+                now.saturating_duration_since(frame.end) < limits.warm_gap
+                    || frame.work >= limits.cold_work
             }
         }
     }
@@ -90,9 +130,39 @@ impl Pacing {
 mod tests {
     use super::*;
 
+    impl Pacing {
+        fn parallel_measured(&self, now: Instant) -> bool {
+            self.parallel(now, PacingLimits::MEASURED)
+        }
+    }
+
+    #[test]
+    fn other_limits_move_both_thresholds() {
+        let t0 = Instant::now();
+        let mut pacing = Pacing::default();
+        pacing.record(t0, t0 + Duration::from_micros(100), 2);
+        let later = t0 + Duration::from_millis(1);
+        // 200 µs of work, 0.9 ms idle: serial under the measured limits...
+        assert!(!pacing.parallel_measured(later));
+        // ...parallel when less work counts as big, or a longer gap as warm.
+        let cold = PacingLimits {
+            cold_work: Duration::from_micros(150),
+            ..PacingLimits::MEASURED
+        };
+        assert!(pacing.parallel(later, cold));
+        let warm = PacingLimits {
+            warm_gap: Duration::from_millis(2),
+            ..PacingLimits::MEASURED
+        };
+        assert!(pacing.parallel(later, warm));
+        assert_eq!(Parallelism::Paced.limits(), Some(PacingLimits::MEASURED));
+        assert_eq!(Parallelism::PacedWith(cold).limits(), Some(cold));
+        assert_eq!(Parallelism::Always.limits(), None);
+    }
+
     #[test]
     fn first_frame_is_parallel() {
-        assert!(Pacing::default().parallel(Instant::now()));
+        assert!(Pacing::default().parallel(Instant::now(), PacingLimits::MEASURED));
     }
 
     #[test]
@@ -101,9 +171,9 @@ mod tests {
         let mut pacing = Pacing::default();
         // A small serial frame, then a call right after it: wake the workers for what follows.
         pacing.record(t0, t0 + Duration::from_micros(30), 1);
-        assert!(pacing.parallel(t0 + Duration::from_micros(35)));
+        assert!(pacing.parallel_measured(t0 + Duration::from_micros(35)));
         pacing.record(t0, t0 + Duration::from_micros(30), 2);
-        assert!(pacing.parallel(t0 + Duration::from_micros(30) + WARM_GAP / 2));
+        assert!(pacing.parallel_measured(t0 + Duration::from_micros(30) + WARM_GAP / 2));
     }
 
     #[test]
@@ -113,12 +183,12 @@ mod tests {
         // 40 µs on two threads is 80 µs of work at most: not worth a late worker.
         pacing.record(t0, t0 + Duration::from_micros(40), 2);
         let later = t0 + Duration::from_millis(16);
-        assert!(!pacing.parallel(later));
+        assert!(!pacing.parallel_measured(later));
         pacing.record(t0, t0 + Duration::from_micros(200), 1);
-        assert!(!pacing.parallel(later));
+        assert!(!pacing.parallel_measured(later));
         // Just past the gap counts as idle.
         let end = t0 + Duration::from_micros(200);
-        assert!(!pacing.parallel(end + WARM_GAP));
+        assert!(!pacing.parallel_measured(end + WARM_GAP));
     }
 
     #[test]
@@ -126,9 +196,9 @@ mod tests {
         let t0 = Instant::now();
         let mut pacing = Pacing::default();
         pacing.record(t0, t0 + Duration::from_micros(300), 1);
-        assert!(pacing.parallel(t0 + Duration::from_millis(16)));
+        assert!(pacing.parallel_measured(t0 + Duration::from_millis(16)));
         // 130 µs on two threads: up to 260 µs of work.
         pacing.record(t0, t0 + Duration::from_micros(130), 2);
-        assert!(pacing.parallel(t0 + Duration::from_millis(16)));
+        assert!(pacing.parallel_measured(t0 + Duration::from_millis(16)));
     }
 }
