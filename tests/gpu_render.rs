@@ -1,5 +1,5 @@
 //! The renderer on the default scene: the clustered image equals the brute-force image to within
-//! 1/255 per channel, tiled too; the heat map counts what the lists say.
+//! 1/255 per channel, tiled too; every heat-map pixel is the colour of its cluster's list length.
 
 use myriad::assignment::Method;
 use myriad::gpu::GpuContext;
@@ -22,6 +22,45 @@ fn dump(name: &str, rgba: &[u8], w: u32, h: u32) {
         let path = std::path::Path::new(&dir).join(name);
         myriad::gpu::save_png(&path, rgba, w, h).unwrap();
     }
+}
+
+/// Every pixel of the heat map is the ramp colour of its cluster's list length (the CPU's cluster
+/// of the read-back depth) over the longest list; background pixels are the ramp's 0.
+fn check_heat_map(viewer: &Viewer, scene: &RenderScene, heat: &[u8]) {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let depth = viewer
+        .renderer
+        .read_depth(&viewer.ctx)
+        .unwrap()
+        .expect("a frame was rendered");
+    let counts = &viewer.lists().counts;
+    let max = counts.iter().copied().max().unwrap().max(1);
+    let (mut worst, mut hot) = (0u8, 0usize);
+    for py in 0..h {
+        for px in 0..w {
+            let at = (py * w + px) as usize;
+            let d = depth[at];
+            let count = if d >= 1.0 {
+                0
+            } else {
+                let view_depth = scene.camera.view_depth_from_ndc_depth(d);
+                counts[scene.grid.cluster_of_pixel(px, py, view_depth, w, h) as usize]
+            };
+            hot += usize::from(count * 2 > max);
+            let want = myriad::gpu::legend::heat_color(count as f32 / max as f32);
+            for c in 0..3 {
+                let diff = heat[4 * at + c].abs_diff(want[c]);
+                assert!(
+                    diff <= 2,
+                    "pixel ({px}, {py}): heat {:?}, want {want:?} for {count} of {max} lights",
+                    &heat[4 * at..4 * at + 3]
+                );
+                worst = worst.max(diff);
+            }
+        }
+    }
+    eprintln!("heat map: worst channel difference {worst}, {hot} pixels over half the maximum");
+    assert!(hot > 0, "no pixel shows the longer lists");
 }
 
 #[test]
@@ -50,7 +89,15 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
     viewer
         .frame(&scene, Shading::Clustered, Method::Refined, true)
         .unwrap();
-    dump("heat.png", &viewer.image().unwrap(), w, h);
+    let heat = viewer.image().unwrap();
+    dump("heat.png", &heat, w, h);
+    check_heat_map(&viewer, &scene, &heat);
+    // The scene is lit: equal images must not be equally black.
+    let lit = images[0]
+        .chunks(4)
+        .filter(|p| p[..3].iter().any(|&c| c > 40))
+        .count();
+    assert!(lit > (w * h / 4) as usize, "only {lit} lit pixels");
     let (worst, differing) = max_channel_difference(&images[0], &images[2]);
     eprintln!(
         "clustered vs brute force at {w}x{h}: max channel difference {worst}, {differing} channels differ"

@@ -1,4 +1,4 @@
-//! `myriad bench`: the time-against-error table, and the main job (no arguments).
+//! `myriad bench`: the time-against-error table, with the thread link measured around it.
 
 use super::assign::parse_method;
 use super::source::{SceneSource, thread_pool};
@@ -116,7 +116,7 @@ fn bench(
         let methods = methods
             .iter()
             .map(|&m| {
-                // The oracle-backed and the paper's method are slow on big scenes: fewer runs.
+                // The oracle-backed method is slow on big scenes: fewer runs.
                 let runs = if matches!(m, Method::Exact) {
                     timing.runs.min(3)
                 } else {

@@ -37,7 +37,7 @@
 //!    clusters with the same cull and plane-search phases as the fast methods (only more
 //!    padded), so a bug there could hide from a comparison with it; the sampled check shares no
 //!    code with the assignment but the oracle. It is not cheaper: on the atrium with 1M lights
-//!    the sampled check of 2000 of 4608 clusters took 2–2.5× as long as the full one
+//!    the sampled check of 2000 of 4608 clusters took about 2.6× as long as the full one
 //!    (`--exact-up-to 2000000`; 4.4 s against 1.7 s on the 2-core machine), because the
 //!    `exact` method tests only each light's candidate clusters while a sampled cluster scans
 //!    every light in its depth window.

@@ -19,11 +19,12 @@
 
 use crate::search::FramePlanes;
 
-/// Relative padding of light radii: a few hundred f32 ulps of the light's distance and size.
+/// Relative padding of light radii: 4e-6 of the light's view-space extent, about 34–67 f32 ulps of
+/// it (a ulp is 2⁻²³–2⁻²⁴ of a value).
 pub(crate) const PAD: f32 = 4.0e-6;
 
 /// The light's radius grown so that f32 rounding can never shrink its footprint below the exact
-/// f64 one: `r + PAD·(|c| + r)`.
+/// f64 one: `r + PAD·(|cx| + |cy| + |dc| + r)` (the sum bounds the length `|c|` from above).
 #[inline]
 pub(crate) fn pad_radius(cx: f32, cy: f32, dc: f32, r: f32) -> f32 {
     let extent = cx.abs() + cy.abs() + dc.abs() + r;
@@ -298,6 +299,53 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// What the phases rely on: with the radius padded as every light's is, the f32 slopes
+    /// contain the exact (f64) tangent slopes of the unpadded circle — no tolerance — from far
+    /// away down to the eye inside the circle (then the bound must be dropped: ±∞), and when a
+    /// tangent turns backwards (its slope must then be unbounded too).
+    #[test]
+    fn padded_tangent_slopes_contain_the_exact_ones() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let (mut bounded, mut dropped) = (0, 0);
+        for _ in 0..200_000 {
+            let r = 10f32.powf(rng.random_range(-4.0..4.0));
+            // Distance from the eye: 0.3–1e4 radii, plenty of them close to 1.1 r.
+            let l = r * 10f32.powf(rng.random_range(-0.5..4.0));
+            let a = rng.random_range(-std::f32::consts::PI..std::f32::consts::PI);
+            let (c, dc) = (l * a.sin(), l * a.cos());
+            let padded = pad_radius(c, 0.0, dc, r);
+            let (lo, hi) = tangent_slopes(c, dc, padded);
+            let (c64, dc64, r64) = (c as f64, dc as f64, r as f64);
+            let l64 = (c64 * c64 + dc64 * dc64).sqrt();
+            if l64 <= r64 {
+                assert_eq!((lo, hi), (f32::NEG_INFINITY, f32::INFINITY), "eye inside");
+                dropped += 1;
+                continue;
+            }
+            let h = ((l64 - r64) * (l64 + r64)).sqrt();
+            let (den_max, den_min) = (dc64 * h - c64 * r64, dc64 * h + c64 * r64);
+            let context = format!("c {c}, dc {dc}, r {r} (padded {padded}): [{lo}, {hi}]");
+            if den_max > 0.0 {
+                let exact = (c64 * h + dc64 * r64) / den_max;
+                assert!(hi as f64 >= exact, "max {exact}: {context}");
+                bounded += hi.is_finite() as usize;
+            } else {
+                assert_eq!(hi, f32::INFINITY, "backward max tangent: {context}");
+            }
+            if den_min > 0.0 {
+                let exact = (c64 * h - dc64 * r64) / den_min;
+                assert!(lo as f64 <= exact, "min {exact}: {context}");
+            } else {
+                assert_eq!(lo, f32::NEG_INFINITY, "backward min tangent: {context}");
+            }
+        }
+        assert!(
+            bounded > 50_000 && dropped > 1000,
+            "{bounded} bounded, {dropped} dropped"
+        );
     }
 
     /// `refine_slice` keeps exactly the clusters of its definition, tested cluster by cluster:

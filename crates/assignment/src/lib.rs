@@ -15,9 +15,10 @@
 //! | `refined` | binary's box tightened per slice and row | fast, few false positives |
 //!
 //! ## A frame, step by step (`binary`, `refined`, `exact`)
-//! 1. **Plan**: split the lights into contiguous ranges, one task each (serial below
-//!    [`SERIAL_LIGHTS`]).
-//! 2. **Axis phases, in parallel** (`jobs.rs`, `geometry.rs`): per block of lights, SoA passes —
+//! 1. **Plan**: split the lights into contiguous ranges, one task each (one task below
+//!    [`SERIAL_LIGHTS`], except for `exact`, which is split at any size).
+//! 2. **Axis phases, in parallel** (`jobs.rs`, `phases.rs`, `search.rs`; `geometry.rs` is their
+//!    per-light twin): per block of lights, SoA passes —
 //!    camera-relative view transform and validity, z phase, x phase, y phase (searches of the
 //!    plane sets — the paper's proposed *binary frustum reduction*, threaded — started at the
 //!    closed-form guess so they finish in one or two probes, `search.rs`) — then the light's
@@ -30,7 +31,8 @@
 //!    output is identical for any number of threads.
 //!
 //! ## Correctness
-//! f32 paths pad every radius by a few hundred ulps of the light's distance, which covers the
+//! f32 paths pad every radius by `4e-6·(|x| + |y| + |depth| + r)` (tens of f32 ulps of the
+//! light's distance and size), which covers the
 //! rounding of the view transform and of every comparison; the tests prove each method is a
 //! superset of the f64 oracle ([`myriad_cluster_math::oracle`]) on random and hostile scenes.
 //! Invalid lights (non-finite position or radius, radius ≤ 0) are skipped and counted in

@@ -1,6 +1,6 @@
 //! Every method is a superset of the exact f64 oracle (brute force over all clusters), and `exact`
 //! equals it, on proptest-generated hostile scenes and on hand-made regression cases — as one
-//! serial task (up to 60 lights) and as a frame split into tasks on a pool, bucketed by depth
+//! serial task (60 lights) and as a frame split into tasks on a pool, bucketed by depth
 //! parts (above `SERIAL_LIGHTS`).
 
 mod common;

@@ -13,8 +13,8 @@
 //!   optionally spot cones.
 //!
 //! ## Precision limits (what remains, and where the tests sit)
-//! The f32 paths are camera-relative and pad every radius by `4e-6 · (|c| + r)` (c: the light's
-//! view-space centre), so their rounding can never shrink a footprint. What the suite found:
+//! The f32 paths are camera-relative and pad every radius by `4e-6 · (|cx| + |cy| + |depth| + r)` (the
+//! light's view-space centre; the sum bounds `|c|` from above), so their rounding can never shrink a footprint. What the suite found:
 //! * **World coordinates.** Inputs are f32, so a world position near 1e6 is only known to
 //!   ±0.03 (half an ulp of 2^19..2^20 is 2^-5). Both the oracle and the fast paths see the *same*
 //!   rounded f32 position and the subtraction `p − eye` is exact for nearby points (Sterbenz), so

@@ -7,8 +7,8 @@
 //! validation and resource fetching (buffers, image decoding) and reads everything else from the
 //! validated JSON itself, checking each index, byte range and float. **No input makes it panic**;
 //! every failure is an [`Error::Gltf`] naming the file, where in the document and what is wrong
-//! (`Sponza.gltf: meshes[3] "Roof" primitives[0]: index 912 is out of range (POSITION has 900
-//! vertices)`). The test `tests/gltf_robustness.rs` runs it over every file of Debian's
+//! (`Sponza.gltf: meshes[3] "Roof" primitives[0]: index 912 (element 40 of the indices) is out of
+//! range (POSITION has 900 vertices)`). The test `tests/gltf_robustness.rs` runs it over every file of Debian's
 //! `assimp-testmodels`.
 //!
 //! ## Loading, step by step

@@ -8,8 +8,8 @@
 //! | `sphere` | 1920×1080, 45° fov, near 0.1, far 100, at the origin | 16×9×24 log | on a sphere of radius 50 around the camera, radius 0.3 (≈8% visible) |
 //!
 //! Decisions the issue left open: the paper does not give its camera, so `paper` looks down the
-//! courtyard's long axis from 1.5 m inside one end, slightly upwards, with a far plane just beyond
-//! the box's diagonal (36 m). `sphere` uses a bevy-like 16×9×24 grid, the configuration of the
+//! courtyard's long axis from 1.5 m inside one end, slightly upwards, with the far plane at 50 m,
+//! beyond the box's diagonal (about 36 m). `sphere` uses a bevy-like 16×9×24 grid, the configuration of the
 //! engine it is compared with. Colours are random hues, intensity 1.
 //!
 //! Each preset is a [`LightField`] ([`Preset::field`]) plus a camera and grid, so the presets and
