@@ -8,7 +8,7 @@ use myriad::render::{GpuStage, RenderScene, run_frames};
 fn frames(ctx: &GpuContext, scene: &RenderScene, pipelined: bool, count: usize) -> Vec<Vec<u8>> {
     let mut renderer = Renderer::new(ctx, HEADLESS_FORMAT);
     let gpu_scene = renderer.upload_scene(ctx, &scene.geometry).unwrap();
-    let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height);
+    let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height).unwrap();
     let mut stage = GpuStage {
         ctx,
         renderer: &mut renderer,

@@ -146,3 +146,20 @@ fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
         );
     }
 }
+
+#[test]
+fn targets_beyond_the_device_limit_are_errors_not_panics() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let max = ctx.device.limits().max_texture_dimension_2d;
+    for (w, h) in [(max + 1, 8), (8, max + 1), (0, 8)] {
+        let e = myriad::gpu::HeadlessTarget::new(&ctx.device, w, h).unwrap_err();
+        assert!(e.to_string().contains(&max.to_string()), "{e}");
+    }
+    // A scene whose camera is too big for the device fails the same way, before any GPU work.
+    let mut scene = RenderScene::default_scene(10, 64, 32).unwrap();
+    scene.camera.width = max + 1;
+    let e = Viewer::new(ctx, &scene).err().expect("an error");
+    assert!(e.to_string().contains("pixels a side"), "{e}");
+}

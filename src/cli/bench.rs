@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Timed runs per method (the median is reported).
-    #[arg(long, default_value_t = 21)]
+    #[arg(long, value_parser = super::at_least_one, default_value_t = 21)]
     runs: usize,
     /// Wait this many microseconds before each timed call, as an engine's frames are apart (the
     /// pool's workers fall asleep in between; 0 = calls back to back). The thread sleeps, unless

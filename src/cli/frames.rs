@@ -13,7 +13,7 @@ use std::process::ExitCode;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Lights (the atrium's own, then lights on its surfaces), orbiting the view's centre.
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, value_parser = super::light_count, default_value_t = 100_000)]
     lights: usize,
     /// Frames per loop.
     #[arg(long, default_value_t = 30)]
@@ -84,7 +84,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
     let gpu_scene = renderer.upload_scene(&ctx, &scene.geometry)?;
-    let target = HeadlessTarget::new(&ctx.device, width, height);
+    let target = HeadlessTarget::new(&ctx.device, width, height)?;
     let mut results = Vec::new();
     for pipelined in [false, true] {
         let mut stage = GpuStage {

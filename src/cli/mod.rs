@@ -83,3 +83,44 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         None => render::main_job(),
     }
 }
+
+/// Parses a count of timed runs: at least 1 (a median of nothing is not a timing).
+fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// Parses a light count: light indices are u32, so at most `u32::MAX` lights.
+fn light_count(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|e: std::num::ParseIntError| e.to_string())?;
+    if n > u32::MAX as usize {
+        return Err(format!(
+            "light indices are u32, so at most {} lights",
+            u32::MAX
+        ));
+    }
+    Ok(n)
+}
+
+#[cfg(test)]
+mod count_tests {
+    #[test]
+    fn counts_are_range_checked() {
+        assert_eq!(super::at_least_one("3"), Ok(3));
+        assert!(super::at_least_one("0").unwrap_err().contains("at least 1"));
+        assert!(super::at_least_one("-1").is_err());
+        assert_eq!(super::light_count("0"), Ok(0));
+        assert_eq!(super::light_count("4294967295"), Ok(u32::MAX as usize));
+        assert!(
+            super::light_count("4294967296")
+                .unwrap_err()
+                .contains("u32")
+        );
+        assert!(super::light_count("18446744073709551615").is_err());
+    }
+}

@@ -66,7 +66,7 @@ pub struct Args {
     size: String,
     /// Timed frames per configuration (medians are reported; after one untimed warm-up frame,
     /// a configuration whose frames take over 10 s gets one timed frame).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, value_parser = super::at_least_one, default_value_t = 3)]
     runs: usize,
     /// Assignment method: exact, linear (the paper's Algorithm 1), binary or refined.
     #[arg(long, default_value = "refined")]

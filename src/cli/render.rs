@@ -33,7 +33,7 @@ pub struct Args {
     camera: Option<String>,
     /// Lights: the model's own, then lights on its surfaces up to this many (with --preset: the
     /// preset's lights) [default: 1000].
-    #[arg(long)]
+    #[arg(long, value_parser = super::light_count)]
     lights: Option<usize>,
     /// Seed of the generated lights [default: 1].
     #[arg(long)]
@@ -55,7 +55,7 @@ pub struct Args {
     out: PathBuf,
     /// Timed frames per shading strategy (the median is reported; brute force runs fewer
     /// when frames are slow).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, value_parser = super::at_least_one, default_value_t = 5)]
     runs: usize,
 }
 

@@ -71,7 +71,7 @@ pub struct Args {
     #[arg(long, conflicts_with = "preset")]
     spread: Option<f32>,
     /// Number of lights.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, value_parser = super::light_count, default_value_t = 1000)]
     lights: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]

@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long)]
     gltf: Vec<PathBuf>,
     /// Lights per scene.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, value_parser = super::light_count, default_value_t = 1000)]
     lights: usize,
     /// Image size WxH.
     #[arg(long, default_value = "1536x768")]
@@ -31,7 +31,7 @@ pub struct Args {
     #[arg(long, default_value = "refined")]
     method: String,
     /// Timed frames per configuration (medians).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, value_parser = super::at_least_one, default_value_t = 3)]
     runs: usize,
     /// Print JSON instead of tables.
     #[arg(long)]

@@ -14,7 +14,7 @@ pub struct SceneSource {
     #[arg(long)]
     pub preset: Option<String>,
     /// Lights in the generated scene [default: 1000].
-    #[arg(long, requires = "preset")]
+    #[arg(long, value_parser = super::light_count, requires = "preset")]
     pub lights: Option<usize>,
     /// Seed of the generated scene [default: 1].
     #[arg(long, requires = "preset")]

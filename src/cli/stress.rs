@@ -76,7 +76,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Lights: the atrium's own, then lights on its surfaces up to this many.
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, value_parser = super::light_count, default_value_t = 100_000)]
     lights: usize,
     /// Render size WxH (the atrium's camera is built for it).
     #[arg(long, default_value = "320x180")]

@@ -119,7 +119,7 @@ impl Viewer {
     pub fn new(ctx: GpuContext, scene: &RenderScene) -> Result<Self> {
         let renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
         let gpu_scene = renderer.upload_scene(&ctx, &scene.geometry)?;
-        let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height);
+        let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height)?;
         Ok(Self {
             ctx,
             renderer,

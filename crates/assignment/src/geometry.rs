@@ -234,9 +234,9 @@ pub(crate) fn refine_slice(
         let room = (rk - dy) * (rk + dy);
         let cut_left = left.iter().take_while(|&&g| g > room).count() as u32;
         let cut_right = right.iter().rev().take_while(|&&g| g > room).count() as u32;
-        let (i0, i1) = (b.i0 + cut_left, b.i1 - cut_right);
+        // (A row cut from both sides to nothing is skipped before `i1` could wrap below 0.)
         if cut_left + cut_right < columns as u32 {
-            row(j, i0, i1);
+            row(j, b.i0 + cut_left, b.i1 - cut_right);
         }
     }
 }

@@ -17,7 +17,7 @@
 //! use myriad_gpu::{GpuContext, HeadlessTarget, Renderer, HEADLESS_FORMAT};
 //! let ctx = GpuContext::headless()?;
 //! let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
-//! let target = HeadlessTarget::new(&ctx.device, 640, 360);
+//! let target = HeadlessTarget::new(&ctx.device, 640, 360)?;
 //! // renderer.upload_scene(..), then renderer.render(&ctx, &scene, &frame, &target.view) per frame.
 //! # Ok::<(), myriad_gpu::GpuError>(())
 //! ```

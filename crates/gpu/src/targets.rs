@@ -1,5 +1,7 @@
 //! Render targets: the G-buffer the deferred pass reads, and a headless colour target.
 
+use crate::GpuError;
+
 /// G-buffer formats. Albedo is sRGB-encoded (8 bits are enough after encoding); the normal is
 /// octahedral in two 16-bit floats; roughness and metallic in 8-bit unorm; depth in f32 so the
 /// view depth reconstructed for the cluster lookup is as precise as the CPU's.
@@ -63,14 +65,31 @@ pub struct HeadlessTarget {
 }
 
 impl HeadlessTarget {
-    /// A `width × height` [`HEADLESS_FORMAT`] target.
-    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+    /// A `width × height` [`HEADLESS_FORMAT`] target. A size of 0 or beyond the device's
+    /// largest 2D texture is [`GpuError::InvalidInput`] (wgpu would panic on it).
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, GpuError> {
+        check_target_size(device, width, height)?;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let size = (width, height);
         let texture = texture_2d(device, "headless target", size, HEADLESS_FORMAT, usage);
         let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-        Self { texture, view }
+        Ok(Self { texture, view })
     }
+}
+
+/// Whether `device` can make `width × height` render targets.
+pub(crate) fn check_target_size(
+    device: &wgpu::Device,
+    width: u32,
+    height: u32,
+) -> Result<(), GpuError> {
+    let max = device.limits().max_texture_dimension_2d;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(GpuError::InvalidInput(format!(
+            "a {width}x{height} target: this device's 2D textures are 1 to {max} pixels a side"
+        )));
+    }
+    Ok(())
 }
 
 /// A single-sampled 2D texture without mips: every target here.

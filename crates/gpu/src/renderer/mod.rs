@@ -229,7 +229,7 @@ impl Renderer {
         camera: &Camera,
     ) -> Result<(), GpuError> {
         let (width, height) = (camera.width, camera.height);
-        self.ensure_gbuffer(&ctx.device, width, height);
+        self.ensure_gbuffer(&ctx.device, width, height)?;
         let grid = ClusterGrid::new(
             glam::UVec3::ONE,
             myriad_cluster_math::DepthSlicing::Linear,
@@ -271,12 +271,20 @@ impl Renderer {
         self.render_frame(ctx, scene, frame, target, false)
     }
 
-    fn ensure_gbuffer(&mut self, device: &wgpu::Device, width: u32, height: u32) {
+    /// A G-buffer of the camera's size (checked against the device's limits first).
+    fn ensure_gbuffer(
+        &mut self,
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+    ) -> Result<(), GpuError> {
         if self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
+            crate::targets::check_target_size(device, width, height)?;
             let gbuffer = GBuffer::new(device, width, height);
             self.deferred_inputs = Some(self.deferred_bind_group(device, &gbuffer));
             self.gbuffer = Some(gbuffer);
         }
+        Ok(())
     }
 
     fn render_frame(
@@ -420,7 +428,7 @@ impl Renderer {
                 "render_after_prepass needs a prepass of the same size first".into(),
             ));
         }
-        self.ensure_gbuffer(device, width, height);
+        self.ensure_gbuffer(device, width, height)?;
         self.timer.begin_frame();
         if draw_gbuffer {
             self.encode_gbuffer(&mut encoder, scene);
