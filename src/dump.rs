@@ -108,6 +108,52 @@ impl AssignmentDump {
         Ok(())
     }
 
+    /// Checks that the dump belongs to a scene with `grid` and `lights` lights: the same grid,
+    /// the same edges and planes (exactly: `myriad assign` writes them from the same grid, and
+    /// JSON round-trips f32), every index a light of the scene, and no light twice in a cluster
+    /// (a renderer would shade it twice). The first difference is the error.
+    pub fn check_against(&self, grid: &ClusterGrid, lights: usize) -> Result<()> {
+        let d = grid.dims;
+        ensure!(
+            self.grid == [d.x, d.y, d.z],
+            "grid {:?} does not match the scene's {}x{}x{}",
+            self.grid,
+            d.x,
+            d.y,
+            d.z
+        );
+        let reference = Self::new(grid, &LightLists::new(), &[]);
+        for (name, got, want) in [
+            ("x_edges", &self.x_edges, &reference.x_edges),
+            ("y_edges", &self.y_edges, &reference.y_edges),
+            ("z_planes", &self.z_planes, &reference.z_planes),
+        ] {
+            if let Some(i) = (0..want.len()).find(|&i| got[i].to_bits() != want[i].to_bits()) {
+                bail!(
+                    "{name}[{i}] is {}, but the scene's grid has {} (another camera or depth slicing?)",
+                    got[i],
+                    want[i]
+                );
+            }
+        }
+        if let Some(k) = self.indices.iter().position(|&l| l as usize >= lights) {
+            bail!(
+                "indices[{k}] = {}, but the scene has {lights} lights",
+                self.indices[k]
+            );
+        }
+        let mut seen = Vec::new();
+        for (c, (&o, &n)) in self.offsets.iter().zip(&self.counts).enumerate() {
+            seen.clear();
+            seen.extend_from_slice(&self.indices[o as usize..o as usize + n as usize]);
+            seen.sort_unstable();
+            if let Some(w) = seen.windows(2).find(|w| w[0] == w[1]) {
+                bail!("cluster {c} lists light {} more than once", w[0]);
+            }
+        }
+        Ok(())
+    }
+
     /// The lists of the dump (indices in scene-file space).
     pub fn lists(&self) -> LightLists {
         LightLists {

@@ -395,6 +395,46 @@ fn check_rejects_broken_dumps_naming_the_file() {
     let garbage = write(&dir, "garbage.json", "this is not JSON");
     assert_mentions(&check(&garbage), &[&garbage.display().to_string()]);
 
+    // Well-formed dumps that do not belong to the scene, or would shade a light twice.
+    let good: Value = serde_json::from_str(&text).unwrap();
+    let edited = |name: &str, edit: &dyn Fn(&mut Value)| {
+        let mut v = good.clone();
+        edit(&mut v);
+        write(&dir, name, &v.to_string())
+    };
+    let planes = edited("planes.json", &|v| {
+        let z = v["z_planes"][1].as_f64().unwrap();
+        v["z_planes"][1] = Value::from(z * 1.01);
+    });
+    assert_mentions(
+        &check(&planes),
+        &[
+            &planes.display().to_string(),
+            "z_planes[1]",
+            "does not match",
+        ],
+    );
+    let beyond = edited("beyond.json", &|v| v["indices"][0] = Value::from(999));
+    assert_mentions(
+        &check(&beyond),
+        &[&beyond.display().to_string(), "indices[0] = 999", "lights"],
+    );
+    let counts: Vec<u64> = serde_json::from_value(good["counts"].clone()).unwrap();
+    let offsets: Vec<u64> = serde_json::from_value(good["offsets"].clone()).unwrap();
+    let c = counts.iter().position(|&n| n >= 2).expect("a list of two");
+    let twice = edited("twice.json", &|v| {
+        let o = offsets[c] as usize;
+        v["indices"][o + 1] = v["indices"][o].clone();
+    });
+    assert_mentions(
+        &check(&twice),
+        &[
+            &twice.display().to_string(),
+            &format!("cluster {c}"),
+            "more than once",
+        ],
+    );
+
     // Well-formed JSON whose lists run past the end of `indices`.
     let mut value = read_json(&dump);
     value["counts"][0] = 1_000_000.into();

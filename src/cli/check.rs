@@ -1,7 +1,7 @@
 //! `myriad check --scene S --dump D [--json]`: a dump against the exact oracle.
 
 use super::source::SceneSource;
-use anyhow::{Result, ensure};
+use anyhow::{Context, Result};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::dump::AssignmentDump;
 use myriad::evaluate::compare;
@@ -23,16 +23,10 @@ pub struct Args {
 pub fn run(args: Args) -> Result<ExitCode> {
     let (scene, name) = args.source.load()?;
     let dump = AssignmentDump::load(&args.dump)?;
-    let d = scene.grid.dims;
-    ensure!(
-        dump.grid == [d.x, d.y, d.z],
-        "{}: grid {:?} does not match the scene's {}x{}x{}",
-        args.dump.display(),
-        dump.grid,
-        d.x,
-        d.y,
-        d.z
-    );
+    // Indices refer to the scene file's lights, skipped invalid ones included.
+    let file_lights = scene.lights.len() + scene.skipped.len();
+    dump.check_against(&scene.grid, file_lights)
+        .with_context(|| format!("{} does not match {name}", args.dump.display()))?;
     let mut exact = LightLists::new();
     Assigner::new().assign(
         Method::Exact,

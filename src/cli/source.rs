@@ -80,5 +80,9 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .context("cannot start the worker threads")
+        // rayon's error prints its io::Error and also returns it as its source: one copy only.
+        .map_err(|e| match threads {
+            0 => anyhow::anyhow!("cannot start the worker threads: {e}"),
+            n => anyhow::anyhow!("cannot start {n} worker threads: {e}"),
+        })
 }
