@@ -59,10 +59,11 @@ impl AssignmentDump {
         Ok(dump)
     }
 
-    /// Writes the dump as JSON.
+    /// Writes the dump as JSON, replacing `path` only once complete.
     pub fn save(&self, path: &Path) -> Result<()> {
         let text = serde_json::to_string(self)?;
-        std::fs::write(path, text).with_context(|| format!("cannot write dump {}", path.display()))
+        myriad_scene::replace_file(path, text.as_bytes())
+            .with_context(|| format!("cannot write dump {}", path.display()))
     }
 
     /// Structural checks: sizes agree and every list lies inside `indices`.

@@ -272,7 +272,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         speedup_vs_brute_force: speedup,
     };
     let json_path = args.out.join("stats.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&stats)?)
+    myriad::scene::replace_file(&json_path, serde_json::to_string_pretty(&stats)?.as_bytes())
         .with_context(|| format!("cannot write {}", json_path.display()))?;
     print_table(&stats);
     println!(

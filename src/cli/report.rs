@@ -120,7 +120,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         args.out.join("report.svg"),
     ];
     let write = |path: &PathBuf, text: &str| {
-        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+        myriad::scene::replace_file(path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))
     };
     write(&paths[0], &markdown)?;
     write(&paths[1], &serde_json::to_string_pretty(&report)?)?;

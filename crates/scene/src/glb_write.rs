@@ -333,11 +333,12 @@ impl Model {
         })
     }
 
-    /// Writes [`Model::to_glb`] to `path`. Errors name the file.
+    /// Writes [`Model::to_glb`] to `path`, replacing it only once complete
+    /// ([`crate::replace_file`]). Errors name the file.
     pub fn save_glb(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let bytes = self.to_glb()?;
-        std::fs::write(path, bytes).map_err(|source| Error::GltfWrite {
+        crate::replace_file(path, &bytes).map_err(|source| Error::GltfWrite {
             path: path.to_path_buf(),
             source,
         })

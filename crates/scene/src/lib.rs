@@ -119,6 +119,7 @@ mod lights;
 mod model;
 mod presets;
 mod read;
+mod replace_file;
 mod scene_file;
 pub mod systems;
 mod tangents;
@@ -137,6 +138,7 @@ pub use model::{
     PunctualKind, TangentSource, TextureRef,
 };
 pub use presets::Preset;
+pub use replace_file::replace_file;
 pub use scene_file::{LightPolicy, Scene, SkippedLight};
 pub use validate::{ValidationReport, validate_file, validate_json_slice, validate_json_str};
 

@@ -180,11 +180,12 @@ impl Scene {
         self.to_json_named("<scene>")
     }
 
-    /// Writes [`Scene::to_json_string`] to `path`. Errors name the file.
+    /// Writes [`Scene::to_json_string`] to `path`, replacing it only once complete
+    /// ([`crate::replace_file`]). Errors name the file.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let text = self.to_json_named(&path.display().to_string())?;
-        std::fs::write(path, text).map_err(|source| Error::Write {
+        crate::replace_file(path, text.as_bytes()).map_err(|source| Error::Write {
             path: path.to_path_buf(),
             source,
         })
