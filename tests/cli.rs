@@ -1159,3 +1159,33 @@ fn stress_rejects_bad_options_clearly() {
     let out = myriad_fails(&["stress", "--lights", "many"]);
     assert_mentions(&out, &["--lights", "many"]);
 }
+
+#[test]
+fn skipped_invalid_lights_are_counted_in_bench_output() {
+    let dir = work_dir("skipped_counted");
+    let scene = write(
+        &dir,
+        "one_bad.json",
+        &scene_with_lights(
+            r#"{"position": [0, 2, 0], "radius": 2}, {"position": [1, 2, 0], "radius": -1},
+               {"position": [0, 1, -3], "radius": 1}"#,
+        ),
+    );
+    let out = myriad_ok(&[
+        "bench".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--methods".as_ref(),
+        "binary".as_ref(),
+        "--runs".as_ref(),
+        "1".as_ref(),
+        "--json".as_ref(),
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(report["lights"].as_u64(), Some(2), "{report}");
+    assert_eq!(report["lights_skipped"].as_u64(), Some(1), "{report}");
+    assert_mentions(
+        &all_output(&out),
+        &["1 invalid light(s) skipped", "lights[1].radius"],
+    );
+}

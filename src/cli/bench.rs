@@ -44,7 +44,10 @@ pub struct Args {
 #[derive(Serialize)]
 struct Report {
     scene: String,
+    /// The lights timed: the file's valid ones.
     lights: usize,
+    /// Invalid lights in the scene file, skipped when it was loaded (and listed on stderr).
+    lights_skipped: usize,
     grid: [u32; 3],
     threads: usize,
     /// The pool's thread-to-thread link just before and just after the timings (absent on one
@@ -133,6 +136,7 @@ fn bench(
         Ok(Report {
             scene: name,
             lights: scene.lights.len(),
+            lights_skipped: scene.skipped.len(),
             grid: [d.x, d.y, d.z],
             threads: rayon::current_num_threads(),
             core_link,
@@ -143,8 +147,12 @@ fn bench(
 
 fn print_table(report: &Report) {
     let [x, y, z] = report.grid;
+    let skipped = match report.lights_skipped {
+        0 => String::new(),
+        n => format!(" (and {n} invalid, skipped)"),
+    };
     println!(
-        "{} — {} lights, grid {x}x{y}x{z}, {} threads",
+        "{} — {} lights{skipped}, grid {x}x{y}x{z}, {} threads",
         report.scene, report.lights, report.threads
     );
     if let Some(LinkBeforeAfter { before, after }) = &report.core_link {

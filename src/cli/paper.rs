@@ -458,8 +458,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let json_path = args.out.join("paper.json");
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    myriad::scene::replace_file(&json_path, serde_json::to_string_pretty(&report)?.as_bytes())
-        .with_context(|| format!("cannot write {}", json_path.display()))?;
+    myriad::scene::replace_file(
+        &json_path,
+        serde_json::to_string_pretty(&report)?.as_bytes(),
+    )
+    .with_context(|| format!("cannot write {}", json_path.display()))?;
     print_report(&report, source.note.as_deref());
     println!("wrote {} and {}", heat_path.display(), json_path.display());
     Ok(ExitCode::SUCCESS)

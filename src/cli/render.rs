@@ -126,6 +126,8 @@ struct Stats {
     grid: [u32; 3],
     method: String,
     lights: usize,
+    /// Invalid lights in the `--scene` file, skipped when it was loaded (listed on stderr).
+    lights_skipped_in_file: usize,
     lights_rejected: u32,
     lights_culled: u32,
     strategies: Vec<StrategyResult>,
@@ -218,7 +220,7 @@ fn measure(
 
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
-    let scene = load_scene(&args)?;
+    let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
     let dims = scene.grid.dims;
 
@@ -266,6 +268,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         grid: dims.to_array(),
         method: method.name().to_string(),
         lights: scene.lights.len(),
+        lights_skipped_in_file,
         lights_rejected: assign_stats.rejected,
         lights_culled: assign_stats.culled,
         strategies,
@@ -286,8 +289,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
 /// The scene to render: geometry from `--gltf` (or the atrium), camera/grid/lights from
 /// `--scene`, `--preset` or the model (its camera, its lights plus surface lights), then the
-/// size, grid and slicing options.
-fn load_scene(args: &Args) -> Result<RenderScene> {
+/// size, grid and slicing options. Also returns how many invalid lights the scene file had
+/// (skipped).
+fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     let (model, model_name) = match &args.gltf {
         Some(path) => (
             Model::load(path, &LoadOptions::default())?,
@@ -299,10 +303,12 @@ fn load_scene(args: &Args) -> Result<RenderScene> {
         ),
     };
     let size = args.size.as_deref().map(parse_size).transpose()?;
+    let mut skipped = 0;
     let mut scene = match (&args.scene, &args.preset) {
         (Some(path), _) => {
             let file = myriad::scene::Scene::load(path, myriad::scene::LightPolicy::SkipInvalid)?;
             super::source::report_skipped(&file);
+            skipped = file.skipped.len();
             let name = format!("{} in {model_name}", path.display());
             RenderScene::from_scene(&model, &name, file)
         }
@@ -342,7 +348,7 @@ fn load_scene(args: &Args) -> Result<RenderScene> {
         };
         scene = scene.with_grid(dims, slicing);
     }
-    Ok(scene)
+    Ok((scene, skipped))
 }
 
 fn write_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
@@ -401,8 +407,14 @@ fn print_table(s: &Stats) {
         format!("{:.1}%", r.pixels.skipped_fraction * 100.0)
     });
     println!(
-        "lights: {} ({} rejected as invalid, {} outside the view frustum, culled before assignment)",
-        s.lights, s.lights_rejected, s.lights_culled
+        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, culled before assignment)",
+        s.lights,
+        match s.lights_skipped_in_file {
+            0 => String::new(),
+            n => format!(" and {n} invalid in the scene file, skipped"),
+        },
+        s.lights_rejected,
+        s.lights_culled
     );
     if let Some(x) = s.speedup_vs_brute_force {
         println!(
