@@ -162,7 +162,16 @@ mod tests {
             link.round_trip_ns > 1.0 && link.round_trip_ns < PROBE_LIMIT.as_nanos() as f64,
             "{link:?}"
         );
-        // Moving 64 KiB takes longer than bouncing one line.
-        assert!(link.handoff_us * 1e3 > link.round_trip_ns, "{link:?}");
+        assert!(
+            link.handoff_us > 0.0 && link.handoff_us < PROBE_LIMIT.as_micros() as f64,
+            "{link:?}"
+        );
+        // While the two threads run at the same time, moving 64 KiB takes longer than bouncing
+        // one line. (When they do not — a loaded machine, a debug build beside other jobs — both
+        // probes time the scheduler's slices instead: a 9.5 ms round trip beside an 8.8 ms
+        // hand-off was seen; there the order means nothing.)
+        if link.round_trip_ns < 100_000.0 {
+            assert!(link.handoff_us * 1e3 > link.round_trip_ns, "{link:?}");
+        }
     }
 }
