@@ -323,11 +323,18 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         }
         (None, None) => {
             let (w, h) = size.unwrap_or((1536, 768));
+            let lights = args.lights.unwrap_or(1000);
+            if lights < model.lights.len() {
+                eprintln!(
+                    "note: --lights {lights} keeps the first {lights} of the model's {} own lights",
+                    model.lights.len()
+                );
+            }
             RenderScene::from_model(
                 &model,
                 &model_name,
                 args.camera.as_deref(),
-                args.lights.unwrap_or(1000),
+                lights,
                 args.seed.unwrap_or(1),
                 w,
                 h,
@@ -339,7 +346,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     }
     if args.grid.is_some() || args.depth.is_some() {
         let dims: UVec3 = match &args.grid {
-            Some(g) => parse_grid(g)?,
+            Some(g) => parse_grid("--grid", g)?,
             None => scene.grid.dims,
         };
         let slicing = match &args.depth {

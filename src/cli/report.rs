@@ -15,7 +15,7 @@
 
 use super::scene::parse_grid;
 use super::source::thread_pool;
-use anyhow::{Context, Result, anyhow, ensure};
+use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::UVec3;
 use myriad::evaluate::{MethodResult, Timing, measure};
@@ -99,10 +99,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let grids = args
         .grids
         .iter()
-        .map(|g| {
-            parse_grid(g.trim())
-                .map_err(|_| anyhow!("--grids: {g:?} is not XxYxZ with each dimension >= 1"))
-        })
+        .map(|g| parse_grid("--grids", g.trim()))
         .collect::<Result<Vec<UVec3>>>()?;
     ensure!(!grids.is_empty(), "--grids: give at least one grid");
     std::fs::create_dir_all(&args.out)

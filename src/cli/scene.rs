@@ -3,7 +3,7 @@
 //! (`--gltf M --field F --lights N --seed K --out S`).
 
 use super::source::parse_preset;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, bail, ensure};
 use myriad::cluster_math::glam::{UVec3, Vec3};
 use myriad::scene::{
     Aabb, Camera, ClusterGrid, DepthSlicing, LightField, LoadOptions, Model, Placement, RadiusRule,
@@ -98,19 +98,20 @@ fn parse_range(text: &str, what: &str) -> Result<[f32; 2]> {
 }
 
 /// `"24x12x16"` as grid dimensions.
-pub(super) fn parse_grid(text: &str) -> Result<UVec3> {
+pub(super) fn parse_grid(flag: &str, text: &str) -> Result<UVec3> {
     let parts: Vec<&str> = text.split('x').collect();
     let dims: Option<Vec<u32>> = parts.iter().map(|p| p.parse().ok()).collect();
     match dims.as_deref() {
-        Some(&[x, y, z])
-            if x >= 1
-                && y >= 1
-                && z >= 1
-                && (x as u64 * y as u64 * z as u64) <= u32::MAX as u64 =>
-        {
+        Some(&[x, y, z]) if x >= 1 && y >= 1 && z >= 1 => {
+            let clusters = x as u64 * y as u64 * z as u64;
+            ensure!(
+                clusters <= u32::MAX as u64,
+                "{flag} {text:?}: {clusters} clusters; cluster ids are u32, so at most {}",
+                u32::MAX
+            );
             Ok(UVec3::new(x, y, z))
         }
-        _ => bail!("--grid {text:?}: expected XxYxZ with each dimension >= 1, e.g. 24x12x16"),
+        _ => bail!("{flag} {text:?}: expected XxYxZ with each dimension >= 1, e.g. 24x12x16"),
     }
 }
 
@@ -180,7 +181,7 @@ fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
         other => bail!("unknown depth slicing {other:?}; expected log or linear"),
     };
     let grid = ClusterGrid::new(
-        parse_grid(args.grid.as_deref().unwrap_or("24x12x16"))?,
+        parse_grid("--grid", args.grid.as_deref().unwrap_or("24x12x16"))?,
         slicing,
         camera.near,
         camera.far,
@@ -268,10 +269,15 @@ mod tests {
         assert_eq!(parse_range("0.5..3", "r").unwrap(), [0.5, 3.0]);
         assert_eq!(parse_range("2", "r").unwrap(), [2.0, 2.0]);
         assert!(parse_range("a..3", "r").is_err());
-        assert_eq!(parse_grid("24x12x16").unwrap(), UVec3::new(24, 12, 16));
+        assert_eq!(
+            parse_grid("--grid", "24x12x16").unwrap(),
+            UVec3::new(24, 12, 16)
+        );
         for bad in ["24x12", "0x1x1", "axbxc", "65536x65536x2"] {
-            assert!(parse_grid(bad).is_err(), "{bad}");
+            assert!(parse_grid("--grid", bad).is_err(), "{bad}");
         }
+        let e = parse_grid("--grid", "4096x4096x4096").unwrap_err();
+        assert!(e.to_string().contains("68719476736 clusters"), "{e}");
     }
 
     #[test]

@@ -179,7 +179,7 @@ struct Report {
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
-    let dims = parse_grid(&args.grid)?;
+    let dims = parse_grid("--grid", &args.grid)?;
     ensure!(args.lights >= 1, "--lights must be at least 1");
     ensure!(
         args.lights <= u32::MAX as usize,
