@@ -249,7 +249,11 @@ fn assign_once(rng: &mut Pcg64, pools: &Pools) -> String {
                 &scene.grid,
                 &mut lists,
             );
-            common::assert_conservative(method.name(), &lists, &truth, &context);
+            let (_, extra) = common::assert_conservative(method.name(), &lists, &truth, &context);
+            assert_eq!(stats.pairs as usize, lists.indices.len(), "{context}");
+            if method == Method::Exact {
+                assert_eq!(extra, 0, "exact has {extra} false positives ({context})");
+            }
             let pooled = stats.parallel && stats.tasks > 1;
             assert!(
                 method == Method::Linear || pooled == split,
