@@ -15,6 +15,16 @@ fn check_scene(scene: &Scene, spots: bool, context: &str) {
     check_with(&mut Assigner::new(), scene, spots, context);
 }
 
+/// A hand-made spot scene against the oracle.
+fn check_spots(camera: Camera, grid: ClusterGrid, lights: Columns, context: &str) {
+    let scene = Scene {
+        camera,
+        grid,
+        lights,
+    };
+    check_scene(&scene, true, context);
+}
+
 /// Every method with `assigner` against the oracle; returns whether the split methods (all but
 /// `linear`) ran their tasks on the pool.
 fn check_with(assigner: &mut Assigner, scene: &Scene, spots: bool, context: &str) -> bool {
@@ -265,15 +275,7 @@ fn spot_angle_of_exactly_f32_half_pi_is_a_point_light_everywhere() {
     );
     let cam = camera(90.0, 0.1, 100.0);
     let grid = ClusterGrid::new(UVec3::new(4, 3, 4), DepthSlicing::Log, 0.1, 100.0);
-    check_scene(
-        &Scene {
-            camera: cam,
-            grid,
-            lights,
-        },
-        true,
-        "half-pi spot behind the camera",
-    );
+    check_spots(cam, grid, lights, "half-pi spot behind the camera");
 }
 
 /// The case `conservative.proptest-regressions` holds, pinned here by value: the strategy now
@@ -349,13 +351,5 @@ fn spots_at_around_and_behind_the_eye() {
     }
     let truth = brute_force(&lights, true, &cam, &grid);
     assert!(truth.iter().map(Vec::len).sum::<usize>() > 500);
-    check_scene(
-        &Scene {
-            camera: cam,
-            grid,
-            lights,
-        },
-        true,
-        "spots at the eye",
-    );
+    check_spots(cam, grid, lights, "spots at the eye");
 }
