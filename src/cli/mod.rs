@@ -5,6 +5,7 @@ mod atrium;
 mod bench;
 mod check;
 mod frames;
+mod grid_options;
 mod info;
 mod paper;
 mod progress;

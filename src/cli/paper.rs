@@ -21,8 +21,9 @@
 //! paper spaced its planes uniformly (`--depth linear` for that).
 
 use super::assign::parse_method;
+use super::grid_options::{check_slicing, parse_slicing};
 use super::progress::Progress;
-use super::render::{parse_size, parse_slicing};
+use super::render::parse_size;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
@@ -71,7 +72,7 @@ pub struct Args {
     /// Assignment method: exact, linear (the paper's Algorithm 1), binary or refined.
     #[arg(long, default_value = "refined")]
     method: String,
-    /// Depth slicing of the grids: log, or linear (the paper's uniform spacing).
+    /// Depth slicing of the grids: log, linear (the paper's uniform spacing) or log_near:D.
     #[arg(long, default_value = "log")]
     depth: String,
     /// Seed of the surface lights.
@@ -354,6 +355,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
             )
         })
         .collect::<Result<_>>()?;
+    for (scene, &z) in scenes
+        .iter()
+        .flat_map(|s| Z_SLICES.iter().map(move |z| (s, z)))
+    {
+        check_slicing(slicing, z, scene.grid.near(), scene.grid.far())?;
+    }
 
     let ctx = GpuContext::headless()?;
     let adapter = ctx.describe();

@@ -2,15 +2,15 @@
 //! brute-force deferred shading, write the lit image, the heat map and the numbers.
 
 use super::assign::parse_method;
+use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::progress::Progress;
-use super::scene::parse_grid;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{GpuContext, PassTimes, save_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
-use myriad::scene::{DepthSlicing, LoadOptions, Model};
+use myriad::scene::{LoadOptions, Model};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -44,7 +44,8 @@ pub struct Args {
     /// Cluster grid XxYxZ [default: 24x12x16, or the scene's].
     #[arg(long)]
     grid: Option<String>,
-    /// Depth slicing: log or linear [default: log, or the scene's].
+    /// Depth slicing: log, linear or log_near:D (a first slice to D metres, then log slices)
+    /// [default: log, or the scene's].
     #[arg(long)]
     depth: Option<String>,
     /// Image size WxH [default: 1536x768, or the scene's camera].
@@ -86,15 +87,6 @@ pub fn parse_size(text: &str) -> Result<(u32, u32)> {
     {
         Some((Ok(w), Ok(h))) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
         _ => bail!("--size {text:?}: expected WxH with each side in 1..=16384, e.g. 1536x768"),
-    }
-}
-
-/// `"log"` or `"linear"` as a depth slicing.
-pub(super) fn parse_slicing(text: &str) -> Result<DepthSlicing> {
-    match text {
-        "log" => Ok(DepthSlicing::Log),
-        "linear" => Ok(DepthSlicing::Linear),
-        other => bail!("--depth {other:?}: expected log or linear"),
     }
 }
 
@@ -353,6 +345,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
             Some(d) => parse_slicing(d)?,
             None => scene.grid.slicing,
         };
+        check_slicing(slicing, dims.z, scene.grid.near(), scene.grid.far())?;
         scene = scene.with_grid(dims, slicing);
     }
     Ok((scene, skipped))

@@ -13,7 +13,7 @@
 //! The plot uses `plotters`' SVG backend only: text becomes SVG `<text>` elements that the viewer
 //! sets in its own fonts, so nothing here needs system fonts or a rasteriser.
 
-use super::scene::parse_grid;
+use super::grid_options::parse_grid;
 use super::source::thread_pool;
 use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};

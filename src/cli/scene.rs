@@ -2,12 +2,13 @@
 //! (`--preset P --lights N --seed K --out S`) or a light field placed in a glTF model
 //! (`--gltf M --field F --lights N --seed K --out S`).
 
+use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::source::parse_preset;
-use anyhow::{Context, Result, bail, ensure};
-use myriad::cluster_math::glam::{UVec3, Vec3};
+use anyhow::{Context, Result, bail};
+use myriad::cluster_math::glam::Vec3;
 use myriad::scene::{
-    Aabb, Camera, ClusterGrid, DepthSlicing, LightField, LoadOptions, Model, Placement, RadiusRule,
-    Scene, SpotRule, SurfaceSampler,
+    Aabb, Camera, ClusterGrid, LightField, LoadOptions, Model, Placement, RadiusRule, Scene,
+    SpotRule, SurfaceSampler,
 };
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -16,9 +17,10 @@ use std::process::ExitCode;
 const FIELDS: [&str; 5] = ["surfaces", "box", "frustum", "clumps", "sphere"];
 
 #[derive(clap::Args, Debug)]
+#[command(group = clap::ArgGroup::new("source").required(true).args(["preset", "gltf"]))]
 pub struct Args {
     /// A standard scene: paper, uniform or sphere.
-    #[arg(long, required_unless_present = "gltf", conflicts_with = "gltf")]
+    #[arg(long)]
     preset: Option<String>,
     /// Place a light field in this glTF model (.gltf or .glb), e.g. assets/atrium.glb.
     #[arg(long)]
@@ -34,15 +36,16 @@ pub struct Args {
     #[arg(long, conflicts_with = "preset")]
     camera: Option<String>,
     /// Render width in pixels [default: 1536].
-    #[arg(long, conflicts_with = "preset")]
+    #[arg(long, conflicts_with = "preset", value_parser = clap::value_parser!(u32).range(1..))]
     width: Option<u32>,
     /// Render height in pixels [default: 768].
-    #[arg(long, conflicts_with = "preset")]
+    #[arg(long, conflicts_with = "preset", value_parser = clap::value_parser!(u32).range(1..))]
     height: Option<u32>,
     /// Cluster grid as XxYxZ [default: 24x12x16].
     #[arg(long, conflicts_with = "preset")]
     grid: Option<String>,
-    /// Depth slicing: log or linear [default: log].
+    /// Depth slicing: log, linear or log_near:D (a first slice to D metres, then log slices)
+    /// [default: log].
     #[arg(long, conflicts_with = "preset")]
     depth: Option<String>,
     /// Light radii, uniform in MIN..MAX metres [default: 0.5..3].
@@ -94,24 +97,6 @@ fn parse_range(text: &str, what: &str) -> Result<[f32; 2]> {
             let v = parse(text)?;
             Ok([v, v])
         }
-    }
-}
-
-/// `"24x12x16"` as grid dimensions.
-pub(super) fn parse_grid(flag: &str, text: &str) -> Result<UVec3> {
-    let parts: Vec<&str> = text.split('x').collect();
-    let dims: Option<Vec<u32>> = parts.iter().map(|p| p.parse().ok()).collect();
-    match dims.as_deref() {
-        Some(&[x, y, z]) if x >= 1 && y >= 1 && z >= 1 => {
-            let clusters = x as u64 * y as u64 * z as u64;
-            ensure!(
-                clusters <= u32::MAX as u64,
-                "{flag} {text:?}: {clusters} clusters; cluster ids are u32, so at most {}",
-                u32::MAX
-            );
-            Ok(UVec3::new(x, y, z))
-        }
-        _ => bail!("{flag} {text:?}: expected XxYxZ with each dimension >= 1, e.g. 24x12x16"),
     }
 }
 
@@ -175,17 +160,10 @@ fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
             ),
         },
     };
-    let slicing = match args.depth.as_deref().unwrap_or("log") {
-        "log" => DepthSlicing::Log,
-        "linear" => DepthSlicing::Linear,
-        other => bail!("unknown depth slicing {other:?}; expected log or linear"),
-    };
-    let grid = ClusterGrid::new(
-        parse_grid("--grid", args.grid.as_deref().unwrap_or("24x12x16"))?,
-        slicing,
-        camera.near,
-        camera.far,
-    );
+    let slicing = parse_slicing(args.depth.as_deref().unwrap_or("log"))?;
+    let dims = parse_grid("--grid", args.grid.as_deref().unwrap_or("24x12x16"))?;
+    check_slicing(slicing, dims.z, camera.near, camera.far)?;
+    let grid = ClusterGrid::new(dims, slicing, camera.near, camera.far);
     let placement = match field_name {
         "surfaces" => Placement::Surfaces {
             surfaces: SurfaceSampler::new(&model),
@@ -265,19 +243,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ranges_and_grids_parse() {
+    fn ranges_parse() {
         assert_eq!(parse_range("0.5..3", "r").unwrap(), [0.5, 3.0]);
         assert_eq!(parse_range("2", "r").unwrap(), [2.0, 2.0]);
         assert!(parse_range("a..3", "r").is_err());
-        assert_eq!(
-            parse_grid("--grid", "24x12x16").unwrap(),
-            UVec3::new(24, 12, 16)
-        );
-        for bad in ["24x12", "0x1x1", "axbxc", "65536x65536x2"] {
-            assert!(parse_grid("--grid", bad).is_err(), "{bad}");
-        }
-        let e = parse_grid("--grid", "4096x4096x4096").unwrap_err();
-        assert!(e.to_string().contains("68719476736 clusters"), "{e}");
     }
 
     #[test]

@@ -55,9 +55,9 @@
 //! changes the surface lights (1 is the default scene exactly) and the sampled clusters.
 
 use super::assign::parse_method;
+use super::grid_options::parse_grid;
 use super::progress::Progress;
 use super::render::parse_size;
-use super::scene::parse_grid;
 use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::{DVec3, Vec3};

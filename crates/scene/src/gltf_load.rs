@@ -244,6 +244,21 @@ fn describe(e: gltf::Error) -> String {
     }
 }
 
+/// Rejects a file that is neither GLB nor JSON by how it starts, so a GLB with a damaged magic
+/// (or an image renamed `.glb`) is not reported as a JSON syntax error.
+fn check_json_start(bytes: &[u8]) -> Result<(), String> {
+    let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'{') => Ok(()),
+        None => Err("empty: neither GLB nor glTF JSON".to_string()),
+        Some(_) => Err(format!(
+            "neither GLB (which starts with the magic \"glTF\") nor glTF JSON (an object, \
+             starting with '{{'): it starts with {}",
+            bytes[..bytes.len().min(4)].escape_ascii()
+        )),
+    }
+}
+
 fn load(
     bytes: &[u8],
     origin: &str,
@@ -260,6 +275,7 @@ fn load(
         check_glb_header(bytes)?;
         gltf::Glb::from_slice(bytes).map_err(describe)?.json
     } else {
+        check_json_start(bytes)?;
         std::borrow::Cow::Borrowed(bytes)
     };
     prevalidate_json(&json)?;
@@ -1023,8 +1039,19 @@ impl Loader<'_> {
                 if !(outer > 0.0 && outer <= std::f32::consts::PI) {
                     return Err(format!("{at}: outerConeAngle {outer} is not in (0, π]"));
                 }
+                let mut inner = spot.inner_cone_angle;
+                // The spec wants 0 <= inner < outer. Only the outer cone bounds the light, so a
+                // bad inner angle is kept usable (clamped) and reported, not fatal.
+                if !(inner >= 0.0 && inner < outer) {
+                    let clamped = inner.clamp(0.0, outer * 0.999);
+                    self.model.warnings.push(format!(
+                        "{at}: innerConeAngle {inner} is not in [0, outerConeAngle {outer}); \
+                         clamped to {clamped}"
+                    ));
+                    inner = clamped;
+                }
                 PunctualKind::Spot {
-                    inner_cone_angle: spot.inner_cone_angle,
+                    inner_cone_angle: inner,
                     outer_cone_angle: outer,
                 }
             }
@@ -1192,6 +1219,33 @@ mod tests {
     }
 
     #[test]
+    fn a_spot_inner_cone_outside_the_outer_is_clamped_and_reported() {
+        let extra = r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+      {"type": "spot", "range": 7, "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.5}}]}},
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}]"#;
+        let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+        assert_eq!(model.lights.len(), 1);
+        let PunctualKind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } = model.placed_lights[0].kind
+        else {
+            panic!("not a spot: {:?}", model.placed_lights[0].kind);
+        };
+        assert_eq!(outer_cone_angle, 0.5);
+        assert!(inner_cone_angle < 0.5 && inner_cone_angle > 0.49);
+        assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+        assert!(
+            model.warnings[0].contains("innerConeAngle 0.6 is not in [0, outerConeAngle 0.5)"),
+            "{:?}",
+            model.warnings
+        );
+    }
+
+    #[test]
     fn strips_and_fans_become_lists() {
         assert_eq!(
             strip_to_list(&[10, 11, 12, 13, 14]),
@@ -1231,6 +1285,12 @@ mod tests {
                 "meshes[0] \"tri\" primitives[0]: index 7 (element 2 of the indices) is out of range",
             ),
             ("{".to_string(), "not valid glTF JSON"),
+            (
+                "glTX\u{2}\0\0\0".to_string(),
+                "neither GLB (which starts with the magic \"glTF\") nor glTF JSON (an object, \
+                 starting with '{'): it starts with glTX",
+            ),
+            (" \n\t".to_string(), "empty: neither GLB nor glTF JSON"),
             (
                 r#"{"asset": {"version": "2.0"}, "nodes": [{"mesh": 3}]}"#.to_string(),
                 "invalid glTF: nodes[0].mesh",
