@@ -713,7 +713,14 @@ fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
         let out = myriad_fails(&[&args[..], &[out_file.to_str().unwrap()]].concat());
         assert_mentions(&out, &[flag, "0 is not in 1.."]);
     }
-    let args = ["scene", "--gltf", &atrium, "--depth", "log_near:5000", "--out"];
+    let args = [
+        "scene",
+        "--gltf",
+        &atrium,
+        "--depth",
+        "log_near:5000",
+        "--out",
+    ];
     let out = myriad_fails(&[&args[..], &[out_file.to_str().unwrap()]].concat());
     assert_mentions(&out, &["log_near:5000", "strictly between", "far (50)"]);
     assert!(!out_file.exists(), "nothing is written on bad options");
