@@ -23,13 +23,13 @@
 use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_slicing};
 use super::progress::Progress;
-use super::render::parse_size;
+use super::render::{parse_size, write_png};
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
+use myriad::gpu::GpuContext;
 use myriad::gpu::layout::GpuLight;
 use myriad::gpu::legend::with_heat_legend;
-use myriad::gpu::{GpuContext, save_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
 use myriad::scene::{LoadOptions, Model};
 use serde::Serialize;
@@ -492,8 +492,7 @@ fn write_heat_map(
     viewer.ctx.wait_idle()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (image, legend_h) = with_heat_legend(&viewer.image()?, w, h, scale_max);
-    save_png(path, &image, w, legend_h)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    write_png(path, &image, w, legend_h)?;
     Ok(HeatMap {
         path: path.display().to_string(),
         lights: scene.lights.len(),

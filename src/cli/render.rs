@@ -8,9 +8,9 @@ use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
-use myriad::gpu::{GpuContext, PassTimes, save_png};
+use myriad::gpu::{GpuContext, PassTimes, encode_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
-use myriad::scene::{LoadOptions, Model};
+use myriad::scene::{LoadOptions, Model, replace_file};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -351,8 +351,16 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     Ok((scene, skipped))
 }
 
-fn write_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
-    save_png(path, rgba, width, height).with_context(|| format!("cannot write {}", path.display()))
+pub(super) fn write_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
+    let write = || -> Result<()> {
+        let png = encode_png(rgba, width, height)?;
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        replace_file(path, &png)?;
+        Ok(())
+    };
+    write().with_context(|| format!("cannot write {}", path.display()))
 }
 
 fn print_table(s: &Stats) {

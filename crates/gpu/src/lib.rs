@@ -46,7 +46,7 @@ pub use frame_input::{
     ClusterLists, LightColumns, SPOT_INNER_FRACTION, SpotColumns, fill_gpu_lights,
 };
 pub use pipelines::ShadingMode;
-pub use readback::{read_depth, read_rgba8, save_png};
+pub use readback::{encode_png, read_depth, read_rgba8, save_png};
 pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_uniforms};
 pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
 pub use targets::{GBuffer, HEADLESS_FORMAT, HeadlessTarget};

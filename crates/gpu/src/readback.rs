@@ -81,7 +81,10 @@ pub(crate) fn map_and_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Ve
     Ok(bytes)
 }
 
-/// Saves tightly packed RGBA8 pixels as a PNG, creating the parent directory.
+/// Saves tightly packed RGBA8 pixels as a PNG, creating the parent directory. It writes in
+/// place; to replace an existing file only once the new one is whole, write [`encode_png`]'s
+/// bytes to a temporary file and rename it (the `myriad` tool does, with
+/// `myriad_scene::replace_file`).
 pub fn save_png(
     path: &Path,
     rgba: &[u8],
@@ -92,4 +95,42 @@ pub fn save_png(
         std::fs::create_dir_all(dir).map_err(image::ImageError::IoError)?;
     }
     image::save_buffer(path, rgba, width, height, image::ExtendedColorType::Rgba8)
+}
+
+/// Tightly packed RGBA8 pixels as the bytes of a PNG file. A buffer whose length is not
+/// `4 · width · height` is an error (the encoder itself would panic).
+pub fn encode_png(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>, image::ImageError> {
+    use image::ImageEncoder;
+    use image::error::{ParameterError, ParameterErrorKind};
+    if rgba.len() as u64 != 4 * width as u64 * height as u64 {
+        return Err(image::ImageError::Parameter(ParameterError::from_kind(
+            ParameterErrorKind::DimensionMismatch,
+        )));
+    }
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png).write_image(
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+    )?;
+    Ok(png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn encoded_png_decodes_to_the_same_pixels() {
+        let rgba: Vec<u8> = (0..3 * 2 * 4).map(|v| (v * 11) as u8).collect();
+        let png = encode_png(&rgba, 3, 2).unwrap();
+        let back = image::load_from_memory(&png).unwrap().to_rgba8();
+        assert_eq!(back.dimensions(), (3, 2));
+        assert_eq!(back.into_raw(), rgba);
+        assert!(
+            encode_png(&rgba, 4, 2).is_err(),
+            "a size that disagrees with the pixels"
+        );
+    }
 }
