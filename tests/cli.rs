@@ -686,7 +686,7 @@ fn render_rejects_bad_options_clearly() {
     let out = myriad_fails(&["render", "--grid", "24x12"]);
     assert_mentions(&out, &["--grid", "XxYxZ"]);
     let out = myriad_fails(&["render", "--depth", "cubic"]);
-    assert_mentions(&out, &["--depth", "log or linear"]);
+    assert_mentions(&out, &["--depth", "log, linear or log_near:D"]);
     let out = myriad_fails(&["render", "--method", "magic"]);
     assert_mentions(&out, &["magic", "refined"]);
     let out = myriad_fails(&["render", "--camera", "Nowhere", "--size", "64x32"]);
@@ -957,7 +957,7 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     let out = myriad_fails(&["paper", "--assets", "/nonexistent/assets"]);
     assert_mentions(&out, &["--assets", "/nonexistent/assets", "no such folder"]);
     let out = myriad_fails(&["paper", "--depth", "cubic"]);
-    assert_mentions(&out, &["--depth", "log or linear"]);
+    assert_mentions(&out, &["--depth", "log, linear or log_near:D"]);
 }
 
 #[test]

@@ -129,7 +129,7 @@ fn bad_input_exits_1_naming_the_file() {
     for (path, expected) in [
         (&truncated, "GLB header declares"),
         (&cycle, "is its own ancestor"),
-        (&not_json, "not valid glTF JSON"),
+        (&not_json, "nor glTF JSON"),
         (&missing, "cannot read glTF file"),
     ] {
         for json in [false, true] {
