@@ -699,29 +699,18 @@ fn render_rejects_bad_options_clearly() {
 fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
     let dir = work_dir("scene_source");
     let out_file = dir.join("s.scene");
-    let out = myriad_fails(&[
-        "scene",
-        "--lights",
-        "10",
-        "--out",
-        out_file.to_str().unwrap(),
-    ]);
+    let out_path = out_file.to_str().unwrap();
+    let out = myriad_fails(&["scene", "--lights", "10", "--out", out_path]);
     assert_mentions(&out, &["--preset", "--gltf"]);
     let atrium = format!("{}/assets/atrium.glb", env!("CARGO_MANIFEST_DIR"));
     for flag in ["--width", "--height"] {
-        let args = ["scene", "--gltf", &atrium, flag, "0", "--out"];
-        let out = myriad_fails(&[&args[..], &[out_file.to_str().unwrap()]].concat());
+        let out = myriad_fails(&["scene", "--gltf", &atrium, flag, "0", "--out", out_path]);
         assert_mentions(&out, &[flag, "0 is not in 1.."]);
     }
-    let args = [
-        "scene",
-        "--gltf",
-        &atrium,
-        "--depth",
-        "log_near:5000",
-        "--out",
-    ];
-    let out = myriad_fails(&[&args[..], &[out_file.to_str().unwrap()]].concat());
+    let far_slice = "log_near:5000";
+    let out = myriad_fails(&[
+        "scene", "--gltf", &atrium, "--depth", far_slice, "--out", out_path,
+    ]);
     assert_mentions(&out, &["log_near:5000", "strictly between", "far (50)"]);
     assert!(!out_file.exists(), "nothing is written on bad options");
 }
