@@ -766,6 +766,38 @@ fn frames_compares_sequential_and_pipelined_loops() {
 }
 
 #[test]
+fn a_failed_render_leaves_the_old_output_set_whole() {
+    let out_dir = work_dir("render_all_or_nothing").join("out");
+    let render = |lights: &str| {
+        let args = ["render", "--preset", "uniform", "--lights", lights];
+        let rest = [
+            "--size",
+            "64x32",
+            "--runs",
+            "1",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ];
+        myriad(&[&args[..], &rest].concat())
+    };
+    assert!(render("50").status.success());
+    let names = ["frame.png", "heatmap.png", "stats.json"];
+    let read_all = || names.map(|n| std::fs::read(out_dir.join(n)).unwrap());
+    let old = read_all();
+    // Brute force over 100 000 lights passes llvmpipe's shader loop limit: the run fails after
+    // the clustered images were made, and must then write none of them. A GPU without that limit
+    // renders the whole set instead.
+    let out = render("100000");
+    if out.status.success() {
+        let stats: Value = serde_json::from_slice(&read_all()[2]).unwrap();
+        assert_eq!(stats["lights"], 100_000);
+    } else {
+        assert_mentions(&all_output(&out), &["stops shader loops"]);
+        assert!(read_all() == old, "the old output set was changed");
+    }
+}
+
+#[test]
 fn render_takes_scene_files_presets_and_sizes() {
     let dir = work_dir("render_sources");
     let scene = dir.join("uniform.json");

@@ -223,6 +223,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     let mut strategies = Vec::new();
     let mut first_stats = None;
+    // The images are kept until every strategy has run: a failure later (brute force past a
+    // driver's loop limit, say) then leaves the old output set as it was, not half replaced.
+    let mut images = Vec::new();
     let progress = Progress::new("render");
     for shading in Shading::ALL {
         let started = Instant::now();
@@ -231,7 +234,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         if shading == Shading::Clustered {
             first_stats = viewer.frame(&scene, shading, method, false)?.stats;
             viewer.ctx.wait_idle()?;
-            write_png(&args.out.join("frame.png"), &viewer.image()?, width, height)?;
+            images.push(("frame.png", viewer.image()?, height));
             // The heat map, with its legend.
             let heat_max = viewer
                 .lists()
@@ -243,7 +246,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 .max(1);
             viewer.frame(&scene, shading, method, true)?;
             let (heat, h) = with_heat_legend(&viewer.image()?, width, height, heat_max);
-            write_png(&args.out.join("heatmap.png"), &heat, width, h)?;
+            images.push(("heatmap.png", heat, h));
         }
         strategies.push(result);
     }
@@ -266,6 +269,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
         strategies,
         speedup_vs_brute_force: speedup,
     };
+    for (name, rgba, h) in &images {
+        write_png(&args.out.join(name), rgba, width, *h)?;
+    }
     let json_path = args.out.join("stats.json");
     myriad::scene::replace_file(&json_path, serde_json::to_string_pretty(&stats)?.as_bytes())
         .with_context(|| format!("cannot write {}", json_path.display()))?;
