@@ -768,18 +768,10 @@ fn frames_compares_sequential_and_pipelined_loops() {
 #[test]
 fn a_failed_render_leaves_the_old_output_set_whole() {
     let out_dir = work_dir("render_all_or_nothing").join("out");
-    let render = |lights: &str| {
-        let args = ["render", "--preset", "uniform", "--lights", lights];
-        let rest = [
-            "--size",
-            "64x32",
-            "--runs",
-            "1",
-            "--out",
-            out_dir.to_str().unwrap(),
-        ];
-        myriad(&[&args[..], &rest].concat())
-    };
+    let dir = out_dir.to_str().unwrap();
+    let rest = ["--size", "64x32", "--runs", "1", "--out", dir];
+    let render =
+        |n| myriad(&[&["render", "--preset", "uniform", "--lights", n][..], &rest].concat());
     assert!(render("50").status.success());
     let names = ["frame.png", "heatmap.png", "stats.json"];
     let read_all = || names.map(|n| std::fs::read(out_dir.join(n)).unwrap());

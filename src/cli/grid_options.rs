@@ -4,8 +4,8 @@ use anyhow::{Result, bail, ensure};
 use myriad::cluster_math::glam::UVec3;
 use myriad::scene::DepthSlicing;
 
-/// What `--depth` accepts, for help texts and errors.
-pub(super) const DEPTH_CHOICES: &str = "log, linear or log_near:D (a first slice to D metres, \
+/// What `--depth` accepts, for its errors.
+const DEPTH_CHOICES: &str = "log, linear or log_near:D (a first slice to D metres, \
      then log slices to the far plane)";
 
 /// `"24x12x16"` as grid dimensions.
