@@ -103,6 +103,13 @@ fn assert_mentions(text: &str, needles: &[&str]) {
     }
 }
 
+/// Each argument list must fail, with output mentioning each of its needles.
+fn assert_rejected(cases: &[(&[&str], &[&str])]) {
+    for (args, needles) in cases {
+        assert_mentions(&myriad_fails(args), needles);
+    }
+}
+
 /// `myriad assign` then `myriad check --json`; returns the parsed comparison.
 fn assign_and_check(scene: &Path, method: &str, dump: &Path) -> Value {
     myriad_ok(&[
@@ -681,18 +688,23 @@ fn no_arguments_runs_the_main_job() {
 
 #[test]
 fn render_rejects_bad_options_clearly() {
-    let out = myriad_fails(&["render", "--size", "0x10"]);
-    assert_mentions(&out, &["--size", "WxH"]);
-    let out = myriad_fails(&["render", "--grid", "24x12"]);
-    assert_mentions(&out, &["--grid", "XxYxZ"]);
-    let out = myriad_fails(&["render", "--depth", "cubic"]);
-    assert_mentions(&out, &["--depth", "log, linear or log_near:D"]);
-    let out = myriad_fails(&["render", "--method", "magic"]);
-    assert_mentions(&out, &["magic", "refined"]);
-    let out = myriad_fails(&["render", "--camera", "Nowhere", "--size", "64x32"]);
-    assert_mentions(&out, &["Nowhere", "Main"]);
-    let out = myriad_fails(&["render", "--gltf", "/nonexistent/model.glb"]);
-    assert_mentions(&out, &["/nonexistent/model.glb"]);
+    assert_rejected(&[
+        (&["render", "--size", "0x10"], &["--size", "WxH"]),
+        (&["render", "--grid", "24x12"], &["--grid", "XxYxZ"]),
+        (
+            &["render", "--depth", "cubic"],
+            &["--depth", "log, linear or log_near:D"],
+        ),
+        (&["render", "--method", "magic"], &["magic", "refined"]),
+        (
+            &["render", "--camera", "Nowhere", "--size", "64x32"],
+            &["Nowhere", "Main"],
+        ),
+        (
+            &["render", "--gltf", "/nonexistent/model.glb"],
+            &["/nonexistent/model.glb"],
+        ),
+    ]);
 }
 
 #[test]
@@ -963,14 +975,18 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     assert!(std::fs::metadata(&heat).unwrap().len() > 1000);
 
     // Bad options fail before any rendering, naming the option.
-    let out = myriad_fails(&["paper", "--runs", "0"]);
-    assert_mentions(&out, &["--runs", "at least 1"]);
-    let out = myriad_fails(&["paper", "--size", "192"]);
-    assert_mentions(&out, &["--size", "WxH"]);
-    let out = myriad_fails(&["paper", "--assets", "/nonexistent/assets"]);
-    assert_mentions(&out, &["--assets", "/nonexistent/assets", "no such folder"]);
-    let out = myriad_fails(&["paper", "--depth", "cubic"]);
-    assert_mentions(&out, &["--depth", "log, linear or log_near:D"]);
+    assert_rejected(&[
+        (&["paper", "--runs", "0"], &["--runs", "at least 1"]),
+        (&["paper", "--size", "192"], &["--size", "WxH"]),
+        (
+            &["paper", "--assets", "/nonexistent/assets"],
+            &["--assets", "/nonexistent/assets", "no such folder"],
+        ),
+        (
+            &["paper", "--depth", "cubic"],
+            &["--depth", "log, linear or log_near:D"],
+        ),
+    ]);
 }
 
 #[test]
@@ -1192,16 +1208,16 @@ fn stress_samples_clusters_above_the_exact_limit() {
 
 #[test]
 fn stress_rejects_bad_options_clearly() {
-    let out = myriad_fails(&["stress", "--lights", "0"]);
-    assert_mentions(&out, &["--lights", "at least 1"]);
-    let out = myriad_fails(&["stress", "--sample", "0", "--lights", "10"]);
-    assert_mentions(&out, &["--sample", "at least 1"]);
-    let out = myriad_fails(&["stress", "--size", "64"]);
-    assert_mentions(&out, &["--size", "WxH"]);
-    let out = myriad_fails(&["stress", "--method", "guess"]);
-    assert_mentions(&out, &["guess", "refined"]);
-    let out = myriad_fails(&["stress", "--lights", "many"]);
-    assert_mentions(&out, &["--lights", "many"]);
+    assert_rejected(&[
+        (&["stress", "--lights", "0"], &["--lights", "at least 1"]),
+        (
+            &["stress", "--sample", "0", "--lights", "10"],
+            &["--sample", "at least 1"],
+        ),
+        (&["stress", "--size", "64"], &["--size", "WxH"]),
+        (&["stress", "--method", "guess"], &["guess", "refined"]),
+        (&["stress", "--lights", "many"], &["--lights", "many"]),
+    ]);
 }
 
 #[test]

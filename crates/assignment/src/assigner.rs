@@ -212,6 +212,13 @@ impl Assigner {
                 "active-cluster mask is for another grid"
             );
         }
+        let frame = Frame {
+            method,
+            lights,
+            camera,
+            grid: *grid,
+            active,
+        };
         let start = Instant::now();
         let parallel = method != Method::Linear
             && self
@@ -227,9 +234,9 @@ impl Assigner {
             // inject its jobs and park this thread until they finish — a cross-thread wake-up
             // per region. Even one costs: criterion times `paper` 1000 `binary` at 46–63 µs from
             // outside the pool against 33–59 µs on a worker (`benches/assignment.rs`).
-            rayon::scope(|_| self.assign_frame(method, lights, camera, grid, active, true, out))
+            rayon::scope(|_| self.assign_frame(frame, true, out))
         } else {
-            self.assign_frame(method, lights, camera, grid, active, parallel, out)
+            self.assign_frame(frame, parallel, out)
         };
         let threads = if stats.parallel {
             (stats.tasks as usize).min(rayon::current_num_threads())
@@ -242,14 +249,9 @@ impl Assigner {
 
     /// One frame, its tasks on the pool when `parallel` (and there are several): the grid
     /// coarsened until the pairs fit the budget.
-    #[allow(clippy::too_many_arguments)] // The frame's inputs, the mask, the choice, the output.
     fn assign_frame(
         &mut self,
-        method: Method,
-        lights: &LightInput<'_>,
-        camera: &Camera,
-        grid: &ClusterGrid,
-        active: Option<&ActiveClusters>,
+        frame: Frame<'_>,
         parallel: bool,
         out: &mut LightLists,
     ) -> AssignStats {
@@ -257,39 +259,40 @@ impl Assigner {
             .pair_budget
             .unwrap_or(u32::MAX as u64)
             .min(u32::MAX as u64);
-        let mut grid = *grid;
+        let mut attempt_frame = frame;
         let mut coarsened = 0;
         loop {
             // One cluster holds at most every light (< 2³² by `assert_consistent`): always fits.
-            let last_resort = grid.dims == glam::UVec3::ONE;
+            let last_resort = attempt_frame.grid.dims == glam::UVec3::ONE;
             let limit = if last_resort { u32::MAX as u64 } else { budget };
-            let mask = if coarsened == 0 { active } else { None };
-            let attempt =
-                self.assign_once(method, lights, camera, &grid, mask, parallel, limit, out);
-            if let Ok(mut stats) = attempt {
-                stats.grid_dims = grid.dims.to_array();
+            if let Ok(mut stats) = self.assign_once(&attempt_frame, parallel, limit, out) {
+                stats.grid_dims = attempt_frame.grid.dims.to_array();
                 stats.coarsened = coarsened;
                 stats.over_budget = stats.pairs > budget;
                 return stats;
             }
-            grid = coarser_grid(&grid);
+            // The mask is for the caller's grid: a coarser grid's lists are full.
+            attempt_frame.grid = coarser_grid(&attempt_frame.grid);
+            attempt_frame.active = None;
             coarsened += 1;
         }
     }
 
     /// One attempt on one grid: `Err(pairs)` (nothing written) when the pairs exceed `budget`.
-    #[allow(clippy::too_many_arguments)] // The frame's inputs, the mask, the choice, the budget, the output.
     fn assign_once(
         &mut self,
-        method: Method,
-        lights: &LightInput<'_>,
-        camera: &Camera,
-        grid: &ClusterGrid,
-        active: Option<&ActiveClusters>,
+        frame: &Frame<'_>,
         parallel: bool,
         budget: u64,
         out: &mut LightLists,
     ) -> Result<AssignStats, u64> {
+        let Frame {
+            method,
+            lights,
+            camera,
+            ref grid,
+            active,
+        } = *frame;
         profile_span!("assign");
         lights.assert_consistent();
         let n = lights.len();
@@ -395,6 +398,17 @@ impl Assigner {
         stats.parallel = parallel;
         Ok(stats)
     }
+}
+
+/// One frame's inputs, as [`Assigner::assign_active`] received them (the grid by value: a pair
+/// budget swaps in coarser ones).
+#[derive(Clone, Copy)]
+struct Frame<'a> {
+    method: Method,
+    lights: &'a LightInput<'a>,
+    camera: &'a Camera,
+    grid: ClusterGrid,
+    active: Option<&'a ActiveClusters>,
 }
 
 /// The grid a pair budget falls back to: every dimension halved (rounding down, at least 1),

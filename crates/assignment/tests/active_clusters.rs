@@ -4,22 +4,14 @@
 mod common;
 
 use common::*;
-use glam::UVec3;
 use myriad_assignment::{ActiveClusters, AppendStrategy, Assigner, LightLists, Method};
 use rand::{Rng, SeedableRng};
 
 fn check(method: Method, strategy: AppendStrategy, lights: usize, density: f64, seed: u64) {
     let scene = make_scene(&SceneParams {
         seed,
-        fov_deg: 65.0,
-        aspect: 16.0 / 9.0,
-        near: 0.1,
-        far_ratio: 500.0,
-        eye_scale: 5.0,
-        dims: UVec3::new(16, 9, 24),
-        slicing: 1,
         lights,
-        spots: true,
+        ..SceneParams::HD
     });
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let mut mask = ActiveClusters::new(&scene.grid);

@@ -114,19 +114,6 @@ fn camera(fov: f32, near: f32, far: f32) -> Camera {
     Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, fov, 160, 90, near, far)
 }
 
-fn scene_of(camera: Camera, dims: UVec3, lights: &[(Vec3, f32)]) -> Scene {
-    let grid = ClusterGrid::new(dims, DepthSlicing::Log, camera.near, camera.far);
-    let mut columns = Columns::default();
-    for &(p, r) in lights {
-        columns.push(p, r);
-    }
-    Scene {
-        camera,
-        grid,
-        lights: columns,
-    }
-}
-
 #[test]
 fn lights_on_planes_behind_and_around_the_camera() {
     let cam = camera(60.0, 0.1, 100.0);
@@ -152,7 +139,11 @@ fn lights_on_planes_behind_and_around_the_camera() {
             lights.push((Vec3::new(0.05 * d, s * d, -d), 0.01 * d));
         }
     }
-    check_scene(&scene_of(cam, dims, &lights), false, "planes");
+    check_scene(
+        &scene_of_points(cam, dims, DepthSlicing::Log, &lights),
+        false,
+        "planes",
+    );
 }
 
 #[test]
@@ -173,7 +164,7 @@ fn extreme_fields_of_view_and_depth_ranges() {
             lights.push((Vec3::new(t.x * d * 1.01, 0.0, -d), d * 0.02));
         }
         check_scene(
-            &scene_of(cam, UVec3::new(6, 4, 7), &lights),
+            &scene_of_points(cam, UVec3::new(6, 4, 7), DepthSlicing::Log, &lights),
             false,
             &format!("fov {fov} near {near} far {far}"),
         );
@@ -202,7 +193,7 @@ fn huge_world_coordinates() {
         ));
     }
     check_scene(
-        &scene_of(cam, UVec3::new(8, 5, 10), &lights),
+        &scene_of_points(cam, UVec3::new(8, 5, 10), DepthSlicing::Log, &lights),
         false,
         "huge coordinates",
     );
@@ -211,9 +202,10 @@ fn huge_world_coordinates() {
 #[test]
 fn invalid_lights_are_rejected_and_counted() {
     let cam = camera(60.0, 0.1, 100.0);
-    let scene = scene_of(
+    let scene = scene_of_points(
         cam,
         UVec3::new(4, 4, 4),
+        DepthSlicing::Log,
         &[
             (Vec3::new(0.0, 0.0, -5.0), 1.0),
             (Vec3::new(f32::NAN, 0.0, -5.0), 1.0),

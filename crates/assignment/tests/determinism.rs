@@ -61,15 +61,8 @@ fn parallel_tasks_agree_with_a_single_serial_task() {
     // Each light's clusters must be the same in both.
     let scene = make_scene(&SceneParams {
         seed: 7,
-        fov_deg: 60.0,
-        aspect: 2.0,
-        near: 0.5,
-        far_ratio: 200.0,
-        eye_scale: 0.0,
-        dims: UVec3::new(24, 12, 16),
-        slicing: 0,
         lights: 200,
-        spots: false,
+        ..SceneParams::WIDE
     });
     let mut big = Columns::default();
     for _ in 0..100 {

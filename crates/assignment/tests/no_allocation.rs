@@ -6,7 +6,6 @@
 mod common;
 
 use common::*;
-use glam::UVec3;
 use myriad_assignment::{Assigner, LightLists, Method};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -45,15 +44,8 @@ static GLOBAL: Counting = Counting;
 fn steady_state_frames_do_not_allocate() {
     let scene = make_scene(&SceneParams {
         seed: 3,
-        fov_deg: 60.0,
-        aspect: 16.0 / 9.0,
-        near: 0.1,
-        far_ratio: 500.0,
-        eye_scale: 5.0,
-        dims: UVec3::new(16, 9, 24),
-        slicing: 1,
         lights: 10_000,
-        spots: true,
+        ..SceneParams::HD
     });
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)

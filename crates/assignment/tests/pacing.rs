@@ -5,7 +5,6 @@
 mod common;
 
 use common::*;
-use glam::UVec3;
 use myriad_assignment::{Assigner, LightLists, Method, PacingLimits, Parallelism};
 use std::time::Duration;
 
@@ -13,15 +12,8 @@ use std::time::Duration;
 fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
     let scene = make_scene(&SceneParams {
         seed: 11,
-        fov_deg: 60.0,
-        aspect: 2.0,
-        near: 0.5,
-        far_ratio: 200.0,
-        eye_scale: 0.0,
-        dims: UVec3::new(24, 12, 16),
-        slicing: 0,
         lights: 1500,
-        spots: false,
+        ..SceneParams::WIDE
     });
     // The generator's radii reach 1000× the near plane; small lights make a small frame.
     let mut lights = Columns::default();

@@ -136,10 +136,7 @@ fn stress_scene(p: &Stress) -> Scene {
         far,
     );
     let grid = ClusterGrid::new(p.dims, slicing_of(p.slicing, p.near, far), p.near, far);
-    let (right, cam_up, fwd) = {
-        let (r, u, f) = camera.basis_f64();
-        (r.as_vec3(), u.as_vec3(), f.as_vec3())
-    };
+    let (right, cam_up, fwd) = view_basis(&camera);
     let t = camera.tan_half_fov();
     let mut lights = Columns::default();
     for _ in 0..48 {
@@ -231,19 +228,6 @@ fn camera_at(eye: Vec3, forward: Vec3, fov: f32, near: f32, far: f32) -> Camera 
     Camera::new(eye, eye + forward * step, Vec3::Y, fov, 320, 180, near, far)
 }
 
-fn points(camera: Camera, dims: UVec3, slicing: DepthSlicing, lights: &[(Vec3, f32)]) -> Scene {
-    let grid = ClusterGrid::new(dims, slicing, camera.near, camera.far);
-    let mut columns = Columns::default();
-    for &(p, r) in lights {
-        columns.push(p, r);
-    }
-    Scene {
-        camera,
-        grid,
-        lights: columns,
-    }
-}
-
 /// World position of a view-space point (x right, y up, z = −depth).
 fn world_of(camera: &Camera, view: Vec3) -> Vec3 {
     let (r, u, f) = camera.basis_f64();
@@ -292,7 +276,7 @@ fn camera_at_1e6_with_micro_lights() {
                 assert!(x.is_finite());
                 lights.push((Vec3::new(x, base.y, base.z), 1e-6));
             }
-            let scene = points(cam, dims, DepthSlicing::Log, &lights);
+            let scene = scene_of_points(cam, dims, DepthSlicing::Log, &lights);
             check(&scene, false, &format!("eye {eye} forward {forward}"));
         }
     }
@@ -312,7 +296,7 @@ fn camera_at_1e6_with_huge_and_containing_lights() {
             (world_of(&cam, Vec3::new(far, 0.0, -far)), 1.0e-3),  // outside, beside
             (world_of(&cam, Vec3::new(0.0, 0.0, -0.01)), 1.0e-5), // on the near plane
         ];
-        let scene = points(cam, UVec3::new(5, 4, 6), DepthSlicing::Log, &lights);
+        let scene = scene_of_points(cam, UVec3::new(5, 4, 6), DepthSlicing::Log, &lights);
         check(&scene, false, &format!("far {far}"));
     }
 }
@@ -341,7 +325,7 @@ fn widest_depth_range_linear_and_log() {
             lights.push((Vec3::new(0.0, 0.0, -d), d * 1e-6));
             lights.push((Vec3::new(0.0, 0.0, -d), d * 0.5));
         }
-        let scene = points(cam, dims, slicing, &lights);
+        let scene = scene_of_points(cam, dims, slicing, &lights);
         check(&scene, false, &format!("{slicing:?}"));
     }
 }
@@ -366,7 +350,7 @@ fn extreme_fields_of_view_and_aspects() {
             for k in 0..lights.len() / 4 {
                 lights[4 * k].1 = 10f32.powi((k % 10) as i32 - 4);
             }
-            let scene = points(cam, dims, DepthSlicing::Log, &lights);
+            let scene = scene_of_points(cam, dims, DepthSlicing::Log, &lights);
             check(&scene, false, &format!("fov {fov} {w}x{h}"));
         }
     }
@@ -393,7 +377,7 @@ fn lights_crossing_the_near_plane_at_every_scale() {
                 }
             }
         }
-        let scene = points(cam, UVec3::new(6, 4, 5), DepthSlicing::Log, &lights);
+        let scene = scene_of_points(cam, UVec3::new(6, 4, 5), DepthSlicing::Log, &lights);
         check(&scene, false, &format!("near {near}"));
     }
 }
@@ -407,7 +391,7 @@ fn straight_up_and_down_with_every_up_vector() {
             let dims = UVec3::new(4, 4, 4);
             let grid = ClusterGrid::new(dims, DepthSlicing::Linear, cam.near, cam.far);
             let lights = lights_on_every_plane(&cam, &grid, 0.01);
-            let scene = points(cam, dims, DepthSlicing::Linear, &lights);
+            let scene = scene_of_points(cam, dims, DepthSlicing::Linear, &lights);
             check(&scene, false, &format!("forward {forward} up {up}"));
         }
     }

@@ -139,6 +139,31 @@ pub struct Scene {
     pub lights: Columns,
 }
 
+/// A scene of point lights `(position, radius)` seen by `camera` through a `dims` grid.
+pub fn scene_of_points(
+    camera: Camera,
+    dims: UVec3,
+    slicing: DepthSlicing,
+    lights: &[(Vec3, f32)],
+) -> Scene {
+    let grid = ClusterGrid::new(dims, slicing, camera.near, camera.far);
+    let mut columns = Columns::default();
+    for &(p, r) in lights {
+        columns.push(p, r);
+    }
+    Scene {
+        camera,
+        grid,
+        lights: columns,
+    }
+}
+
+/// The camera's right, up and forward axes in f32.
+pub fn view_basis(camera: &Camera) -> (Vec3, Vec3, Vec3) {
+    let (r, u, f) = camera.basis_f64();
+    (r.as_vec3(), u.as_vec3(), f.as_vec3())
+}
+
 pub fn random_dir(rng: &mut impl Rng) -> Vec3 {
     loop {
         let v = Vec3::new(
@@ -178,6 +203,35 @@ pub struct SceneParams {
     pub spots: bool,
 }
 
+impl SceneParams {
+    /// A wide 2:1 view from the origin on the paper's 24×12×16 linear grid, point lights only.
+    pub const WIDE: Self = Self {
+        seed: 0,
+        fov_deg: 60.0,
+        aspect: 2.0,
+        near: 0.5,
+        far_ratio: 200.0,
+        eye_scale: 0.0,
+        dims: UVec3::new(24, 12, 16),
+        slicing: 0,
+        lights: 0,
+        spots: false,
+    };
+    /// A 16:9 view from near the origin on a 16×9×24 log grid, with spot lights.
+    pub const HD: Self = Self {
+        seed: 0,
+        fov_deg: 65.0,
+        aspect: 16.0 / 9.0,
+        near: 0.1,
+        far_ratio: 500.0,
+        eye_scale: 5.0,
+        dims: UVec3::new(16, 9, 24),
+        slicing: 1,
+        lights: 0,
+        spots: true,
+    };
+}
+
 pub fn make_scene(p: &SceneParams) -> Scene {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(p.seed);
     let eye = random_dir(&mut rng) * p.eye_scale * rng.random_range(0.0f32..1.0);
@@ -201,10 +255,7 @@ pub fn make_scene(p: &SceneParams) -> Scene {
         far,
     );
     let grid = ClusterGrid::new(p.dims, slicing_of(p.slicing, p.near, far), p.near, far);
-    let (right, up, fwd) = {
-        let (r, u, f) = camera.basis_f64();
-        (r.as_vec3(), u.as_vec3(), f.as_vec3())
-    };
+    let (right, up, fwd) = view_basis(&camera);
     let t = camera.tan_half_fov();
     let mut lights = Columns::default();
     for _ in 0..p.lights {
