@@ -782,23 +782,74 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
     let out_dir = work_dir("render_all_or_nothing").join("out");
     let dir = out_dir.to_str().unwrap();
     let rest = ["--size", "64x32", "--runs", "1", "--out", dir];
-    let render =
-        |n| myriad(&[&["render", "--preset", "uniform", "--lights", n][..], &rest].concat());
-    assert!(render("50").status.success());
+    let render = |lights: &str, extra: &[&str]| {
+        let args = ["render", "--preset", "uniform", "--lights", lights];
+        myriad(&[&args[..], extra, &rest].concat())
+    };
+    assert!(render("50", &[]).status.success());
     let names = ["frame.png", "heatmap.png", "stats.json"];
     let read_all = || names.map(|n| std::fs::read(out_dir.join(n)).unwrap());
     let old = read_all();
-    // Brute force over 100 000 lights passes llvmpipe's shader loop limit: the run fails after
-    // the clustered images were made, and must then write none of them. A GPU without that limit
-    // renders the whole set instead.
-    let out = render("100000");
+    let stats: Value = serde_json::from_slice(&old[2]).unwrap();
+    assert_eq!(stats["strategies"][0]["shading"], "clustered");
+    // One cluster holding all 100 000 lights passes llvmpipe's shader loop limit: clustered
+    // shading is refused, the run fails and must write nothing. A GPU without that limit renders
+    // the whole set instead.
+    let out = render("100000", &["--grid", "1x1x1"]);
     if out.status.success() {
         let stats: Value = serde_json::from_slice(&read_all()[2]).unwrap();
-        assert_eq!(stats["lights"], 100_000);
+        assert_eq!(stats["grid"], serde_json::json!([1, 1, 1]));
     } else {
         assert_mentions(&all_output(&out), &["stops shader loops"]);
         assert!(read_all() == old, "the old output set was changed");
     }
+}
+
+#[test]
+fn render_skips_a_baseline_the_adapter_cannot_draw_and_keeps_the_rest() {
+    let out_dir = work_dir("render_skips_baseline").join("out");
+    let out = myriad_ok(&[
+        "render",
+        "--preset",
+        "uniform",
+        "--lights",
+        "100000",
+        "--size",
+        "64x32",
+        "--runs",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stats = read_json(&out_dir.join("stats.json"));
+    let drawn: Vec<&str> = stats["strategies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["shading"].as_str().unwrap())
+        .collect();
+    let skipped = stats["skipped"].as_array().unwrap();
+    if skipped.is_empty() {
+        // A GPU without a loop limit draws all three.
+        assert_eq!(drawn, ["clustered", "tiled", "brute force"]);
+        assert!(stats["speedup_vs_brute_force"].as_f64().unwrap() > 0.0);
+    } else {
+        // llvmpipe: brute force over 100 000 lights per pixel is refused and skipped, said so.
+        assert_eq!(drawn, ["clustered", "tiled"]);
+        assert_eq!(skipped[0]["shading"], "brute force");
+        assert!(
+            skipped[0]["reason"]
+                .as_str()
+                .unwrap()
+                .contains("stops shader loops")
+        );
+        assert!(stats["speedup_vs_brute_force"].is_null());
+        assert_mentions(
+            &all_output(&out),
+            &["brute force skipped", "stops shader loops"],
+        );
+    }
+    assert!(out_dir.join("frame.png").is_file() && out_dir.join("heatmap.png").is_file());
 }
 
 #[test]

@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
-use myriad::gpu::{GpuContext, PassTimes, encode_png};
+use myriad::gpu::{GpuContext, GpuError, PassTimes, encode_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
 use myriad::scene::{LoadOptions, Model, replace_file};
 use serde::Serialize;
@@ -123,7 +123,27 @@ struct Stats {
     lights_rejected: u32,
     lights_culled: u32,
     strategies: Vec<StrategyResult>,
+    /// Baselines (tiled, brute force) the adapter refused to draw, with the reason: a pixel
+    /// would loop over more lights than its shaders may (llvmpipe's loop limit). Clustered
+    /// shading is never skipped: its refusal fails the run.
+    skipped: Vec<SkippedStrategy>,
     speedup_vs_brute_force: Option<f64>,
+}
+
+#[derive(Serialize, Debug)]
+struct SkippedStrategy {
+    shading: &'static str,
+    reason: String,
+}
+
+/// Whether `e` is the renderer refusing a frame for the adapter's shader loop limit.
+fn is_loop_limit(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<GpuError>(),
+            Some(GpuError::ShaderLoopLimit { .. })
+        )
+    })
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -227,9 +247,22 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // driver's loop limit, say) then leaves the old output set as it was, not half replaced.
     let mut images = Vec::new();
     let progress = Progress::new("render");
+    let mut skipped = Vec::new();
     for shading in Shading::ALL {
         let started = Instant::now();
-        let result = measure(&mut viewer, &scene, shading, method, args.runs, &progress)?;
+        let result = match measure(&mut viewer, &scene, shading, method, args.runs, &progress) {
+            Ok(result) => result,
+            // A refused frame changed nothing on the GPU: the other strategies go on.
+            Err(e) if shading != Shading::Clustered && is_loop_limit(&e) => {
+                eprintln!("note: {} skipped: {e:#}", shading.name());
+                skipped.push(SkippedStrategy {
+                    shading: shading.name(),
+                    reason: format!("{e:#}"),
+                });
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
         progress.done(shading.name(), started.elapsed().as_secs_f64());
         if shading == Shading::Clustered {
             first_stats = viewer.frame(&scene, shading, method, false)?.stats;
@@ -251,9 +284,17 @@ pub fn run(args: Args) -> Result<ExitCode> {
         strategies.push(result);
     }
     let assign_stats = first_stats.context("clustered frame has statistics")?;
-    let time_of = |s: &StrategyResult| s.gpu_shading_ms.unwrap_or(s.gpu_frame_wall_ms);
-    let speedup =
-        (time_of(&strategies[0]) > 0.0).then(|| time_of(&strategies[2]) / time_of(&strategies[0]));
+    let time_of = |name: &str| {
+        let s = strategies.iter().find(|s| s.shading == name)?;
+        Some(s.gpu_shading_ms.unwrap_or(s.gpu_frame_wall_ms))
+    };
+    let speedup = match (
+        time_of(Shading::Clustered.name()),
+        time_of(Shading::BruteForce.name()),
+    ) {
+        (Some(clustered), Some(brute)) if clustered > 0.0 => Some(brute / clustered),
+        _ => None,
+    };
     let stats = Stats {
         scene: scene.name.clone(),
         adapter,
@@ -267,6 +308,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         lights_rejected: assign_stats.rejected,
         lights_culled: assign_stats.culled,
         strategies,
+        skipped,
         speedup_vs_brute_force: speedup,
     };
     for (name, rgba, h) in &images {
@@ -385,17 +427,15 @@ fn print_table(s: &Stats) {
         }
     );
     let ms = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.2}"));
-    println!(
-        "{:<34} {:>12} {:>12} {:>12}",
-        "stage (median ms)", "clustered", "tiled", "brute force"
-    );
     let row = |name: &str, f: &dyn Fn(&StrategyResult) -> String| {
-        let cells: Vec<String> = s.strategies.iter().map(f).collect();
-        println!(
-            "{name:<34} {:>12} {:>12} {:>12}",
-            cells[0], cells[1], cells[2]
-        );
+        let cells: String = s
+            .strategies
+            .iter()
+            .map(|r| format!(" {:>12}", f(r)))
+            .collect();
+        println!("{name:<34}{cells}");
     };
+    row("stage (median ms)", &|r| r.shading.to_string());
     row("CPU light assignment", &|r| format!("{:.3}", r.assign_ms));
     row("upload (KiB)", &|r| {
         format!("{:.1}", r.upload_bytes as f64 / 1024.0)
@@ -430,6 +470,9 @@ fn print_table(s: &Stats) {
         s.lights_rejected,
         s.lights_culled
     );
+    for skip in &s.skipped {
+        println!("{} skipped: {}", skip.shading, skip.reason);
+    }
     if let Some(x) = s.speedup_vs_brute_force {
         println!(
             "clustered deferred shading is {x:.1}x faster than brute-force deferred (shading pass)"

@@ -10,18 +10,19 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     /// Its queue.
     pub queue: wgpu::Queue,
-    /// The adapter, when this crate created it (engines may not have it at hand).
-    pub adapter_info: Option<wgpu::AdapterInfo>,
+    /// The adapter the device came from.
+    pub adapter_info: wgpu::AdapterInfo,
 }
 
 impl GpuContext {
-    /// Wraps an engine's device and queue. Timestamp queries are used when the device was
+    /// Wraps an engine's device and queue (the adapter is asked of the device, so an engine on
+    /// llvmpipe gets the same loop-limit guard as the CLI). Timestamp queries are used when the device was
     /// created with [`wgpu::Features::TIMESTAMP_QUERY`].
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Self {
         Self {
+            adapter_info: device.adapter_info(),
             device,
             queue,
-            adapter_info: None,
         }
     }
 
@@ -56,19 +57,24 @@ impl GpuContext {
         Ok(Self {
             device,
             queue,
-            adapter_info: Some(info),
+            adapter_info: info,
         })
     }
 
-    /// The most loop iterations one shader invocation may run on this adapter, where it is
-    /// known to be limited: Mesa's llvmpipe stops after 65 535 (`LP_MAX_TGSI_LOOP_ITERATIONS`,
-    /// counted over all loops of the invocation — found by the 100 000-light test). `None` for
-    /// other adapters and for callers' devices (whose adapter is unknown).
+    /// The loop limit of one shader invocation on this adapter, where it is known to be limited:
+    /// Mesa's llvmpipe stops after 65 535 iterations over all loops
+    /// (`LP_MAX_TGSI_LOOP_ITERATIONS`; `loop_budget.rs` says what fits). `None` for other
+    /// adapters.
     pub fn shader_loop_limit(&self) -> Option<u64> {
-        self.adapter_info
-            .as_ref()
-            .filter(|info| info.name.contains("llvmpipe") || info.driver.contains("llvmpipe"))
-            .map(|_| 65_535)
+        let info = &self.adapter_info;
+        (info.name.contains("llvmpipe") || info.driver.contains("llvmpipe")).then_some(65_535)
+    }
+
+    /// The most lights one pixel may loop over in `mode` with `slices` depth slices on this
+    /// adapter; `None` where loops are not known to be limited.
+    pub fn max_lights_per_pixel(&self, mode: crate::ShadingMode, slices: u32) -> Option<u64> {
+        self.shader_loop_limit()
+            .map(|limit| crate::loop_budget::max_lights_per_pixel(limit, mode, slices))
     }
 
     /// Whether passes can be timed with timestamp queries.
@@ -80,13 +86,11 @@ impl GpuContext {
 
     /// A one-line description of the adapter ("NVIDIA H100 (Vulkan, DiscreteGpu)").
     pub fn describe(&self) -> String {
-        match &self.adapter_info {
-            Some(info) => format!(
-                "{} ({:?}, {:?}, driver {} {})",
-                info.name, info.backend, info.device_type, info.driver, info.driver_info
-            ),
-            None => "caller's device".to_string(),
-        }
+        let info = &self.adapter_info;
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            info.name, info.backend, info.device_type, info.driver, info.driver_info
+        )
     }
 
     /// Blocks until the GPU has finished all submitted work.

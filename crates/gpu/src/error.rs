@@ -35,18 +35,21 @@ pub enum GpuError {
     },
     /// A pixel would loop over more lights than the adapter's shader compiler allows: Mesa's
     /// llvmpipe ends any shader invocation's loops after 65 535 iterations in all, which would
-    /// silently drop the remaining lights. Refused instead.
+    /// silently drop the remaining lights (see `loop_budget.rs` for the accounting). Refused
+    /// instead.
     #[error(
         "a pixel would evaluate {lights} lights, but {adapter} stops shader loops after {limit} \
-         iterations (lights past that would be silently dropped); use light lists (clustered \
-         shading) or fewer lights per pass"
+         iterations in all, room for at most {max_lights} lights per pixel here (lights past that would be \
+         silently dropped); use light lists (clustered shading) or fewer lights per pass"
     )]
     ShaderLoopLimit {
         /// Lights one pixel would visit.
         lights: u64,
+        /// The most lights a pixel may visit in this pass on this adapter.
+        max_lights: u64,
         /// The adapter.
         adapter: String,
-        /// Its loop limit.
+        /// Its loop limit, over all loops of an invocation.
         limit: u64,
     },
     /// Frame inputs that do not fit together (list sizes vs grid, target size vs grid).

@@ -31,6 +31,7 @@ mod error;
 mod frame_input;
 pub mod layout;
 pub mod legend;
+pub mod loop_budget;
 mod pipelines;
 mod profiling;
 mod readback;

@@ -314,10 +314,10 @@ impl Renderer {
             )));
         }
         // Checked before anything is staged, so a refused frame changes nothing.
-        if let Some(limit) = ctx.shader_loop_limit()
+        if let Some(max_lights) = ctx.max_lights_per_pixel(frame.mode, dims.z)
             && !frame.heat_map
         {
-            let per_pixel = match frame.mode {
+            let lights = match frame.mode {
                 ShadingMode::BruteForce => {
                     frame.lights.map_or(self.light_count, |c| c.len()) as u64
                 }
@@ -327,11 +327,12 @@ impl Renderer {
                     .or(self.lists_uploaded.map(|(_, max)| max))
                     .unwrap_or(0) as u64,
             };
-            if per_pixel > limit {
+            if lights > max_lights {
                 return Err(GpuError::ShaderLoopLimit {
-                    lights: per_pixel,
+                    lights,
+                    max_lights,
                     adapter: ctx.describe(),
-                    limit,
+                    limit: ctx.shader_loop_limit().unwrap_or_default(),
                 });
             }
         }
