@@ -35,8 +35,9 @@ impl AssignmentDump {
         grid.fill_slice_edges(&mut z_planes);
         Self {
             grid: [d.x, d.y, d.z],
-            x_edges: (0..=d.x).map(|i| grid.x_edge_ndc(i)).collect(),
-            y_edges: (0..=d.y).map(|j| grid.y_edge_ndc(j)).collect(),
+            x_edges: (0..=d.x).map(|i| grid.x_edge_ndc(i) + 0.0).collect(),
+            // `+ 0.0` writes the middle edge as 0, not -0.
+            y_edges: (0..=d.y).map(|j| grid.y_edge_ndc(j) + 0.0).collect(),
             z_planes,
             offsets: lists.offsets.clone(),
             counts: lists.counts.clone(),
@@ -106,6 +107,40 @@ impl AssignmentDump {
                 );
             }
         }
+        self.validate_partition()
+    }
+
+    /// The lists must partition `indices` (CSR, in any cluster order): no two non-empty lists
+    /// share an index slot, and every slot belongs to a list. `myriad assign` writes them so;
+    /// aliased lists or stray indices would make the reported pairs mean something else.
+    fn validate_partition(&self) -> Result<()> {
+        let mut ranges: Vec<(u32, u32, usize)> = (self.offsets.iter().zip(&self.counts))
+            .enumerate()
+            .filter(|(_, (_, n))| **n > 0)
+            .map(|(c, (&o, &n))| (o, n, c))
+            .collect();
+        ranges.sort_unstable();
+        let mut covered = 0u64;
+        let mut previous: Option<usize> = None;
+        for (o, n, c) in ranges {
+            if (o as u64) < covered {
+                bail!(
+                    "cluster {c}'s list (indices[{o}..{}]) overlaps cluster {}'s",
+                    o as u64 + n as u64,
+                    previous.expect("an earlier list covers the slot")
+                );
+            }
+            if o as u64 > covered {
+                bail!("indices[{covered}..{o}] belong to no cluster's list");
+            }
+            covered = o as u64 + n as u64;
+            previous = Some(c);
+        }
+        ensure!(
+            covered == self.indices.len() as u64,
+            "indices[{covered}..{}] belong to no cluster's list",
+            self.indices.len()
+        );
         Ok(())
     }
 
@@ -129,7 +164,7 @@ impl AssignmentDump {
             ("y_edges", &self.y_edges, &reference.y_edges),
             ("z_planes", &self.z_planes, &reference.z_planes),
         ] {
-            if let Some(i) = (0..want.len()).find(|&i| got[i].to_bits() != want[i].to_bits()) {
+            if let Some(i) = (0..want.len()).find(|&i| got[i] != want[i]) {
                 bail!(
                     "{name}[{i}] is {}, but the scene's grid has {} (another camera or depth slicing?)",
                     got[i],

@@ -289,6 +289,62 @@ fn every_method_passes_the_oracle_check() {
 }
 
 #[test]
+fn check_finds_a_removed_light_with_either_reference() {
+    let dir = work_dir("check_references");
+    let scene = dir.join("paper.json");
+    let scene_arg = scene.to_str().unwrap();
+    myriad_ok(&[
+        "scene", "--preset", "paper", "--lights", "300", "--out", scene_arg,
+    ]);
+    // The exact method's lists: every pair is a true one, so any removal is a miss.
+    let dump = dir.join("exact.dump.json");
+    let whole = assign_and_check(&scene, "exact", &dump);
+    // The middle y edge is written as 0, not -0.
+    let mut d = read_json(&dump);
+    assert_eq!(d["y_edges"][6].to_string(), "0.0");
+    // One light taken out of one list (the lists stay CSR).
+    let counts: Vec<u64> = serde_json::from_value(d["counts"].clone()).unwrap();
+    let c = counts.iter().position(|&n| n >= 1).unwrap();
+    let at = d["offsets"][c].as_u64().unwrap() as usize;
+    let removed = d["indices"].as_array_mut().unwrap().remove(at);
+    d["counts"][c] = Value::from(counts[c] - 1);
+    for later in c + 1..counts.len() {
+        let o = d["offsets"][later].as_u64().unwrap();
+        d["offsets"][later] = Value::from(o - 1);
+    }
+    let broken = write(&dir, "broken.dump.json", &d.to_string());
+    for reference in ["independent", "exact-method"] {
+        let args = [
+            "check",
+            "--scene",
+            scene_arg,
+            "--dump",
+            dump.to_str().unwrap(),
+        ];
+        let out = myriad_ok(&[&args[..], &["--json", "--reference", reference]].concat());
+        let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(cmp["reference"], reference);
+        for field in ["exact_pairs", "reported_pairs", "misses", "false_positives"] {
+            assert_eq!(cmp[field], whole[field], "{reference}: {field}");
+        }
+        let args = [
+            "check",
+            "--scene",
+            scene_arg,
+            "--dump",
+            broken.to_str().unwrap(),
+        ];
+        let out = myriad(&[&args[..], &["--json", "--reference", reference]].concat());
+        assert!(!out.status.success(), "{reference}: a miss must fail");
+        let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(cmp["misses"], 1, "{reference}: {cmp}");
+        assert_eq!(cmp["first_miss"]["cluster"], c, "{reference}: {cmp}");
+        assert_eq!(cmp["first_miss"]["light"], removed, "{reference}: {cmp}");
+        assert_mentions(&stderr(&out), &["1 miss(es)", &format!("cluster {c}")]);
+    }
+}
+
+#[test]
 fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
     let dir = work_dir("skipped_lights");
     let l0 = r#"{"position": [0, 2, 0], "radius": 2}"#;
@@ -449,6 +505,27 @@ fn check_rejects_broken_dumps_naming_the_file() {
     assert_mentions(
         &check(&inconsistent),
         &[&inconsistent.display().to_string(), "inconsistent"],
+    );
+
+    // Lists that alias each other, or indices no list owns: not CSR, so not a dump.
+    let d = counts
+        .iter()
+        .rposition(|&n| n >= 1)
+        .expect("a last non-empty list");
+    assert_ne!(c, d);
+    let aliased = edited("aliased.json", &|v| {
+        v["offsets"][d] = v["offsets"][c].clone()
+    });
+    assert_mentions(
+        &check(&aliased),
+        &[&aliased.display().to_string(), "overlaps", "inconsistent"],
+    );
+    let stray = edited("stray.json", &|v| {
+        v["indices"].as_array_mut().unwrap().push(Value::from(0))
+    });
+    assert_mentions(
+        &check(&stray),
+        &[&stray.display().to_string(), "belong to no cluster's list"],
     );
 
     // A dump of another grid.

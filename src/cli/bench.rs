@@ -1,9 +1,10 @@
 //! `myriad bench`: the time-against-error table, with the thread link measured around it.
 
 use super::assign::parse_method;
+use super::oracle_check::independent_lists;
 use super::source::{SceneSource, thread_pool};
 use anyhow::Result;
-use myriad::assignment::{Assigner, LightLists, Method, Parallelism};
+use myriad::assignment::{Method, Parallelism};
 use myriad::core_link::{self, CoreLink, HANDOFF_BYTES};
 use myriad::evaluate::{Idle, MethodResult, Timing, measure};
 use myriad::scene::Scene;
@@ -107,14 +108,8 @@ fn bench(
     let pool = thread_pool(threads)?;
     let input = myriad::light_input(&scene.lights);
     pool.install(|| {
-        let mut exact = LightLists::new();
-        Assigner::new().assign(
-            Method::Exact,
-            &input,
-            &scene.camera,
-            &scene.grid,
-            &mut exact,
-        );
+        // The reference shares no code with the assignment but the f64 oracle.
+        let exact = independent_lists(&scene.lights, &scene.camera, &scene.grid);
         let before = core_link::measure();
         let methods = methods
             .iter()

@@ -7,6 +7,7 @@ mod check;
 mod frames;
 mod grid_options;
 mod info;
+mod oracle_check;
 mod paper;
 mod progress;
 mod render;

@@ -14,6 +14,7 @@
 //! sets in its own fonts, so nothing here needs system fonts or a rasteriser.
 
 use super::grid_options::parse_grid;
+use super::oracle_check::independent_lists;
 use super::source::thread_pool;
 use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
@@ -165,8 +166,8 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
                 scene.grid.near(),
                 scene.grid.far(),
             );
-            let mut exact = LightLists::new();
-            Assigner::new().assign(Method::Exact, &input, camera, &grid, &mut exact);
+            // The reference shares no code with the assignment but the f64 oracle.
+            let exact = independent_lists(&scene.lights, camera, &grid);
             let mut lists = LightLists::new();
             let mut times = Vec::new();
             for method in Method::ALL {
@@ -183,14 +184,9 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
                     Timing::back_to_back(runs),
                 );
                 // `measure` keeps its lists to itself; one more assignment gives them back for the
-                // shading cost (exact's are the reference itself).
-                let method_lists = if method == Method::Exact {
-                    &exact
-                } else {
-                    Assigner::new().assign(method, &input, camera, &grid, &mut lists);
-                    &lists
-                };
-                let (shading_cost, lit_clusters) = shading_cost(method_lists, &exact);
+                // shading cost.
+                Assigner::new().assign(method, &input, camera, &grid, &mut lists);
+                let (shading_cost, lit_clusters) = shading_cost(&lists, &exact);
                 times.push(format!("{method} {:.0} µs", result.median_us));
                 rows.push(Row {
                     scene: preset.name(),

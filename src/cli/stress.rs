@@ -20,24 +20,13 @@
 //!    bytes and CPU time;
 //! 5. **GPU render**, clustered only: pass timestamps where the adapter has them, and the wall
 //!    time from submit to idle. (Brute force and one-slice tiles are not attempted: on llvmpipe
-//!    a pixel may loop over at most 65 535 lights and the renderer refuses more —
+//!    a pixel may loop over at most 65 534 lights and the renderer refuses more —
 //!    `GpuError::ShaderLoopLimit`; clustered lists stay far below that);
-//! 6. **oracle check**, two ways:
-//!    * up to `--exact-up-to` lights (200k), **every cluster**: the `exact` method's lists and
-//!      [`myriad::evaluate::compare`];
-//!    * above, **`--sample K` clusters** (2000, seeded), each checked on its own: every light is
-//!      tested against the cluster's cell with the f64 oracle itself
-//!      ([`LightVolume::intersects_cell`] on [`Cell::of_cluster`], the lights read by
-//!      [`OracleView::light`] as the `exact` method and the assignment tests' brute force read
-//!      them), after a depth window and a test against the cell's
-//!      four walls, which only drop lights the oracle rejects too (their slack is far wider
-//!      than the oracle's tolerance). Every light the oracle accepts must be in the list.
-//!
-//!    A miss names the cluster and the light. Why two: the `exact` method finds its candidate
-//!    clusters with the same cull and plane-search phases as the fast methods (only more
-//!    padded), so a bug there could hide from a comparison with it; the sampled check shares no
-//!    code with the assignment but the oracle. It is not cheaper: on the atrium with 1M lights
-//!    the sampled check of 2000 of 4608 clusters took about 2.6× as long as the full one
+//! 6. **oracle check** (`oracle_check.rs`): up to `--exact-up-to` lights (200k), **every
+//!    cluster** through the `exact` method's lists; above, **`--sample K` clusters** (2000,
+//!    seeded), each checked independently against every light in its depth window. A miss names
+//!    the cluster and the light. It is not cheaper: on the atrium with 1M lights the sampled
+//!    check of 2000 of 4608 clusters took about 2.6× as long as the full one
 //!    (`--exact-up-to 2000000`; 4.4 s against 1.7 s on the 2-core machine), because the
 //!    `exact` method tests only each light's candidate clusters while a sampled cluster scans
 //!    every light in its depth window.
@@ -56,19 +45,14 @@
 
 use super::assign::parse_method;
 use super::grid_options::parse_grid;
+use super::oracle_check::{CheckReport, OracleLights, check_all, check_clusters, sample_clusters};
 use super::progress::Progress;
 use super::render::parse_size;
 use anyhow::{Result, ensure};
-use myriad::assignment::{Assigner, LightLists, Method};
-use myriad::cluster_math::glam::{DVec3, Vec3};
-use myriad::cluster_math::oracle::{Cell, LightVolume, OracleView};
-use myriad::cluster_math::{Camera, ClusterGrid};
-use myriad::evaluate::compare;
+use myriad::assignment::{Assigner, LightLists};
 use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
 use myriad::render::{RenderScene, Viewer, cluster_lists, grid_of, light_columns};
-use myriad::scene::{DepthSlicing, Lights};
-use rand::SeedableRng;
-use rayon::prelude::*;
+use myriad::scene::DepthSlicing;
 use serde::Serialize;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -128,30 +112,6 @@ struct Assignment {
     /// The longest list: what one pixel may loop over.
     max_list: u32,
     list_bytes: u64,
-}
-
-/// A light the oracle puts in a cluster but the list lacks.
-#[derive(Serialize, Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Miss {
-    cluster: u32,
-    /// (i, j, k) of the cluster.
-    tile: [u32; 3],
-    light: u32,
-}
-
-/// The oracle check's outcome.
-#[derive(Serialize, Debug, Clone, PartialEq)]
-pub(crate) struct CheckReport {
-    /// "full" (every cluster, exact lists) or "sampled".
-    mode: &'static str,
-    clusters_checked: u64,
-    clusters_total: u64,
-    exact_pairs: u64,
-    reported_pairs: u64,
-    misses: u64,
-    false_positives: u64,
-    /// The miss in the lowest cluster (lowest light first), if any.
-    first_miss: Option<Miss>,
 }
 
 #[derive(Serialize, Debug)]
@@ -370,219 +330,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Every cluster: the `exact` method's lists against the reported ones.
-fn check_all(
-    lights: &Lights,
-    camera: &Camera,
-    grid: &ClusterGrid,
-    lists: &LightLists,
-) -> CheckReport {
-    let mut exact = LightLists::new();
-    Assigner::new().assign(
-        Method::Exact,
-        &myriad::light_input(lights),
-        camera,
-        grid,
-        &mut exact,
-    );
-    let cmp = compare(lists, &exact);
-    let first_miss = (cmp.misses > 0)
-        .then(|| {
-            (0..exact.cluster_count()).find_map(|c| {
-                let got = lists.lights_of(c);
-                exact
-                    .lights_of(c)
-                    .iter()
-                    .find(|l| !got.contains(l))
-                    .map(|&light| miss(grid, c as u32, light))
-            })
-        })
-        .flatten();
-    CheckReport {
-        mode: "full",
-        clusters_checked: exact.cluster_count() as u64,
-        clusters_total: grid.cluster_count() as u64,
-        exact_pairs: cmp.exact_pairs,
-        reported_pairs: cmp.reported_pairs,
-        misses: cmp.misses,
-        false_positives: cmp.false_positives,
-        first_miss,
-    }
-}
-
-fn miss(grid: &ClusterGrid, cluster: u32, light: u32) -> Miss {
-    let t = grid.cluster_coords(cluster);
-    Miss {
-        cluster,
-        tile: [t.x, t.y, t.z],
-        light,
-    }
-}
-
-/// `k` distinct cluster ids of `0..count` drawn from `seed`, ascending (all of them when `k`
-/// is at least `count`).
-pub(crate) fn sample_clusters(count: usize, k: usize, seed: u64) -> Vec<u32> {
-    if k >= count {
-        return (0..count as u32).collect();
-    }
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed ^ 0x5354_5245_5353); // "STRESS"
-    let mut picked: Vec<u32> = rand::seq::index::sample(&mut rng, count, k)
-        .into_iter()
-        .map(|c| c as u32)
-        .collect();
-    picked.sort_unstable();
-    picked
-}
-
-/// One valid light in f64 view space.
-#[derive(Clone, Copy, Debug)]
-struct ViewLight {
-    volume: LightVolume,
-    /// Centre and radius of the volume's bounding ball, for the cheap filters.
-    centre: DVec3,
-    radius: f64,
-    /// Index into the input columns.
-    index: u32,
-}
-
-/// The lights as the oracle sees them ([`OracleView::light`], as the `exact` method reads them),
-/// sorted by depth, so one cluster's candidates are a window of the array. Invalid lights are
-/// left out, since no method may assign them.
-pub(crate) struct OracleLights {
-    lights: Vec<ViewLight>,
-    /// `-centre.z` of each light, ascending.
-    depths: Vec<f64>,
-    max_radius: f64,
-}
-
-impl OracleLights {
-    pub(crate) fn new(lights: &Lights, camera: &Camera) -> Self {
-        let view = OracleView::new(camera);
-        let spots_present = lights.has_spots();
-        let mut sorted: Vec<ViewLight> = (0..lights.len())
-            .into_par_iter()
-            .filter_map(|l| {
-                let position = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
-                let spot = spots_present.then(|| {
-                    let direction = Vec3::new(
-                        lights.spot_dir_x[l],
-                        lights.spot_dir_y[l],
-                        lights.spot_dir_z[l],
-                    );
-                    (direction, lights.spot_angle[l])
-                });
-                let volume = view.light(position, lights.radius[l], spot)?;
-                let (centre, radius) = volume.bounding_ball();
-                Some(ViewLight {
-                    volume,
-                    centre,
-                    radius,
-                    index: l as u32,
-                })
-            })
-            .collect();
-        sorted.par_sort_unstable_by(|a, b| (-a.centre.z).total_cmp(&-b.centre.z));
-        Self {
-            depths: sorted.iter().map(|l| -l.centre.z).collect(),
-            max_radius: sorted.iter().map(|l| l.radius).fold(0.0, f64::max),
-            lights: sorted,
-        }
-    }
-
-    /// The input indices of every light the oracle says touches `cell`, ascending.
-    fn touching(&self, cell: &Cell, out: &mut Vec<u32>) {
-        out.clear();
-        // The cell is where four walls through the eye and two depth planes hold it; a ball whose
-        // centre lies farther than its radius outside any one of them misses the cell. Outward
-        // unit normals of the walls (left, right, bottom, top): inside ⇔ `n·p ≤ 0`.
-        let walls = [
-            DVec3::new(-1.0, 0.0, -cell.x_slopes[0]).normalize(),
-            DVec3::new(1.0, 0.0, cell.x_slopes[1]).normalize(),
-            DVec3::new(0.0, -1.0, -cell.y_slopes[0]).normalize(),
-            DVec3::new(0.0, 1.0, cell.y_slopes[1]).normalize(),
-        ];
-        // Slack far above the oracle's own tolerance bands (1e-12 of the local scale for spots,
-        // 64 ulps for balls) and the rounding here, so these filters only drop lights the oracle
-        // rejects too.
-        let slack = |scale: f64| 1e-6 * (1.0 + scale);
-        let [near, far] = cell.depths;
-        // Depth window: the centre's depth is within the radius of the cell's depth range.
-        let window = self.max_radius + slack(far + self.max_radius);
-        let lo = self.depths.partition_point(|&d| d < near - window);
-        let hi = self.depths.partition_point(|&d| d <= far + window);
-        for light in &self.lights[lo..hi] {
-            let c = light.centre;
-            let reach = light.radius + slack(c.abs().element_sum() + light.radius);
-            let depth = -c.z;
-            if depth < near - reach || depth > far + reach || walls.iter().any(|n| n.dot(c) > reach)
-            {
-                continue;
-            }
-            if light.volume.intersects_cell(cell) {
-                out.push(light.index);
-            }
-        }
-        out.sort_unstable();
-    }
-}
-
-/// Checks the reported lists of `clusters` against the oracle, light by light.
-pub(crate) fn check_clusters(
-    oracle: &OracleLights,
-    camera: &Camera,
-    grid: &ClusterGrid,
-    lists: &LightLists,
-    clusters: &[u32],
-) -> CheckReport {
-    #[derive(Default)]
-    struct Tally {
-        exact: u64,
-        reported: u64,
-        misses: u64,
-        first_miss: Option<(u32, u32)>,
-    }
-    let tally = clusters
-        .par_iter()
-        .map_init(Vec::new, |exact, &c| {
-            let t = grid.cluster_coords(c);
-            let cell = Cell::of_cluster(camera, grid, t.x, t.y, t.z);
-            oracle.touching(&cell, exact);
-            let mut got = lists.lights_of(c as usize).to_vec();
-            got.sort_unstable();
-            got.dedup();
-            let missing: Vec<u32> = exact
-                .iter()
-                .copied()
-                .filter(|l| got.binary_search(l).is_err())
-                .collect();
-            Tally {
-                exact: exact.len() as u64,
-                reported: got.len() as u64,
-                misses: missing.len() as u64,
-                first_miss: missing.first().map(|&l| (c, l)),
-            }
-        })
-        .reduce(Tally::default, |a, b| Tally {
-            exact: a.exact + b.exact,
-            reported: a.reported + b.reported,
-            misses: a.misses + b.misses,
-            first_miss: match (a.first_miss, b.first_miss) {
-                (Some(x), Some(y)) => Some(x.min(y)),
-                (x, y) => x.or(y),
-            },
-        });
-    CheckReport {
-        mode: "sampled",
-        clusters_checked: clusters.len() as u64,
-        clusters_total: grid.cluster_count() as u64,
-        exact_pairs: tally.exact,
-        reported_pairs: tally.reported,
-        misses: tally.misses,
-        false_positives: tally.reported - (tally.exact - tally.misses),
-        first_miss: tally.first_miss.map(|(c, l)| miss(grid, c, l)),
-    }
-}
-
 /// Peak resident set size of this process (`VmHWM`), where the OS tells.
 fn peak_memory_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -698,101 +445,5 @@ fn print_table(r: &Report) {
         println!("PASS: no light missing from any checked cluster");
     } else {
         println!("FAIL: {} miss(es)", c.misses);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A small default scene (no GPU needed) and its refined lists.
-    fn scene_and_lists(lights: usize) -> (RenderScene, LightLists) {
-        let scene = RenderScene::default_scene(lights, 64, 36).unwrap();
-        let mut lists = LightLists::new();
-        Assigner::new().assign(
-            Method::Refined,
-            &myriad::light_input(&scene.lights),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
-        (scene, lists)
-    }
-
-    /// `lists` without `light` in cluster `cluster`.
-    fn without(lists: &LightLists, cluster: usize, light: u32) -> LightLists {
-        let mut out = LightLists::new();
-        for c in 0..lists.cluster_count() {
-            out.offsets.push(out.indices.len() as u32);
-            let kept: Vec<u32> = lists
-                .lights_of(c)
-                .iter()
-                .copied()
-                .filter(|&l| c != cluster || l != light)
-                .collect();
-            out.counts.push(kept.len() as u32);
-            out.indices.extend(kept);
-        }
-        out
-    }
-
-    #[test]
-    fn sampled_oracle_over_every_cluster_equals_the_exact_method() {
-        let (scene, lists) = scene_and_lists(3000);
-        let oracle = OracleLights::new(&scene.lights, &scene.camera);
-        let every = sample_clusters(scene.grid.cluster_count(), usize::MAX, 1);
-        let sampled = check_clusters(&oracle, &scene.camera, &scene.grid, &lists, &every);
-        let full = check_all(&scene.lights, &scene.camera, &scene.grid, &lists);
-        assert!(full.exact_pairs > 10_000, "{full:?}");
-        assert_eq!(sampled.misses, 0);
-        assert_eq!(
-            (
-                sampled.exact_pairs,
-                sampled.reported_pairs,
-                sampled.false_positives
-            ),
-            (full.exact_pairs, full.reported_pairs, full.false_positives)
-        );
-    }
-
-    #[test]
-    fn sampled_check_finds_a_light_removed_from_a_list() {
-        let (scene, lists) = scene_and_lists(3000);
-        let oracle = OracleLights::new(&scene.lights, &scene.camera);
-        // A cluster and a light the oracle says touch it.
-        let mut exact = Vec::new();
-        let (cluster, light) = (0..scene.grid.cluster_count() as u32)
-            .rev()
-            .find_map(|c| {
-                let t = scene.grid.cluster_coords(c);
-                let cell = Cell::of_cluster(&scene.camera, &scene.grid, t.x, t.y, t.z);
-                oracle.touching(&cell, &mut exact);
-                exact.get(exact.len() / 2).map(|&l| (c, l))
-            })
-            .expect("some cluster has lights");
-        let broken = without(&lists, cluster as usize, light);
-        assert_eq!(broken.pair_count() + 1, lists.pair_count());
-        // Sampled with the cluster among others: exactly that miss.
-        let clusters = [0, cluster / 2, cluster];
-        let ok = check_clusters(&oracle, &scene.camera, &scene.grid, &lists, &clusters);
-        assert_eq!((ok.misses, ok.first_miss), (0, None));
-        let bad = check_clusters(&oracle, &scene.camera, &scene.grid, &broken, &clusters);
-        assert_eq!(bad.misses, 1);
-        assert_eq!(bad.first_miss, Some(miss(&scene.grid, cluster, light)));
-        // And the full check names the same pair.
-        let full = check_all(&scene.lights, &scene.camera, &scene.grid, &broken);
-        assert_eq!(full.misses, 1);
-        assert_eq!(full.first_miss, Some(miss(&scene.grid, cluster, light)));
-    }
-
-    #[test]
-    fn samples_are_distinct_seeded_and_ascending() {
-        let a = sample_clusters(4608, 2000, 7);
-        assert_eq!(a.len(), 2000);
-        assert!(a.windows(2).all(|w| w[0] < w[1]));
-        assert!(a.iter().all(|&c| c < 4608));
-        assert_eq!(a, sample_clusters(4608, 2000, 7));
-        assert_ne!(a, sample_clusters(4608, 2000, 8));
-        assert_eq!(sample_clusters(10, 50, 1), (0..10).collect::<Vec<_>>());
     }
 }
