@@ -4,7 +4,7 @@
 
 use myriad::assignment::Method;
 use myriad::gpu::GpuContext;
-use myriad::render::{RenderScene, Skips, Viewer};
+use myriad::render::{RenderScene, Shading, Skips, Viewer};
 use myriad::scene::{Lights, atrium};
 
 fn max_difference(a: &[u8], b: &[u8]) -> u8 {
@@ -155,4 +155,30 @@ fn unchanged_frames_are_reused_and_changes_are_seen() {
     scene.lights.y[100] += 0.5;
     let (_, f4) = render(&mut viewer, &scene, Skips::ALL);
     assert!(!f4.reused && !f4.appearance_only && f4.stats.is_some());
+}
+
+#[test]
+fn a_plain_frame_in_between_invalidates_the_reuse_cache() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let (skipping, _) = render(&mut viewer, &scene, Skips::ALL);
+    // A plain frame uploads every light and the full grid's lists over the cached ones …
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    // … so the next skipping frame must not reuse what the GPU no longer holds.
+    let (again, frame) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(
+        !frame.reused && !frame.appearance_only,
+        "stale cache reused"
+    );
+    assert!(max_difference(&skipping, &again) <= 1);
+    // Another method is another set of lists: not reused either.
+    let other = viewer
+        .frame_with_skips(&scene, Method::Binary, Skips::ALL)
+        .unwrap();
+    assert!(!other.reused, "lists of another method reused");
 }

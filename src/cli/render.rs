@@ -461,7 +461,7 @@ fn print_table(s: &Stats) {
         format!("{:.1}%", r.pixels.skipped_fraction * 100.0)
     });
     println!(
-        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, culled before assignment)",
+        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, dropped by the assignment's first test; all uploaded — `myriad skips` measures culling them)",
         s.lights,
         match s.lights_skipped_in_file {
             0 => String::new(),

@@ -109,6 +109,10 @@ struct Cache {
     base_grid: ClusterGrid,
     grid: ClusterGrid,
     lights: Lights,
+    method: Method,
+    /// The renderer's upload generation after this frame: any other upload since (a plain
+    /// [`Viewer::frame`], say) means the GPU's lights and lists are no longer these.
+    generation: u64,
 }
 
 /// Scratch and cache of the skipping frame path, kept in the [`Viewer`].
@@ -164,6 +168,8 @@ impl Viewer {
         // 4. Dirty tracking.
         if let Some(cache) = state.cache.as_ref().filter(|c| {
             skips.reuse_unchanged
+                && c.generation == self.renderer.upload_generation()
+                && c.method == method
                 && c.skips == skips
                 && c.camera == scene.camera
                 && c.base_grid == scene.grid
@@ -199,12 +205,9 @@ impl Viewer {
                 self.renderer
                     .render(&self.ctx, &self.scene, &desc, &self.target.view)?;
             if appearance {
-                state
-                    .cache
-                    .as_mut()
-                    .expect("cache present")
-                    .lights
-                    .clone_from(lights);
+                let cache = state.cache.as_mut().expect("cache present");
+                cache.lights.clone_from(lights);
+                cache.generation = self.renderer.upload_generation();
             }
             return Ok(frame);
         }
@@ -285,8 +288,12 @@ impl Viewer {
                 base_grid: scene.grid,
                 grid: frame.grid,
                 lights: Lights::new(),
+                method,
+                generation: 0,
             });
             cache.skips = skips;
+            cache.method = method;
+            cache.generation = self.renderer.upload_generation();
             cache.camera = scene.camera;
             cache.base_grid = scene.grid;
             cache.grid = frame.grid;

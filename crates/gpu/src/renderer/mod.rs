@@ -130,6 +130,8 @@ pub struct Renderer {
     lists_uploaded: Option<(usize, u32)>,
     edges_uploaded: Option<ClusterGrid>,
     has_spots: bool,
+    /// Bumped by every frame that uploads lights or lists (see [`Renderer::upload_generation`]).
+    uploads: u64,
 }
 
 impl Renderer {
@@ -171,6 +173,7 @@ impl Renderer {
             light_count: 0,
             lights_camera: None,
             lists_uploaded: None,
+            uploads: 0,
             edges_uploaded: None,
             has_spots: false,
             pipelines,
@@ -199,6 +202,13 @@ impl Renderer {
             .as_ref()
             .map(|g| crate::readback::read_depth(ctx, &g.depth_texture))
             .transpose()
+    }
+
+    /// How many frames have uploaded lights or lists so far. A caller that keeps what it last
+    /// uploaded (to send nothing when nothing changed) compares this with the value after its own
+    /// upload: if another frame uploaded in between, the GPU no longer holds its data.
+    pub fn upload_generation(&self) -> u64 {
+        self.uploads
     }
 
     /// GPU times of the last frame's passes (waits for the GPU); `None` where the device has no
@@ -364,6 +374,7 @@ impl Renderer {
                 );
                 self.light_count = columns.len();
                 self.lights_camera = Some(camera_position);
+                self.uploads += 1;
                 self.has_spots = columns.spot.is_some();
             }
             None if self.lights_camera != Some(camera_position) && self.light_count > 0 => {
@@ -390,6 +401,7 @@ impl Renderer {
                 report.upload_bytes += stage(&mut self.belt, &mut encoder, buffer, data);
             }
             self.lists_uploaded = Some((clusters, lists.max_count()));
+            self.uploads += 1;
         }
         let max_count = match (frame.mode, self.lists_uploaded) {
             (ShadingMode::BruteForce, _) => self.light_count as u32,
