@@ -51,8 +51,10 @@ impl AssignmentDump {
 
     /// Reads and checks a dump file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
+        let bytes = myriad_scene::read_regular_file(path)
             .with_context(|| format!("cannot read dump {}", path.display()))?;
+        let text = String::from_utf8(bytes)
+            .with_context(|| format!("{}: not a valid assignment dump", path.display()))?;
         let dump: Self = serde_json::from_str(&text)
             .with_context(|| format!("{}: not a valid assignment dump", path.display()))?;
         dump.validate()

@@ -453,11 +453,20 @@ fn position_of_missing_accessor_is_an_error() {
     assert!(r.is_err());
 }
 
-/// A buffer URI naming a device (`/dev/zero` would be read forever) or a folder is refused.
+/// A buffer URI naming a device (`/dev/zero` would be read forever) or a folder is refused,
+/// however it is spelled (percent-encoded, relative, `file:`).
 #[test]
 fn buffer_uris_naming_devices_or_folders_are_refused() {
     let dir = temp_dir("devices");
-    for uri in ["/dev/zero", ".", "/"] {
+    let uris = [
+        "/dev/zero",
+        ".",
+        "/",
+        "/dev/%7Aero",
+        "../../../../../../../../../../dev/zer%6F",
+        "file:///dev/zero",
+    ];
+    for uri in uris {
         let text = format!(
             r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 16, "uri": "{uri}"}}]}}"#
         );
@@ -471,5 +480,46 @@ fn buffer_uris_naming_devices_or_folders_are_refused() {
         let message = r.expect_err(uri);
         assert!(message.contains("not a regular file"), "{uri}: {message}");
     }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// An image URI naming a device is refused before the decoder reads it; an escape that does not
+/// decode to UTF-8 is an error, not a panic in the gltf crate.
+#[test]
+fn image_uris_naming_devices_and_bad_escapes_are_errors() {
+    let dir = temp_dir("image_devices");
+    let triangle = r#""buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+        "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0,
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"source": 0}]"#;
+    for (uri, expected) in [
+        ("/dev/zero", "not a regular file"),
+        ("/dev/%7Aero", "not a regular file"),
+        ("%FF.png", "does not percent-decode to UTF-8"),
+    ] {
+        let text = format!(
+            r#"{{"asset": {{"version": "2.0"}}, {triangle}, "images": [{{"uri": "{uri}"}}]}}"#
+        );
+        let path = dir.join("image.gltf");
+        std::fs::write(&path, &text).unwrap();
+        let r = guarded("image uri", Duration::from_secs(20), move || {
+            Model::load(&path, &LoadOptions::default())
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        });
+        let message = r.expect_err(uri);
+        assert!(message.contains(expected), "{uri}: {message}");
+    }
+    let buffer =
+        r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4, "uri": "%FF.bin"}]}"#;
+    let path = dir.join("buffer.gltf");
+    std::fs::write(&path, buffer).unwrap();
+    let message = Model::load(&path, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("does not percent-decode"), "{message}");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -109,7 +109,7 @@ impl Model {
     /// the file's folder. Every problem is an [`Error`] naming the file.
     pub fn load(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Model> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| Error::GltfRead {
+        let bytes = crate::read_regular_file(path).map_err(|source| Error::GltfRead {
             path: path.to_path_buf(),
             source,
         })?;
@@ -259,6 +259,22 @@ fn check_json_start(bytes: &[u8]) -> Result<(), String> {
     }
 }
 
+/// The file an external (non-data) URI names, resolved as the gltf crate resolves it: `file:`
+/// URIs as paths, other URIs without a scheme percent-decoded and relative to `base`. `None`
+/// for data URIs and other schemes (the crate reports those). An escape that does not decode to
+/// UTF-8 is an error here (the crate would panic on it).
+fn external_file(base: &Path, uri: &str) -> Result<Option<std::path::PathBuf>, String> {
+    if uri.contains(':') {
+        let path = uri
+            .strip_prefix("file://")
+            .or_else(|| uri.strip_prefix("file:"));
+        return Ok(path.map(std::path::PathBuf::from));
+    }
+    let decoded = urlencoding::decode(uri)
+        .map_err(|_| format!("URI \"{uri}\" does not percent-decode to UTF-8"))?;
+    Ok(Some(base.join(&*decoded)))
+}
+
 fn load(
     bytes: &[u8],
     origin: &str,
@@ -301,18 +317,26 @@ fn load(
                 "buffers[{i}]{name}: an external file cannot be read without a base folder"
             ));
         }
-        // A URI naming a device or a pipe (`/dev/zero`, a FIFO) would make the read below never
-        // end: only regular files are read. (URIs that do not resolve as written — percent-
-        // encoded names — are left to the gltf crate, which reports missing files itself.)
-        if let (Some(base), Some(uri)) = (base, declared.uri.as_deref())
-            && !uri.starts_with("data:")
-            && let Ok(meta) = std::fs::metadata(base.join(uri))
-            && !meta.is_file()
-        {
-            return Err(format!("buffers[{i}]{name}: not a regular file"));
-        }
-        let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)
-            .map_err(|e| format!("buffers[{i}]{name}: {}", describe(e)))?;
+        // External files are read here, as regular files only: a URI naming a device or a pipe
+        // (`/dev/zero`, a FIFO; also percent-encoded) would make the read never end.
+        let external = match (base, declared.uri.as_deref()) {
+            (Some(base), Some(uri)) => {
+                external_file(base, uri).map_err(|e| format!("buffers[{i}]{name}: {e}"))?
+            }
+            _ => None,
+        };
+        let data = match external {
+            Some(path) => {
+                let mut bytes = crate::read_regular_file(&path).map_err(|e| {
+                    format!("buffers[{i}]{name}: cannot read {}: {e}", path.display())
+                })?;
+                // As the gltf crate does: buffers are padded to a multiple of 4 bytes.
+                bytes.resize(bytes.len().next_multiple_of(4), 0);
+                gltf::buffer::Data(bytes)
+            }
+            None => gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)
+                .map_err(|e| format!("buffers[{i}]{name}: {}", describe(e)))?,
+        };
         if (data.0.len() as u64) < declared.byte_length.0 {
             return Err(format!(
                 "buffers[{i}]{name}: declares {} bytes but holds {}",
@@ -725,10 +749,21 @@ impl Loader<'_> {
             }
             ImageSource::Uri { .. } | ImageSource::DataUri { .. } => {
                 let uri = image.uri.as_deref().unwrap_or_default();
-                if base.is_none() && matches!(source, ImageSource::Uri { .. }) {
-                    return Err(format!(
-                        "external file \"{uri}\" cannot be read without a base folder"
-                    ));
+                if matches!(source, ImageSource::Uri { .. }) {
+                    let Some(base) = base else {
+                        return Err(format!(
+                            "external file \"{uri}\" cannot be read without a base folder"
+                        ));
+                    };
+                    // The crate reads the file to its end: a regular file only.
+                    if let Some(path) = external_file(base, uri)?
+                        && !std::fs::metadata(&path).is_ok_and(|m| m.is_file())
+                    {
+                        return Err(format!(
+                            "external file \"{uri}\" ({}) is missing or not a regular file",
+                            path.display()
+                        ));
+                    }
                 }
                 gltf::image::Source::Uri {
                     uri,

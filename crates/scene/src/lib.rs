@@ -119,6 +119,7 @@ mod lights;
 mod model;
 mod presets;
 mod read;
+mod read_file;
 mod replace_file;
 mod scene_file;
 pub mod systems;
@@ -138,6 +139,7 @@ pub use model::{
     PunctualKind, TangentSource, TextureRef,
 };
 pub use presets::Preset;
+pub use read_file::read_regular_file;
 pub use replace_file::replace_file;
 pub use scene_file::{LightPolicy, Scene, SkippedLight};
 pub use validate::{ValidationReport, validate_file, validate_json_slice, validate_json_str};

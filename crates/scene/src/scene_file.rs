@@ -65,7 +65,7 @@ impl Scene {
     /// Reads and checks a scene file. Errors name the file; see [`Scene::from_json_str`].
     pub fn load(path: impl AsRef<Path>, policy: LightPolicy) -> Result<Self> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| Error::Read {
+        let bytes = crate::read_regular_file(path).map_err(|source| Error::Read {
             path: path.to_path_buf(),
             source,
         })?;

@@ -67,7 +67,7 @@ impl fmt::Display for ValidationReport {
 /// and column).
 pub fn validate_file(path: impl AsRef<Path>) -> Result<ValidationReport> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| Error::Read {
+    let bytes = crate::read_regular_file(path).map_err(|source| Error::Read {
         path: path.to_path_buf(),
         source,
     })?;
