@@ -523,3 +523,57 @@ fn image_uris_naming_devices_and_bad_escapes_are_errors() {
     assert!(message.contains("does not percent-decode"), "{message}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Valid glTF whose world space overflows f32, whose bounds are finite but farther apart than
+/// f32 can measure, or whose only triangle has no area: errors or finite values, never a panic.
+#[test]
+fn overflowing_and_degenerate_models_are_errors_not_panics() {
+    let dir = temp_dir("overflow");
+    // A vertex at 1 scaled by 3e38 and moved by 3e38 more: +inf in world space.
+    let overflow = gltf_edit(&[(
+        r#""nodes":[{"mesh":0}]"#,
+        r#""nodes":[{"mesh":0,"scale":[3e38,1,1],"translation":[3e38,0,0]}]"#,
+    )]);
+    let e = load_gltf(&dir, "overflow.gltf", overflow).unwrap_err();
+    assert!(e.contains("nodes[0]") && e.contains("overflow f32"), "{e}");
+
+    // Corners 4e38 apart (each finite) and a camera without zfar: the far plane is clamped to
+    // f32::MAX, not infinite, so a grid can be built on it.
+    let huge = gltf_edit(&[(
+        r#""nodes":[{"mesh":0}],
+ "scenes":[{"nodes":[0]}]"#,
+        r#""nodes":[{"mesh":0,"scale":[3e38,3e38,1]},{"camera":0}],
+ "cameras":[{"type":"perspective","perspective":{"yfov":1.0,"znear":0.1}}],
+ "scenes":[{"nodes":[0,1]}]"#,
+    )]);
+    let model = load_gltf(&dir, "huge.gltf", huge).unwrap();
+    let camera = model.camera(0, 64, 32).unwrap();
+    assert!(
+        camera.far.is_finite() && camera.far > 1e38,
+        "{}",
+        camera.far
+    );
+    let grid = myriad::cluster_math::ClusterGrid::new(
+        myriad::cluster_math::glam::UVec3::new(4, 2, 8),
+        myriad::cluster_math::DepthSlicing::Log,
+        camera.near,
+        camera.far,
+    );
+    assert_eq!(grid.cluster_count(), 64);
+
+    // A mesh scaled to nothing: no surface to put lights on is an error naming the model.
+    let flat = gltf_edit(&[(
+        r#""nodes":[{"mesh":0}],
+ "scenes":[{"nodes":[0]}]"#,
+        r#""nodes":[{"mesh":0,"scale":[0,0,0]},{"camera":0}],
+ "cameras":[{"type":"perspective","perspective":{"yfov":1.0,"znear":0.1,"zfar":100}}],
+ "scenes":[{"nodes":[0,1]}]"#,
+    )]);
+    let model = load_gltf(&dir, "flat.gltf", flat).unwrap();
+    let e = myriad::render::RenderScene::from_model(&model, "flat.gltf", None, 10, 1, 16, 8)
+        .err()
+        .expect("no surfaces");
+    let e = format!("{e:#}");
+    assert!(e.contains("flat.gltf") && e.contains("no surfaces"), "{e}");
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -205,7 +205,10 @@ fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
         });
     }
     if let Some(problem) = field.problem() {
-        bail!("invalid light field: {problem}");
+        bail!(
+            "{}: cannot generate the {field_name} light field: {problem}",
+            path.display()
+        );
     }
     let lights = field.generate(args.lights, args.seed);
     let what = format!(

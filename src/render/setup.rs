@@ -84,6 +84,9 @@ impl RenderScene {
                 offset: 0.2,
             })
             .with_radius(RadiusRule::Uniform { min: 0.5, max: 3.0 });
+            if let Some(problem) = field.problem() {
+                anyhow::bail!("{name}: cannot place {extra} lights on its surfaces: {problem}");
+            }
             let first = all.len() as u32;
             for (k, light) in field.generate(extra, seed).iter().enumerate() {
                 all.push(light.with_source_index(first + k as u32));

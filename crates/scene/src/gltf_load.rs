@@ -402,6 +402,29 @@ fn load(
             loader.model.warnings.push(format!("ignored {n} {what}"));
         }
     }
+    // Finite positions under finite transforms can still overflow f32 in world space (3e38
+    // scaled by 10): the bounds, the camera and the light fields would all be infinite.
+    let bounds = loader.model.bounds();
+    if !bounds.is_empty() && (!bounds.min.is_finite() || !bounds.max.is_finite()) {
+        let instance = loader.model.instances.iter().find(|instance| {
+            let m = instance.world_from_local;
+            loader.model.meshes[instance.mesh]
+                .primitives
+                .iter()
+                .any(|p| {
+                    p.indices
+                        .iter()
+                        .any(|&i| !m.transform_point3(p.positions[i as usize]).is_finite())
+                })
+        });
+        let place = instance.map_or(String::new(), |i| {
+            format!("nodes[{}] (meshes[{}]): ", i.node, i.mesh)
+        });
+        return Err(format!(
+            "{place}world-space positions overflow f32 (bounds {:?} .. {:?})",
+            bounds.min, bounds.max
+        ));
+    }
     Ok(loader.model)
 }
 

@@ -559,7 +559,7 @@ impl Model {
 
     /// Camera `index` as a [`Camera`] at `width`×`height` (see [`ModelCamera::to_camera`]); an
     /// infinite far plane becomes the distance to the farthest corner of [`Model::bounds`]
-    /// (plus 1%), at least `1000 × znear`. `None` if there is no such camera or it is
+    /// (plus 1%), at least `1000 × znear`, at most `f32::MAX`. `None` if there is no such camera or it is
     /// orthographic.
     pub fn camera(&self, index: usize, width: u32, height: u32) -> Option<Camera> {
         let c = self.cameras.get(index)?;
@@ -568,16 +568,19 @@ impl Model {
                 znear, zfar: None, ..
             } => {
                 let bounds = self.bounds();
+                // In f64: corners near ±f32::MAX are finite but their distances overflow f32.
                 let farthest = if bounds.is_empty() {
                     0.0
                 } else {
                     bounds
                         .corners()
                         .iter()
-                        .map(|&p| (p - c.position).length())
-                        .fold(0.0f32, f32::max)
+                        .map(|&p| (p.as_dvec3() - c.position.as_dvec3()).length())
+                        .fold(0.0f64, f64::max)
                 };
-                (1.01 * farthest).max(1000.0 * znear)
+                (1.01 * farthest)
+                    .max(1000.0 * znear as f64)
+                    .min(f32::MAX as f64) as f32
             }
             _ => 0.0, // unused: finite far or orthographic
         };
