@@ -571,8 +571,7 @@ fn overflowing_and_degenerate_models_are_errors_not_panics() {
     )]);
     let model = load_gltf(&dir, "flat.gltf", flat).unwrap();
     let e = myriad::render::RenderScene::from_model(&model, "flat.gltf", None, 10, 1, 16, 8)
-        .err()
-        .expect("no surfaces");
+        .expect_err("no surfaces");
     let e = format!("{e:#}");
     assert!(e.contains("flat.gltf") && e.contains("no surfaces"), "{e}");
     std::fs::remove_dir_all(dir).unwrap();
