@@ -10,15 +10,9 @@
 //!   seeded lights (uniform in the frustum's volume, radii 0.2–1.5), with the grid overridden to each
 //!   of 24×12×16, 16×9×24 and 32×18×48 (log slicing over the camera's near/far), and
 //!   10, 1 000, 10 000, 100 000 and 1 000 000 lights. Benchmark ids are `method/lights`.
-//!   Two cells of the table are left out on purpose:
-//!   - `exact` above 10 000 lights: it is the f64 oracle (every candidate cluster tested exactly),
-//!     the reference the other methods are checked against, not a method anyone ships. Its cost
-//!     grows with the pairs it tests: 1.5–2.4 ms per run at 10k of these small lights here, so
-//!     tens of milliseconds at 100k, and seconds at 1M lights of the `paper` preset's radii (4–6 ms
-//!     per 1000 there) — it would dominate the bench's time and tell nothing new.
-//!   - `linear` above 100 000 lights: the paper's Algorithm 1 is single-threaded and linear in the
-//!     lights; at 1M a run takes about a tenth of a second here (7–15 ms at 100k), so 1M would
-//!     cost a long measurement for a number the 100k row already predicts.
+//!   Every method runs at every size, the oracle-backed `exact` and the single-threaded
+//!   `linear` included: at 1M lights a run of either takes a tenth of a second or more, so the
+//!   biggest cells take flat sampling of 10 runs (see [`timing`]).
 //! * **`targets`** — exactly the issue's target configurations, with each preset's own grid:
 //!   `paper` 1000 lights (`linear`, `binary`, `refined`; the paper's 1.04 ms reference),
 //!   `uniform` 100k `refined` on a pool of one worker per core and on a 1-thread pool (thread
@@ -38,7 +32,9 @@
 //! Sample sizes shrink as inputs grow (see [`timing`]) so the whole bench stays within minutes:
 //! 50 samples for small inputs, 20 around 100k lights, 10 for the biggest.
 
-use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
+use criterion::{
+    BenchmarkGroup, BenchmarkId, Criterion, SamplingMode, Throughput, measurement::WallTime,
+};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::{ClusterGrid, DepthSlicing, glam::UVec3};
 use myriad::scene::{Preset, Scene};
@@ -60,15 +56,6 @@ const METHODS: [Method; 4] = [
     Method::Exact,
 ];
 
-/// Whether the scaling table measures `method` at `lights` (see the module docs for the gaps).
-fn measured(method: Method, lights: usize) -> bool {
-    match method {
-        Method::Exact => lights <= 10_000,
-        Method::Linear => lights <= 100_000,
-        Method::Binary | Method::Refined => true,
-    }
-}
-
 /// Sample size, warm-up and measurement time for one benchmark, by its rough cost per run.
 fn timing(group: &mut BenchmarkGroup<'_, WallTime>, method: Method, lights: usize) {
     // The oracle costs a few times what the fast methods do per light (2–4x at 10k lights here).
@@ -83,7 +70,15 @@ fn timing(group: &mut BenchmarkGroup<'_, WallTime>, method: Method, lights: usiz
         100_001..=1_000_000 => (10, 0.5, 3.0),
         _ => (10, 1.0, 5.0),
     };
+    // Runs of a tenth of a second and more: ten runs, not criterion's rising 1..=10 iterations
+    // per sample (55 runs).
+    let sampling = if weight > 1_000_000 {
+        SamplingMode::Flat
+    } else {
+        SamplingMode::Auto
+    };
     group
+        .sampling_mode(sampling)
         .sample_size(samples)
         .warm_up_time(Duration::from_secs_f64(warm_up))
         .measurement_time(Duration::from_secs_f64(measurement));
@@ -147,7 +142,7 @@ fn scaling(c: &mut Criterion) {
         );
         let mut group = c.benchmark_group(format!("scaling/{x}x{y}x{z}"));
         for (&lights, scene) in LIGHT_COUNTS.iter().zip(&scenes) {
-            for method in METHODS.into_iter().filter(|&m| measured(m, lights)) {
+            for method in METHODS {
                 let id = BenchmarkId::new(method.name(), lights);
                 let source = (Preset::Uniform, lights, scene);
                 bench_assign(&mut group, id, method, source, Some(grid), Caller::Outside);

@@ -1345,6 +1345,29 @@ fn stress_rejects_bad_options_clearly() {
         (&["stress", "--size", "64"], &["--size", "WxH"]),
         (&["stress", "--method", "guess"], &["guess", "refined"]),
         (&["stress", "--lights", "many"], &["--lights", "many"]),
+        (
+            &["bench", "--preset", "paper", "--threads", "1000000"],
+            &["--threads 1000000", "at most 1024"],
+        ),
+        (
+            &[
+                "scene",
+                "--gltf",
+                "assets/atrium.glb",
+                "--field",
+                "clumps",
+                "--clumps",
+                "4294967295",
+                "--lights",
+                "2",
+                "--out",
+                "unused.json",
+            ],
+            &[
+                "--clumps 4294967295",
+                "between 1 and the number of lights (2)",
+            ],
+        ),
     ]);
 }
 

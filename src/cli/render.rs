@@ -4,6 +4,7 @@
 use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::progress::Progress;
+use super::source::check_memory;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
@@ -348,6 +349,8 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         (Some(path), _) => {
             let file = myriad::scene::Scene::load(path, myriad::scene::LightPolicy::SkipInvalid)?;
             super::source::report_skipped(&file);
+            check_memory(&file.grid, file.lights.len())
+                .with_context(|| format!("{}: grid too large here", path.display()))?;
             skipped = file.skipped.len();
             let name = format!("{} in {model_name}", path.display());
             RenderScene::from_scene(&model, &name, file)
@@ -355,6 +358,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         (None, Some(preset)) => {
             let preset = super::source::parse_preset(preset)?;
             let (lights, seed) = (args.lights.unwrap_or(1000), args.seed.unwrap_or(1));
+            check_memory(&preset.view().1, lights)?;
             let name = format!(
                 "preset {} ({lights} lights, seed {seed}) in {model_name}",
                 preset.name()

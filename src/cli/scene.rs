@@ -3,8 +3,8 @@
 //! (`--gltf M --field F --lights N --seed K --out S`).
 
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
-use super::source::parse_preset;
-use anyhow::{Context, Result, bail};
+use super::source::{check_memory, parse_preset};
+use anyhow::{Context, Result, bail, ensure};
 use myriad::cluster_math::glam::Vec3;
 use myriad::scene::{
     Aabb, Camera, ClusterGrid, LightField, LoadOptions, Model, Placement, RadiusRule, Scene,
@@ -173,7 +173,15 @@ fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
         "frustum" => Placement::Frustum(camera),
         "clumps" => Placement::Clumps {
             within: bounds,
-            clumps: args.clumps.unwrap_or(16),
+            clumps: {
+                let clumps = args.clumps.unwrap_or(16);
+                ensure!(
+                    (1..=args.lights.max(1)).contains(&clumps),
+                    "--clumps {clumps}: between 1 and the number of lights ({})",
+                    args.lights
+                );
+                clumps
+            },
             spread: args.spread.unwrap_or(1.0),
         },
         "sphere" => Placement::Sphere {
@@ -210,6 +218,7 @@ fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
             path.display()
         );
     }
+    check_memory(&grid, args.lights)?;
     let lights = field.generate(args.lights, args.seed);
     let what = format!(
         "{} lights, field {} in {}, camera {camera_name}, seed {}",
@@ -225,6 +234,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let (scene, what) = match (&args.preset, &args.gltf) {
         (Some(name), _) => {
             let preset = parse_preset(name)?;
+            check_memory(&preset.view().1, args.lights)?;
             let what = format!(
                 "{} preset, {} lights, seed {}",
                 preset.name(),

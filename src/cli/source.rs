@@ -1,7 +1,7 @@
 //! Where a command's scene comes from: a scene file or a generated preset; and thread pools.
 
 use anyhow::{Context, Result, bail, ensure};
-use myriad::scene::{LightPolicy, Preset, Scene};
+use myriad::scene::{ClusterGrid, LightPolicy, Preset, Scene};
 use std::path::PathBuf;
 
 /// `--scene FILE` or `--preset P [--lights N] [--seed K]`.
@@ -35,11 +35,15 @@ impl SceneSource {
                 );
                 let scene = Scene::load(path, LightPolicy::SkipInvalid)?;
                 report_skipped(&scene);
+                check_memory(&scene.grid, scene.lights.len())
+                    .with_context(|| format!("{}: grid too large here", path.display()))?;
                 Ok((scene, path.display().to_string()))
             }
             (None, Some(name)) => {
                 let preset = parse_preset(name)?;
                 let (lights, seed) = (self.lights.unwrap_or(1000), self.seed.unwrap_or(1));
+                check_memory(&preset.view().1, lights)
+                    .with_context(|| format!("--preset {name} --lights {lights}"))?;
                 Ok((
                     preset.generate(lights, seed),
                     format!("preset {} ({lights} lights, seed {seed})", preset.name()),
@@ -75,8 +79,15 @@ pub fn report_skipped(scene: &Scene) {
     }
 }
 
+/// The most worker threads `--threads` may ask for (more only costs memory and start-up).
+const MAX_THREADS: usize = 1024;
+
 /// A rayon pool with `threads` threads (0 = one per core).
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
+    ensure!(
+        threads <= MAX_THREADS,
+        "--threads {threads}: at most {MAX_THREADS} worker threads"
+    );
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -85,4 +96,74 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
             0 => anyhow::anyhow!("cannot start the worker threads: {e}"),
             n => anyhow::anyhow!("cannot start {n} worker threads: {e}"),
         })
+}
+
+/// Bytes a frame of `grid` with `lights` lights needs at the least, before a single pair: per
+/// cluster the CSR `offsets` and `counts` plus the assigner's per-cluster scratch (16 bytes), per
+/// light its columns and records (64 bytes).
+pub fn minimum_frame_bytes(grid: &ClusterGrid, lights: usize) -> u64 {
+    16 * grid.cluster_count() as u64 + 64 * lights as u64
+}
+
+/// Refuses a grid and light count whose minimum frame does not fit in the memory the OS says is
+/// available (Linux `MemAvailable`; no check where it is unknown). Without this, a valid scene
+/// file of a few bytes with a 65535×65535 grid makes the process grow until the OS kills it.
+pub fn check_memory(grid: &ClusterGrid, lights: usize) -> Result<()> {
+    let needed = minimum_frame_bytes(grid, lights);
+    if let Some(available) = available_memory_bytes() {
+        let d = grid.dims;
+        ensure!(
+            needed <= available,
+            "a {}x{}x{} grid with {lights} lights needs at least {:.1} GiB, but only {:.1} GiB of \
+             memory is available",
+            d.x,
+            d.y,
+            d.z,
+            needed as f64 / (1u64 << 30) as f64,
+            available as f64 / (1u64 << 30) as f64
+        );
+    }
+    Ok(())
+}
+
+/// `MemAvailable` from `/proc/meminfo`, in bytes.
+fn available_memory_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use myriad::cluster_math::glam::UVec3;
+    use myriad::scene::DepthSlicing;
+
+    #[test]
+    fn a_grid_beyond_any_memory_is_refused_and_a_normal_one_is_not() {
+        let grid = |x, y, z| ClusterGrid::new(UVec3::new(x, y, z), DepthSlicing::Log, 0.1, 100.0);
+        // 2^32 - 2^17 + 1 clusters: 64 GiB of offsets and counts before a single pair.
+        let huge = grid(65_535, 65_535, 1);
+        let needed = minimum_frame_bytes(&huge, 10);
+        assert_eq!(needed, 16 * 65_535 * 65_535 + 640);
+        match available_memory_bytes() {
+            Some(available) if available < needed => {
+                let e = check_memory(&huge, 10).unwrap_err().to_string();
+                assert!(
+                    e.contains("65535x65535x1") && e.contains("needs at least 64.0 GiB"),
+                    "{e}"
+                );
+            }
+            _ => check_memory(&huge, 10).unwrap(),
+        }
+        check_memory(&grid(32, 18, 48), 100_000).unwrap();
+    }
+
+    #[test]
+    fn thread_counts_are_bounded() {
+        let e = thread_pool(MAX_THREADS + 1).unwrap_err().to_string();
+        assert!(e.contains("at most 1024"), "{e}");
+        assert_eq!(thread_pool(2).unwrap().current_num_threads(), 2);
+    }
 }
