@@ -313,28 +313,28 @@ fn check_finds_a_removed_light_with_either_reference() {
         d["offsets"][later] = Value::from(o - 1);
     }
     let broken = write(&dir, "broken.dump.json", &d.to_string());
-    for reference in ["independent", "exact-method"] {
-        let args = [
+    let check = |dump: &Path, reference: &str| {
+        let dump = dump.to_str().unwrap();
+        myriad(&[
             "check",
             "--scene",
             scene_arg,
             "--dump",
-            dump.to_str().unwrap(),
-        ];
-        let out = myriad_ok(&[&args[..], &["--json", "--reference", reference]].concat());
+            dump,
+            "--json",
+            "--reference",
+            reference,
+        ])
+    };
+    for reference in ["independent", "exact-method"] {
+        let out = check(&dump, reference);
+        assert!(out.status.success(), "{reference}: {}", all_output(&out));
         let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
         assert_eq!(cmp["reference"], reference);
         for field in ["exact_pairs", "reported_pairs", "misses", "false_positives"] {
             assert_eq!(cmp[field], whole[field], "{reference}: {field}");
         }
-        let args = [
-            "check",
-            "--scene",
-            scene_arg,
-            "--dump",
-            broken.to_str().unwrap(),
-        ];
-        let out = myriad(&[&args[..], &["--json", "--reference", reference]].concat());
+        let out = check(&broken, reference);
         assert!(!out.status.success(), "{reference}: a miss must fail");
         let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
         assert_eq!(cmp["misses"], 1, "{reference}: {cmp}");
