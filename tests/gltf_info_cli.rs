@@ -147,3 +147,44 @@ fn bad_input_exits_1_naming_the_file() {
         }
     }
 }
+
+#[test]
+fn commands_that_load_a_model_print_what_the_loader_changed() {
+    // One triangle whose material asks for roughness 2: the loader clamps it to 1 and says so;
+    // `info` lists the warning, `scene` (like `render`, `paper`, `skips`) prints it on stderr.
+    let dir = work_dir("loader_warnings");
+    let path = dir.join("rough.gltf");
+    std::fs::write(
+        &path,
+        r#"{"asset": {"version": "2.0"},
+  "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
+  "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+  "materials": [{"pbrMetallicRoughness": {"roughnessFactor": 2}}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+  "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}]}"#,
+    )
+    .unwrap();
+    let warning = "materials[0]: roughnessFactor 2 is outside [0, 1]; clamped to 1";
+    let info = info_json(&path);
+    assert_eq!(info["warnings"], serde_json::json!([warning]), "{info}");
+    let scene_file = dir.join("rough.scene");
+    let out = myriad(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        path.as_os_str(),
+        "--lights".as_ref(),
+        "10".as_ref(),
+        "--out".as_ref(),
+        scene_file.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains(&format!("warning: {}: {warning}", path.display())),
+        "{err}"
+    );
+    assert!(scene_file.is_file());
+}

@@ -219,7 +219,7 @@ fn find_source(assets: Option<&Path>) -> Result<Source> {
     }
     let sponza = dir.join(SPONZA);
     if sponza.is_file() {
-        let model = Model::load(&sponza, &LoadOptions::default())?;
+        let model = super::source::load_model(&sponza, &LoadOptions::default())?;
         return Ok(Source {
             model,
             name: format!("Sponza ({})", sponza.display()),

@@ -11,7 +11,7 @@ use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{GpuContext, GpuError, PassTimes, encode_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
-use myriad::scene::{LoadOptions, Model, replace_file};
+use myriad::scene::{LoadOptions, replace_file};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -335,7 +335,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
 fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     let (model, model_name) = match &args.gltf {
         Some(path) => (
-            Model::load(path, &LoadOptions::default())?,
+            super::source::load_model(path, &LoadOptions::default())?,
             path.display().to_string(),
         ),
         None => (

@@ -7,10 +7,10 @@ use super::source::{check_memory, parse_preset};
 use anyhow::{Context, Result, bail, ensure};
 use myriad::cluster_math::glam::Vec3;
 use myriad::scene::{
-    Aabb, Camera, ClusterGrid, LightField, LoadOptions, Model, Placement, RadiusRule, Scene,
-    SpotRule, SurfaceSampler,
+    Aabb, Camera, ClusterGrid, LightField, LoadOptions, Placement, RadiusRule, Scene, SpotRule,
+    SurfaceSampler,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// The light fields `--field` accepts.
@@ -122,10 +122,10 @@ fn camera_for_bounds(b: Aabb, width: u32, height: u32) -> Camera {
     Camera::new(position, target, Vec3::Y, 60.0, width, height, 0.1, far)
 }
 
-fn gltf_scene(args: &Args, path: &PathBuf) -> Result<(Scene, String)> {
+fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let (width, height) = (args.width.unwrap_or(1536), args.height.unwrap_or(768));
     let field_name = args.field.as_deref().unwrap_or("surfaces");
-    let model = Model::load(path, &LoadOptions::without_images())?;
+    let model = super::source::load_model(path, &LoadOptions::without_images())?;
     let bounds = model.bounds();
     if bounds.is_empty() {
         bail!(

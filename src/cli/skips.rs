@@ -8,7 +8,7 @@ use super::render::parse_size;
 use anyhow::Result;
 use myriad::gpu::GpuContext;
 use myriad::render::{RenderScene, SkipFrame, Skips, Viewer};
-use myriad::scene::{LoadOptions, Model};
+use myriad::scene::LoadOptions;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -250,7 +250,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         scenes.push(RenderScene::default_scene(args.lights, width, height)?);
         let sponza = PathBuf::from(SPONZA);
         if sponza.is_file() {
-            let model = Model::load(&sponza, &LoadOptions::default())?;
+            let model = super::source::load_model(&sponza, &LoadOptions::default())?;
             scenes.push(RenderScene::from_model(
                 &model,
                 "Sponza",
@@ -265,7 +265,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     } else {
         for path in &args.gltf {
-            let model = Model::load(path, &LoadOptions::default())?;
+            let model = super::source::load_model(path, &LoadOptions::default())?;
             let name = path.display().to_string();
             scenes.push(RenderScene::from_model(
                 &model,

@@ -1,8 +1,8 @@
 //! Where a command's scene comes from: a scene file or a generated preset; and thread pools.
 
 use anyhow::{Context, Result, bail, ensure};
-use myriad::scene::{ClusterGrid, LightPolicy, Preset, Scene};
-use std::path::PathBuf;
+use myriad::scene::{ClusterGrid, LightPolicy, LoadOptions, Model, Preset, Scene};
+use std::path::{Path, PathBuf};
 
 /// `--scene FILE` or `--preset P [--lights N] [--seed K]`.
 #[derive(clap::Args, Debug)]
@@ -77,6 +77,17 @@ pub fn report_skipped(scene: &Scene) {
     if scene.skipped.len() > 10 {
         eprintln!("  … and {} more", scene.skipped.len() - 10);
     }
+}
+
+/// Loads a glTF model and says on stderr what the loader changed or left out (`Model::warnings`:
+/// clamped material factors, lights without a usable radius, …), so `render`, `scene`, `paper`
+/// and `skips` lose nothing silently. `info` lists the warnings itself.
+pub fn load_model(path: &Path, options: &LoadOptions) -> Result<Model> {
+    let model = Model::load(path, options)?;
+    for w in &model.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(model)
 }
 
 /// The most worker threads `--threads` may ask for (more only costs memory and start-up).

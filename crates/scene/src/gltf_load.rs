@@ -40,6 +40,12 @@
 //!   is left out with a warning.
 //! * **Left out, with a warning:** skins (meshes are drawn at their node's transform),
 //!   morph targets, animations, UV sets other than `TEXCOORD_0`, vertex colours.
+//! * **Out-of-range values the spec forbids are clamped and reported**, not fatal, since the
+//!   model stays usable: material factors outside [0, 1] (base colour, metallic, roughness,
+//!   emissive; a negative `alphaCutoff` or `emissiveStrength` becomes 0), a spot's inner cone
+//!   outside [0, outer). A spot's outer cone above the spec's π/2 is kept as it is (the
+//!   assignment and the shaders handle cones up to π) and reported. Commands that load a model
+//!   print these warnings on stderr; `myriad info` lists them.
 //! * **Normals** that are not unit length are normalised (with a warning naming the primitive);
 //!   a trailing incomplete triangle of a list is dropped (with a warning).
 
@@ -507,19 +513,54 @@ impl Loader<'_> {
         if !base_color_factor.is_finite() || factors.iter().any(|f| !f.is_finite()) {
             return Err("a factor is not finite".into());
         }
+        // The spec bounds these to [0, 1]; a value outside is clamped and reported, like a bad
+        // inner cone angle: the material stays usable and the warning says what changed.
+        let at = format!("materials[{i}]{}", quoted(&m.name));
+        let mut unit = |name: &str, value: f32| {
+            let clamped = value.clamp(0.0, 1.0);
+            if clamped != value {
+                self.model.warnings.push(format!(
+                    "{at}: {name} {value} is outside [0, 1]; clamped to {clamped}"
+                ));
+            }
+            clamped
+        };
+        let base_color_factor = Vec4::from_array(std::array::from_fn(|c| {
+            unit(&format!("baseColorFactor[{c}]"), base_color_factor[c])
+        }));
+        let metallic = unit("metallicFactor", factors[0]);
+        let roughness = unit("roughnessFactor", factors[1]);
+        let emissive = finite_vec3(m.emissive_factor.0, "emissiveFactor")?;
+        let emissive = Vec3::from_array(std::array::from_fn(|c| {
+            unit(&format!("emissiveFactor[{c}]"), emissive[c])
+        }));
+        let alpha_cutoff = m.alpha_cutoff.as_ref().map_or(0.5, |c| c.0);
+        let alpha_cutoff = if alpha_cutoff < 0.0 {
+            unit("alphaCutoff", alpha_cutoff)
+        } else {
+            alpha_cutoff
+        };
         let strength = m
             .extensions
             .as_ref()
             .and_then(|e| e.emissive_strength.as_ref())
             .map_or(1.0, |s| s.emissive_strength.0);
-        let emissive_factor = finite_vec3(m.emissive_factor.0, "emissiveFactor")? * strength;
+        let strength = if strength < 0.0 {
+            self.model.warnings.push(format!(
+                "{at}: emissiveStrength {strength} is negative; clamped to 0"
+            ));
+            0.0
+        } else {
+            strength
+        };
+        let emissive_factor = emissive * strength;
         if !emissive_factor.is_finite() {
             return Err("emissive strength is not finite".into());
         }
         let alpha_mode = match m.alpha_mode {
             Checked::Valid(json::material::AlphaMode::Opaque) => AlphaMode::Opaque,
             Checked::Valid(json::material::AlphaMode::Mask) => AlphaMode::Mask {
-                cutoff: m.alpha_cutoff.as_ref().map_or(0.5, |c| c.0),
+                cutoff: alpha_cutoff,
             },
             Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
             Checked::Invalid => return Err("invalid alphaMode".into()),
@@ -540,8 +581,8 @@ impl Loader<'_> {
             name: m.name.clone(),
             base_color_factor,
             base_color_texture,
-            metallic_factor: factors[0],
-            roughness_factor: factors[1],
+            metallic_factor: metallic,
+            roughness_factor: roughness,
             metallic_roughness_texture,
             normal_texture,
             normal_scale: factors[2],
@@ -1097,6 +1138,14 @@ impl Loader<'_> {
                 if !(outer > 0.0 && outer <= std::f32::consts::PI) {
                     return Err(format!("{at}: outerConeAngle {outer} is not in (0, π]"));
                 }
+                if outer > std::f32::consts::FRAC_PI_2 {
+                    // The spec stops at π/2; the assignment, the oracle and the shaders handle
+                    // cones up to π (a spot wider than a hemisphere), so the light is kept as is.
+                    self.model.warnings.push(format!(
+                        "{at}: outerConeAngle {outer} is above the spec's π/2; kept as a cone \
+                         wider than a hemisphere"
+                    ));
+                }
                 let mut inner = spot.inner_cone_angle;
                 // The spec wants 0 <= inner < outer. Only the outer cone bounds the light, so a
                 // bad inner angle is kept usable (clamped) and reported, not fatal.
@@ -1301,6 +1350,63 @@ mod tests {
             "{:?}",
             model.warnings
         );
+    }
+
+    #[test]
+    fn a_spot_wider_than_the_spec_is_kept_and_reported() {
+        let extra = r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+      {"type": "spot", "range": 7, "spot": {"outerConeAngle": 2.5}}]}},
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}]"#;
+        let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+        assert_eq!(model.lights.get(0).spot.unwrap().angle, 2.5);
+        assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+        assert!(
+            model.warnings[0].contains("outerConeAngle 2.5 is above the spec's π/2"),
+            "{:?}",
+            model.warnings
+        );
+    }
+
+    #[test]
+    fn material_factors_outside_the_unit_range_are_clamped_and_reported() {
+        let extra = r#",
+  "materials": [{"name": "hot", "alphaMode": "MASK", "alphaCutoff": -0.5,
+      "emissiveFactor": [2, 0.5, -1],
+      "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": -2}},
+      "pbrMetallicRoughness": {"baseColorFactor": [1.5, 0.5, -0.25, 1],
+                               "metallicFactor": 3, "roughnessFactor": -1}},
+      {"name": "fine", "emissiveFactor": [1, 0, 0],
+       "pbrMetallicRoughness": {"baseColorFactor": [0, 0.5, 1, 0.5],
+                                "metallicFactor": 1, "roughnessFactor": 0}}],
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}]"#;
+        let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+        let hot = &model.materials[0];
+        assert_eq!(hot.base_color_factor, Vec4::new(1.0, 0.5, 0.0, 1.0));
+        assert_eq!((hot.metallic_factor, hot.roughness_factor), (1.0, 0.0));
+        assert_eq!(hot.emissive_factor, Vec3::ZERO);
+        assert_eq!(hot.alpha_mode, AlphaMode::Mask { cutoff: 0.0 });
+        let expected = [
+            "baseColorFactor[0] 1.5 is outside [0, 1]; clamped to 1",
+            "baseColorFactor[2] -0.25 is outside [0, 1]; clamped to 0",
+            "metallicFactor 3 is outside [0, 1]; clamped to 1",
+            "roughnessFactor -1 is outside [0, 1]; clamped to 0",
+            "emissiveFactor[0] 2 is outside [0, 1]; clamped to 1",
+            "emissiveFactor[2] -1 is outside [0, 1]; clamped to 0",
+            "alphaCutoff -0.5 is outside [0, 1]; clamped to 0",
+            "emissiveStrength -2 is negative; clamped to 0",
+        ];
+        assert_eq!(model.warnings.len(), expected.len(), "{:?}", model.warnings);
+        for (w, e) in model.warnings.iter().zip(expected) {
+            assert_eq!(w, &format!("materials[0] \"hot\": {e}"));
+        }
+        // In-range factors pass untouched.
+        let fine = &model.materials[1];
+        assert_eq!(fine.base_color_factor, Vec4::new(0.0, 0.5, 1.0, 0.5));
+        assert_eq!((fine.metallic_factor, fine.roughness_factor), (1.0, 0.0));
     }
 
     #[test]
