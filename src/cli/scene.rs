@@ -5,10 +5,8 @@
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::source::{check_memory, parse_preset};
 use anyhow::{Context, Result, bail, ensure};
-use myriad::cluster_math::glam::Vec3;
 use myriad::scene::{
-    Aabb, Camera, ClusterGrid, LightField, LoadOptions, Placement, RadiusRule, Scene, SpotRule,
-    SurfaceSampler,
+    ClusterGrid, LightField, LoadOptions, Placement, RadiusRule, Scene, SpotRule, SurfaceSampler,
 };
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -100,28 +98,6 @@ fn parse_range(text: &str, what: &str) -> Result<[f32; 2]> {
     }
 }
 
-/// A camera for a model without one: from just inside one end of the bounds' longer
-/// horizontal axis, at a sixth of the height, looking down that axis slightly upwards (the
-/// `paper` preset's view of its courtyard).
-fn camera_for_bounds(b: Aabb, width: u32, height: u32) -> Camera {
-    let size = b.size();
-    let c = b.center();
-    let eye_y = b.min.y + size.y / 6.0;
-    let (position, target) = if size.x >= size.z {
-        (
-            Vec3::new(b.min.x + 0.05 * size.x, eye_y, c.z),
-            Vec3::new(b.max.x, eye_y + 0.1 * size.y, c.z),
-        )
-    } else {
-        (
-            Vec3::new(c.x, eye_y, b.min.z + 0.05 * size.z),
-            Vec3::new(c.x, eye_y + 0.1 * size.y, b.max.z),
-        )
-    };
-    let far = (1.1 * size.length()).max(1.0);
-    Camera::new(position, target, Vec3::Y, 60.0, width, height, 0.1, far)
-}
-
 fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let (width, height) = (args.width.unwrap_or(1536), args.height.unwrap_or(768));
     let field_name = args.field.as_deref().unwrap_or("surfaces");
@@ -152,13 +128,9 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
             })?;
             (camera, name.clone())
         }
-        None => match model.camera(0, width, height) {
-            Some(camera) => (camera, model.cameras[0].name.clone()),
-            None => (
-                camera_for_bounds(bounds, width, height),
-                "a view down the long axis (the model has no perspective camera 0)".to_string(),
-            ),
-        },
+        None => model
+            .camera_or_view(0, width, height)
+            .expect("the bounds are not empty"),
     };
     let slicing = parse_slicing(args.depth.as_deref().unwrap_or("log"))?;
     let dims = parse_grid("--grid", args.grid.as_deref().unwrap_or("24x12x16"))?;
@@ -260,14 +232,5 @@ mod tests {
         assert_eq!(parse_range("0.5..3", "r").unwrap(), [0.5, 3.0]);
         assert_eq!(parse_range("2", "r").unwrap(), [2.0, 2.0]);
         assert!(parse_range("a..3", "r").is_err());
-    }
-
-    #[test]
-    fn fallback_camera_looks_down_the_long_axis() {
-        let b = Aabb::new(Vec3::new(-15.0, 0.0, -7.5), Vec3::new(15.0, 12.0, 7.5));
-        let c = camera_for_bounds(b, 800, 400);
-        assert!(b.contains(c.position));
-        assert!(c.target.x > c.position.x + 20.0);
-        assert!(c.far > b.size().length());
     }
 }

@@ -51,8 +51,8 @@ impl RenderScene {
         )
     }
 
-    /// A model's scene: its camera `camera` (by name; default its first) at `width × height`,
-    /// its own lights then surface lights up to `lights` in all (drawn from `seed`).
+    /// A model's scene: its camera `camera` (by name; default its first, or without a
+    /// perspective one [`Model::view_of_bounds`]) at `width × height`, its own lights then surface lights up to `lights` in all (drawn from `seed`).
     pub fn from_model(
         model: &Model,
         name: &str,
@@ -62,16 +62,24 @@ impl RenderScene {
         width: u32,
         height: u32,
     ) -> Result<Self> {
-        let index = match camera {
-            Some(c) => model.camera_index(c).with_context(|| {
-                let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
-                format!("{name}: no camera named {c:?}; it has {names:?}")
-            })?,
-            None => 0,
+        let camera = match camera {
+            Some(c) => {
+                let index = model.camera_index(c).with_context(|| {
+                    let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
+                    format!("{name}: no camera named {c:?}; it has {names:?}")
+                })?;
+                model.camera(index, width, height).with_context(|| {
+                    format!("{name}: camera {c:?} is orthographic; a perspective one is needed")
+                })?
+            }
+            // As `myriad scene` does: the first camera, or a view down the bounds' long axis.
+            None => {
+                model
+                    .camera_or_view(0, width, height)
+                    .with_context(|| format!("{name}: draws nothing and has no camera"))?
+                    .0
+            }
         };
-        let camera = model
-            .camera(index, width, height)
-            .with_context(|| format!("{name}: camera {index} is missing or not perspective"))?;
         let grid = ClusterGrid::new(DEFAULT_GRID, DepthSlicing::Log, camera.near, camera.far);
         let mut all = Lights::new();
         for light in model.lights.iter().take(lights) {
@@ -150,4 +158,23 @@ fn blended_bounds(geometry: &SceneGeometry) -> Vec<Aabb> {
             )
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_model_without_a_camera_is_rendered_from_the_view_of_its_bounds() {
+        let mut model = myriad_scene::atrium();
+        model.cameras.clear();
+        let scene = RenderScene::from_model(&model, "no camera", None, 10, 1, 64, 32).unwrap();
+        assert_eq!(Some(scene.camera), model.view_of_bounds(64, 32));
+        assert_eq!(scene.lights.len(), 10);
+        // A camera asked for by name must exist.
+        let err = RenderScene::from_model(&model, "no camera", Some("Main"), 10, 1, 64, 32)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("no camera named \"Main\""), "{err}");
+    }
 }

@@ -20,7 +20,7 @@
 //!   clustered (they reach everything) and are kept apart in [`Model::directional_lights`].
 
 use crate::lights::Lights;
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{DVec3, Mat4, Vec2, Vec3, Vec4};
 use myriad_cluster_math::Camera;
 
 /// An axis-aligned box. [`Aabb::EMPTY`] (min = +∞, max = −∞) is the identity of [`Aabb::union`].
@@ -587,6 +587,71 @@ impl Model {
         c.to_camera(width, height, far)
     }
 
+    /// Camera `index` if it is a perspective camera, else a view of the bounds
+    /// ([`Model::view_of_bounds`]); the `String` names which. `None` only when neither exists
+    /// (no such camera and nothing drawn). Every command that needs a model's view uses this, so
+    /// they agree on what a model without a camera shows.
+    pub fn camera_or_view(
+        &self,
+        index: usize,
+        width: u32,
+        height: u32,
+    ) -> Option<(Camera, String)> {
+        match self.camera(index, width, height) {
+            Some(camera) => Some((camera, self.cameras[index].name.clone())),
+            None => self.view_of_bounds(width, height).map(|camera| {
+                let why = if index < self.cameras.len() {
+                    "is orthographic"
+                } else {
+                    "does not exist"
+                };
+                (
+                    camera,
+                    format!("a view down the bounds' long axis (camera {index} {why})"),
+                )
+            }),
+        }
+    }
+
+    /// A view for a model without a (perspective) camera: from just inside one end of the
+    /// bounds' longer horizontal axis, at a sixth of the height, looking down that axis slightly
+    /// upwards (the `paper` preset's view of its courtyard), 60° vertical field of view. `None`
+    /// when nothing is drawn. The far plane reaches past the far corner (in f64, clamped to
+    /// `f32::MAX`).
+    pub fn view_of_bounds(&self, width: u32, height: u32) -> Option<Camera> {
+        let b = self.bounds();
+        if b.is_empty() {
+            return None;
+        }
+        // In f64: bounds spanning most of f32's range have a size that overflows f32.
+        let (min, max) = (b.min.as_dvec3(), b.max.as_dvec3());
+        let (size, c) = (max - min, 0.5 * (min + max));
+        let eye_y = min.y + size.y / 6.0;
+        let (position, target) = if size.x >= size.z {
+            (
+                DVec3::new(min.x + 0.05 * size.x, eye_y, c.z),
+                DVec3::new(max.x, eye_y + 0.1 * size.y, c.z),
+            )
+        } else {
+            (
+                DVec3::new(c.x, eye_y, min.z + 0.05 * size.z),
+                DVec3::new(c.x, eye_y + 0.1 * size.y, max.z),
+            )
+        };
+        let (position, target) = (position.as_vec3(), target.as_vec3());
+        let far = (1.1 * size.length()).clamp(1.0, f32::MAX as f64) as f32;
+        Some(Camera::new(
+            position,
+            target,
+            Vec3::Y,
+            60.0,
+            width,
+            height,
+            0.1,
+            far,
+        ))
+    }
+
     /// Counts for reports: see [`ModelSummary`].
     pub fn summary(&self) -> ModelSummary {
         let count_alpha =
@@ -707,6 +772,59 @@ mod tests {
         assert_eq!(material, None);
         let s = model.summary();
         assert_eq!((s.meshes, s.instances, s.triangles), (1, 3, 6));
+    }
+
+    fn quad_at(world_from_local: Mat4) -> Model {
+        let mut model = Model::new("test");
+        model.meshes.push(Mesh {
+            name: None,
+            primitives: vec![unit_quad()],
+        });
+        model.instances.push(Instance {
+            mesh: 0,
+            world_from_local,
+            node: 0,
+            name: None,
+        });
+        model
+    }
+
+    #[test]
+    fn a_model_without_a_camera_is_viewed_down_its_long_axis() {
+        assert!(Model::new("empty").camera_or_view(0, 8, 4).is_none());
+        // A courtyard 30 long in x, 12 high, 15 deep.
+        let model = quad_at(
+            Mat4::from_translation(Vec3::new(-15.0, 0.0, -7.5))
+                * Mat4::from_scale(Vec3::new(30.0, 12.0, 1.0)),
+        );
+        let mut model = model;
+        model.instances.push(Instance {
+            mesh: 0,
+            world_from_local: Mat4::from_translation(Vec3::new(-15.0, 0.0, 7.5))
+                * Mat4::from_scale(Vec3::new(30.0, 12.0, 1.0)),
+            node: 1,
+            name: None,
+        });
+        let b = model.bounds();
+        let (c, name) = model.camera_or_view(0, 800, 400).unwrap();
+        assert!(name.contains("camera 0 does not exist"), "{name}");
+        assert!(b.contains(c.position));
+        assert!(c.target.x > c.position.x + 20.0);
+        assert!(c.far > b.size().length());
+        assert_eq!((c.width, c.height), (800, 400));
+        // Bounds whose size overflows f32 still give a finite camera inside them.
+        let mut huge = quad_at(Mat4::from_translation(Vec3::splat(-3.0e38)));
+        huge.instances.push(Instance {
+            mesh: 0,
+            world_from_local: Mat4::from_translation(Vec3::splat(3.0e38)),
+            node: 1,
+            name: None,
+        });
+        assert!(!huge.bounds().size().is_finite());
+        let c = huge.view_of_bounds(8, 4).unwrap();
+        assert!(c.position.is_finite() && c.target.is_finite());
+        assert!(huge.bounds().contains(c.position));
+        assert_eq!(c.far, f32::MAX);
     }
 
     #[test]
