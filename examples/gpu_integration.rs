@@ -4,7 +4,9 @@
 //! `myriad-gpu` are used, as an engine depending on just those would.
 //!
 //! Run with `cargo run --release --example gpu_integration` (needs a Vulkan, Metal or DX12
-//! adapter; Mesa's software Vulkan works).
+//! adapter; Mesa's software Vulkan works). It is also a test (`test = true` in `Cargo.toml`, so
+//! `cargo test` runs the `tests` module below): the engine-owned device path must render what
+//! brute force renders, and keep the adapter's loop guard.
 
 use myriad_assignment::{Assigner, LightInput, LightLists, Method};
 use myriad_cluster_math::glam::{UVec3, Vec3};
@@ -12,43 +14,53 @@ use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 use myriad_gpu::layout::{MaterialUniforms, Vertex};
 use myriad_gpu::wgpu;
 use myriad_gpu::{
-    Blend, ClusterLists, Draw, FrameDesc, GpuContext, LightColumns, MaterialDesc, Renderer,
-    SceneGeometry, ShadingMode,
+    Blend, ClusterLists, Draw, FrameDesc, FrameReport, GpuContext, GpuError, LightColumns,
+    MaterialDesc, Renderer, SceneGeometry, ShadingMode,
 };
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The engine's own device (here a headless one) and its own render target.
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&Default::default()))?;
-    let (width, height) = (320, 180);
-    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("engine target"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let view = target.create_view(&Default::default());
+const SIZE: (u32, u32) = (320, 180);
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
-    // Hand the renderer the engine's device, and its geometry once: a 40 m floor.
-    let ctx = GpuContext::from_device(device, queue);
-    let mut renderer = Renderer::new(&ctx, format);
+/// What the engine owns: its device and queue (here a headless one) and a render target.
+struct Engine {
+    ctx: GpuContext,
+    target: wgpu::Texture,
+}
+
+impl Engine {
+    fn new() -> Result<Self, Box<dyn std::error::Error>> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+        let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
+        let (device, queue) = pollster::block_on(adapter.request_device(&Default::default()))?;
+        let target = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("engine target"),
+            size: wgpu::Extent3d {
+                width: SIZE.0,
+                height: SIZE.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        // Hand the renderer the engine's device.
+        let ctx = GpuContext::from_device(device, queue);
+        Ok(Self { ctx, target })
+    }
+}
+
+/// The engine's geometry, handed over once: a 40 m floor.
+fn floor() -> SceneGeometry {
     let up = [0.0, 1.0, 0.0];
     let corner = |x: f32, z: f32| Vertex {
         position: [x, 0.0, z],
         normal: up,
         uv: [0.0, 0.0],
     };
-    let geometry = SceneGeometry {
+    SceneGeometry {
         vertices: vec![
             corner(-20.0, 5.0),
             corner(20.0, 5.0),
@@ -72,41 +84,54 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             base_color_texture: None,
         }],
         textures: vec![],
-    };
-    let scene = renderer.upload_scene(&ctx, &geometry)?;
+    }
+}
 
-    // The engine's lights as SoA columns: a row of 64 coloured lights above the floor.
-    let n = 64;
-    let x: Vec<f32> = (0..n).map(|i| (i % 8) as f32 * 4.0 - 14.0).collect();
-    let y = vec![0.8; n];
-    let z: Vec<f32> = (0..n).map(|i| -((i / 8) as f32) * 4.0 - 2.0).collect();
-    let radius = vec![3.0; n];
-    let (r, g, b): (Vec<f32>, Vec<f32>, Vec<f32>) = (0..n)
-        .map(|i| {
-            (
-                (i % 3 == 0) as u8 as f32,
-                (i % 3 == 1) as u8 as f32,
-                (i % 3 == 2) as u8 as f32,
-            )
-        })
-        .fold(
-            (vec![], vec![], vec![]),
-            |(mut r, mut g, mut b), (a, c, d)| {
-                r.push(a);
-                g.push(c);
-                b.push(d);
-                (r, g, b)
-            },
-        );
-    let intensity = vec![4.0; n];
+/// The engine's lights as SoA columns: rows of 8 coloured lights above the floor.
+struct Lights {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    radius: Vec<f32>,
+    rgb: [Vec<f32>; 3],
+    intensity: Vec<f32>,
+}
 
+impl Lights {
+    fn rows(n: usize) -> Self {
+        Self {
+            x: (0..n).map(|i| (i % 8) as f32 * 4.0 - 14.0).collect(),
+            y: vec![0.8; n],
+            z: (0..n).map(|i| -((i / 8) as f32) * 4.0 - 2.0).collect(),
+            radius: vec![3.0; n],
+            rgb: [0, 1, 2].map(|c| (0..n).map(|i| f32::from(u8::from(i % 3 == c))).collect()),
+            intensity: vec![4.0; n],
+        }
+    }
+
+    fn columns(&self) -> LightColumns<'_> {
+        LightColumns {
+            x: &self.x,
+            y: &self.y,
+            z: &self.z,
+            radius: &self.radius,
+            r: &self.rgb[0],
+            g: &self.rgb[1],
+            b: &self.rgb[2],
+            intensity: &self.intensity,
+            spot: None,
+        }
+    }
+}
+
+fn view() -> (Camera, ClusterGrid) {
     let camera = Camera::new(
         Vec3::new(0.0, 6.0, 6.0),
         Vec3::new(0.0, 0.0, -14.0),
         Vec3::Y,
         60.0,
-        width,
-        height,
+        SIZE.0,
+        SIZE.1,
         0.1,
         60.0,
     );
@@ -116,56 +141,147 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         camera.near,
         camera.far,
     );
+    (camera, grid)
+}
 
-    // Per frame: assign on the CPU, then render with the lists.
-    let mut assigner = Assigner::new();
+/// One frame: assign on the CPU (for `ShadingMode::Lists`), then render into the engine's
+/// target; returns the report, the pairs assigned and the target's pixels.
+fn frame(
+    engine: &Engine,
+    renderer: &mut Renderer,
+    scene: &myriad_gpu::GpuScene,
+    lights: &Lights,
+    mode: ShadingMode,
+) -> Result<(FrameReport, u64, Vec<u8>), GpuError> {
+    let (camera, grid) = view();
     let mut lists = LightLists::new();
-    let stats = assigner.assign(
-        Method::Refined,
-        &LightInput::points(&x, &y, &z, &radius),
-        &camera,
-        &grid,
-        &mut lists,
-    );
+    let pairs = if mode == ShadingMode::Lists {
+        let input = LightInput::points(&lights.x, &lights.y, &lights.z, &lights.radius);
+        Assigner::new()
+            .assign(Method::Refined, &input, &camera, &grid, &mut lists)
+            .pairs
+    } else {
+        0
+    };
     let report = renderer.render(
-        &ctx,
-        &scene,
+        &engine.ctx,
+        scene,
         &FrameDesc {
             camera: &camera,
             grid: &grid,
-            mode: ShadingMode::Lists,
+            mode,
             heat_map: false,
-            lights: Some(LightColumns {
-                x: &x,
-                y: &y,
-                z: &z,
-                radius: &radius,
-                r: &r,
-                g: &g,
-                b: &b,
-                intensity: &intensity,
-                spot: None,
-            }),
-            lists: Some(ClusterLists {
+            lights: Some(lights.columns()),
+            lists: (mode == ShadingMode::Lists).then_some(ClusterLists {
                 offsets: &lists.offsets,
                 counts: &lists.counts,
                 indices: &lists.indices,
             }),
             settings: Default::default(),
         },
-        &view,
+        &engine.target.create_view(&Default::default()),
     )?;
-    let pixels = myriad_gpu::read_rgba8(&ctx, &target)?;
-    let lit = pixels
+    let pixels = myriad_gpu::read_rgba8(&engine.ctx, &engine.target)?;
+    Ok((report, pairs, pixels))
+}
+
+/// Pixels that a light visibly brightens (any channel above 80).
+fn lit_pixels(pixels: &[u8]) -> usize {
+    pixels
         .chunks(4)
         .filter(|p| p[0].max(p[1]).max(p[2]) > 80)
-        .count();
+        .count()
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let engine = Engine::new()?;
+    let mut renderer = Renderer::new(&engine.ctx, FORMAT);
+    let scene = renderer.upload_scene(&engine.ctx, &floor())?;
+    let lights = Lights::rows(64);
+    let (report, pairs, pixels) =
+        frame(&engine, &mut renderer, &scene, &lights, ShadingMode::Lists)?;
     println!(
-        "{} lights, {} pairs, {} bytes uploaded; {lit} of {} pixels lit",
-        n,
-        stats.pairs,
+        "{} lights, {pairs} pairs, {} bytes uploaded; {} of {} pixels lit",
+        lights.x.len(),
         report.upload_bytes,
-        width * height
+        lit_pixels(&pixels),
+        SIZE.0 * SIZE.1
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_engines_own_device_renders_what_brute_force_renders() {
+        // Like the library's GPU tests: an adapter is required unless explicitly skipped.
+        if GpuContext::headless_for_tests().is_none() {
+            return;
+        }
+        let engine = Engine::new().unwrap();
+        let mut renderer = Renderer::new(&engine.ctx, FORMAT);
+        let scene = renderer.upload_scene(&engine.ctx, &floor()).unwrap();
+        let lights = Lights::rows(64);
+        let (report, pairs, clustered) =
+            frame(&engine, &mut renderer, &scene, &lights, ShadingMode::Lists).unwrap();
+        assert_eq!(report.lights, 64);
+        assert!(pairs > 64, "{pairs} pairs");
+        let (_, _, brute) = frame(
+            &engine,
+            &mut renderer,
+            &scene,
+            &lights,
+            ShadingMode::BruteForce,
+        )
+        .unwrap();
+        let worst = clustered
+            .iter()
+            .zip(&brute)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap();
+        assert!(
+            worst <= 1,
+            "clustered differs from brute force by {worst}/255"
+        );
+        // The 64 lights light a good part of the floor, and not all of the image.
+        let lit = lit_pixels(&clustered);
+        let all = (SIZE.0 * SIZE.1) as usize;
+        assert!(lit > all / 10 && lit < all, "{lit} of {all} pixels lit");
+    }
+
+    #[test]
+    fn an_engines_own_device_keeps_the_loop_guard() {
+        let Some(headless) = GpuContext::headless_for_tests() else {
+            return;
+        };
+        let engine = Engine::new().unwrap();
+        assert_eq!(
+            engine.ctx.shader_loop_limit(),
+            headless.shader_loop_limit(),
+            "{} vs {}",
+            engine.ctx.describe(),
+            headless.describe()
+        );
+        let Some(max) = engine.ctx.max_lights_per_pixel(ShadingMode::BruteForce, 24) else {
+            eprintln!("{}: shader loops are not limited", engine.ctx.describe());
+            return;
+        };
+        // One light more than a brute-force pixel may loop over is refused, before any upload.
+        let mut renderer = Renderer::new(&engine.ctx, FORMAT);
+        let scene = renderer.upload_scene(&engine.ctx, &floor()).unwrap();
+        let lights = Lights::rows(max as usize + 1);
+        match frame(
+            &engine,
+            &mut renderer,
+            &scene,
+            &lights,
+            ShadingMode::BruteForce,
+        ) {
+            Err(GpuError::ShaderLoopLimit { lights, .. }) => assert_eq!(lights, max + 1),
+            other => panic!("expected a refusal, got {:?}", other.map(|r| r.0.lights)),
+        }
+    }
 }

@@ -1,6 +1,10 @@
 //! End-to-end tests of the `myriad` binary: every subcommand run as a user runs it, through
 //! files on disk, checking exit codes, messages and the JSON the tools write.
 //!
+//! Tests of commands that render (`render`, the main job, `frames`, `paper`, `skips`, `stress`)
+//! first ask for an adapter exactly as the library's GPU tests do ([`gpu_available`]): without
+//! one they fail with advice, or return early when `MYRIAD_SKIP_GPU_TESTS=1` says so.
+//!
 //! Each test works in its own folder under cargo's `CARGO_TARGET_TMPDIR`, so tests run in
 //! parallel without sharing files. Scenes are small (hundreds of lights): the whole file runs in
 //! well under a second of tool time.
@@ -52,6 +56,12 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 /// Runs `myriad` with `args`.
+/// Whether the GPU tests may run: an adapter exists (else a panic with advice), or `None` from
+/// [`myriad::gpu::GpuContext::headless_for_tests`] because `MYRIAD_SKIP_GPU_TESTS=1`.
+fn gpu_available() -> bool {
+    myriad::gpu::GpuContext::headless_for_tests().is_some()
+}
+
 fn myriad<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_myriad"))
         .args(args)
@@ -718,6 +728,9 @@ fn bad_options_fail_with_a_helpful_message() {
 
 #[test]
 fn no_arguments_runs_the_main_job() {
+    if !gpu_available() {
+        return;
+    }
     // The main job writes into ./out: run it in a fresh folder.
     let dir = work_dir("main_job");
     let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
@@ -836,6 +849,9 @@ fn preset_options_without_a_preset_are_rejected() {
 
 #[test]
 fn frames_compares_sequential_and_pipelined_loops() {
+    if !gpu_available() {
+        return;
+    }
     let out = myriad_ok(&[
         "frames", "--lights", "3000", "--size", "64x32", "--frames", "4", "--json",
     ]);
@@ -856,6 +872,9 @@ fn frames_compares_sequential_and_pipelined_loops() {
 
 #[test]
 fn a_failed_render_leaves_the_old_output_set_whole() {
+    if !gpu_available() {
+        return;
+    }
     let out_dir = work_dir("render_all_or_nothing").join("out");
     let dir = out_dir.to_str().unwrap();
     let rest = ["--size", "64x32", "--runs", "1", "--out", dir];
@@ -884,6 +903,9 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
 
 #[test]
 fn render_skips_a_baseline_the_adapter_cannot_draw_and_keeps_the_rest() {
+    if !gpu_available() {
+        return;
+    }
     let out_dir = work_dir("render_skips_baseline").join("out");
     let out = myriad_ok(&[
         "render",
@@ -931,6 +953,9 @@ fn render_skips_a_baseline_the_adapter_cannot_draw_and_keeps_the_rest() {
 
 #[test]
 fn render_takes_scene_files_presets_and_sizes() {
+    if !gpu_available() {
+        return;
+    }
     let dir = work_dir("render_sources");
     let scene = dir.join("uniform.json");
     myriad_ok(&[
@@ -1006,6 +1031,9 @@ fn render_takes_scene_files_presets_and_sizes() {
 
 #[test]
 fn paper_reproduces_both_tables_with_json_and_heat_map() {
+    if !gpu_available() {
+        return;
+    }
     // Run in a fresh folder: the scene is Sponza only when ../shared/assets has it from there.
     let dir = work_dir("paper");
     let out_dir = dir.join("results");
@@ -1101,6 +1129,29 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     let heat = out_dir.join("paper_heatmap.png");
     assert!(heat.is_file(), "no {}", heat.display());
     assert!(std::fs::metadata(&heat).unwrap().len() > 1000);
+
+    // Sponza itself, where this checkout has the shared assets beside it (the run above, in a
+    // fresh folder, never does): the paper's own scene and camera.
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
+    if assets.join("sponza/Sponza.gltf").is_file() {
+        let out = myriad_ok(&[
+            "paper".as_ref(),
+            "--assets".as_ref(),
+            assets.as_os_str(),
+            "--size".as_ref(),
+            "96x48".as_ref(),
+            "--runs".as_ref(),
+            "1".as_ref(),
+            "--out".as_ref(),
+            dir.join("sponza").as_os_str(),
+        ]);
+        assert_mentions(
+            &stdout(&out),
+            &["scene: Sponza", "camera CameraMain", "Table 1", "Table 2"],
+        );
+    } else {
+        eprintln!("{} has no Sponza: only the atrium run", assets.display());
+    }
 
     // Bad options fail before any rendering, naming the option.
     assert_rejected(&[
@@ -1223,6 +1274,9 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
 
 #[test]
 fn skips_measures_every_saving_and_the_image_stays() {
+    if !gpu_available() {
+        return;
+    }
     let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
     let out = myriad_ok(&[
         "skips",
@@ -1298,6 +1352,9 @@ fn assert_stress_stages(report: &Value) {
 
 #[test]
 fn stress_checks_every_cluster_against_the_oracle() {
+    if !gpu_available() {
+        return;
+    }
     let r = stress_json(&["--lights", "20000", "--size", "64x36"]);
     assert_eq!(r["lights"], 20000);
     assert_eq!(
@@ -1323,6 +1380,9 @@ fn stress_checks_every_cluster_against_the_oracle() {
 
 #[test]
 fn stress_samples_clusters_above_the_exact_limit() {
+    if !gpu_available() {
+        return;
+    }
     let r = stress_json(&["--sample", "50", "--lights", "250000", "--size", "32x18"]);
     assert_eq!(r["passed"], true);
     let check = &r["check"];

@@ -125,6 +125,7 @@ fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
     let small = RenderScene::default_scene(100, w, h).unwrap();
     let large = RenderScene::default_scene(8_000, w, h).unwrap();
     let mut viewer = Viewer::new(ctx, &small).unwrap();
+    let mut capacities = Vec::new();
     for scene in [&small, &large, &small] {
         let frame = viewer
             .frame(scene, Shading::Clustered, Method::Refined, false)
@@ -133,6 +134,14 @@ fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
         // Lights and lists both went through the staging ring: 48 bytes a light, 4 a pair.
         let pairs = frame.stats.unwrap().pairs;
         assert!(frame.report.upload_bytes >= 48 * scene.lights.len() as u64 + 4 * pairs);
+        // The GPU buffers hold all of it.
+        let [lights, _, _, indices] = viewer.renderer.list_buffer_bytes();
+        assert!(
+            lights >= 48 * scene.lights.len() as u64,
+            "{lights} B of lights"
+        );
+        assert!(indices >= 4 * pairs, "{indices} B for {pairs} pairs");
+        capacities.push((lights, indices));
         let clustered = viewer.image().unwrap();
         viewer
             .frame(scene, Shading::BruteForce, Method::Refined, false)
@@ -145,6 +154,12 @@ fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
             scene.lights.len()
         );
     }
+    // 100 lights, then 8000 (the buffers grew), then 100 again (they kept their size).
+    assert!(
+        capacities[1].0 > capacities[0].0 && capacities[1].1 > capacities[0].1,
+        "{capacities:?}"
+    );
+    assert_eq!(capacities[2], capacities[1]);
 }
 
 #[test]

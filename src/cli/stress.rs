@@ -125,8 +125,11 @@ struct Report {
     seed: u64,
     adapter: String,
     timestamps: bool,
-    /// The adapter's per-pixel loop limit (llvmpipe), if it has one.
+    /// The adapter's per-invocation shader loop limit (llvmpipe), if it has one.
     shader_loop_limit: Option<u64>,
+    /// The longest list a pixel may loop over under that limit on this grid
+    /// (`myriad_gpu::loop_budget`); `null` without a limit.
+    max_lights_per_pixel: Option<u64>,
     stages: Stages,
     assignment: Assignment,
     upload_bytes: u64,
@@ -226,6 +229,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let adapter = viewer.ctx.describe();
     let timestamps = viewer.ctx.has_timestamps();
     let shader_loop_limit = viewer.ctx.shader_loop_limit();
+    let max_lights_per_pixel = viewer
+        .ctx
+        .max_lights_per_pixel(myriad::gpu::ShadingMode::Lists, scene.grid.dims.z);
 
     // 4. Upload (+ encode and submit) of the measured frame.
     progress.start("upload + encode + submit");
@@ -307,6 +313,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         adapter,
         timestamps,
         shader_loop_limit,
+        max_lights_per_pixel,
         stages,
         assignment,
         upload_bytes: report.upload_bytes,
@@ -383,8 +390,8 @@ fn print_table(r: &Report) {
         format!(
             "longest list {}{}; lists {:.1} MiB",
             a.max_list,
-            r.shader_loop_limit
-                .map_or(String::new(), |l| format!(" (adapter loop limit {l})")),
+            r.max_lights_per_pixel
+                .map_or(String::new(), |l| format!(" (at most {l} on this adapter)")),
             mib(a.list_bytes)
         ),
     );

@@ -40,9 +40,12 @@ pub enum GpuError {
     #[error(
         "a pixel would evaluate {lights} lights, but {adapter} stops shader loops after {limit} \
          iterations in all, room for at most {max_lights} lights per pixel here (lights past that would be \
-         silently dropped); use light lists (clustered shading) or fewer lights per pass"
+         silently dropped); {}",
+        loop_limit_advice(*.mode)
     )]
     ShaderLoopLimit {
+        /// The refused pass: brute force loops over every light, lists over one cluster's.
+        mode: crate::ShadingMode,
         /// Lights one pixel would visit.
         lights: u64,
         /// The most lights a pixel may visit in this pass on this adapter.
@@ -61,4 +64,14 @@ pub enum GpuError {
     /// The device reported a validation or out-of-memory error.
     #[error("wgpu reported an error: {0}")]
     Device(String),
+}
+
+/// What to change when a pass would pass the adapter's loop limit.
+fn loop_limit_advice(mode: crate::ShadingMode) -> &'static str {
+    match mode {
+        crate::ShadingMode::BruteForce => {
+            "use light lists (clustered shading) or fewer lights per pass"
+        }
+        crate::ShadingMode::Lists => "use a finer cluster grid (shorter lists) or fewer lights",
+    }
 }

@@ -3,13 +3,16 @@
 //! Mesa's llvmpipe ends an invocation's loops after a fixed number of iterations *in all*
 //! (`LP_MAX_TGSI_LOOP_ITERATIONS` = 65 535, one counter shared by every loop of the
 //! invocation), and a light past that is dropped without any error. Measured on llvmpipe with
-//! every light at one point and only the last one bright (`tests/gpu_loop_budget.rs`):
+//! every light at one point and only the last one bright, the guard below lifted by hand:
 //! - one depth slice (no search loop): the last of 65 534 lights is shown, of 65 535 it is lost;
 //! - 16 slices, whose `slice_of_depth` binary search (`shaders/common/cluster.wgsl`) runs first
 //!   and goes round at most 4 times: 65 530 are shown, 65 531 lose light.
 //!
 //! So the budget is 65 534 loop iterations, and each time the search goes round takes one light
 //! away. A frame that could exceed it at any pixel is refused (never drawn wrong).
+//! `tests/gpu_loop_budget.rs` pins both sides with the guard in place: exactly at the budget the
+//! last light shows (a bound one too large fails there, the lost light is seen), one light more
+//! is refused.
 
 use crate::ShadingMode;
 

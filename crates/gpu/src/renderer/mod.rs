@@ -211,6 +211,13 @@ impl Renderer {
         self.uploads
     }
 
+    /// Bytes of the storage buffers that hold lights and lists `[lights, offsets, counts,
+    /// indices]`. They grow (to the next power of two) when a frame needs more and never shrink,
+    /// so an engine can see what its light load costs in GPU memory.
+    pub fn list_buffer_bytes(&self) -> [u64; 4] {
+        [&self.lights, &self.offsets, &self.counts, &self.indices].map(|b| b.capacity())
+    }
+
     /// GPU times of the last frame's passes (waits for the GPU); `None` where the device has no
     /// timestamp queries.
     pub fn last_pass_times(&self, ctx: &GpuContext) -> Result<Option<PassTimes>, GpuError> {
@@ -339,6 +346,7 @@ impl Renderer {
             };
             if lights > max_lights {
                 return Err(GpuError::ShaderLoopLimit {
+                    mode: frame.mode,
                     lights,
                     max_lights,
                     adapter: ctx.describe(),
