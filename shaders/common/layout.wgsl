@@ -58,8 +58,9 @@ struct Material {
 struct ClusterCheck {
     target_size: vec2<u32>,
     sample_count: u32,
-    _pad: u32,
+    from_stored_depth: u32,
     grid_dims: vec4<u32>,
+    near_far: vec4<f32>,
 }
 
 // One scene vertex, world space (vertex buffer of the G-buffer and forward passes; its Rust twin

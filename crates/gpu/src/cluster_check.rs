@@ -9,6 +9,23 @@ use crate::{GpuContext, GpuError};
 use myriad_cluster_math::ClusterGrid;
 use wgpu::util::DeviceExt;
 
+/// What the sample depths of a check are.
+#[derive(Clone, Copy, Debug)]
+pub enum SampleDepths<'a> {
+    /// View depths, as `ClusterGrid::cluster_of_pixel` takes them.
+    View(&'a [f32]),
+    /// Depth-buffer values of a camera with these near and far planes, turned into view depth
+    /// on the GPU exactly as the shading passes do (`view_depth_from_ndc_depth`).
+    Stored {
+        /// The stored depths.
+        depths: &'a [f32],
+        /// The camera's near plane.
+        near: f32,
+        /// The camera's far plane.
+        far: f32,
+    },
+}
+
 /// The cluster id the GPU computes for each `(pixel, view depth)` sample on a `width × height`
 /// target. Blocks until done.
 pub fn gpu_cluster_ids(
@@ -19,6 +36,22 @@ pub fn gpu_cluster_ids(
     pixels: &[[u32; 2]],
     depths: &[f32],
 ) -> Result<Vec<u32>, GpuError> {
+    gpu_cluster_ids_of(ctx, grid, width, height, pixels, SampleDepths::View(depths))
+}
+
+/// [`gpu_cluster_ids`] for view or stored depths ([`SampleDepths`]).
+pub fn gpu_cluster_ids_of(
+    ctx: &GpuContext,
+    grid: &ClusterGrid,
+    width: u32,
+    height: u32,
+    pixels: &[[u32; 2]],
+    samples: SampleDepths<'_>,
+) -> Result<Vec<u32>, GpuError> {
+    let (depths, from_stored_depth, near_far) = match samples {
+        SampleDepths::View(d) => (d, 0, [0.0; 4]),
+        SampleDepths::Stored { depths, near, far } => (depths, 1, [near, far, 0.0, 0.0]),
+    };
     if pixels.len() != depths.len() || pixels.is_empty() {
         return Err(GpuError::InvalidInput(format!(
             "{} pixels and {} depths (need the same, non-zero count)",
@@ -41,8 +74,9 @@ pub fn gpu_cluster_ids(
     let uniforms = ClusterCheckUniforms {
         target_size: [width, height],
         sample_count: pixels.len() as u32,
-        _pad: 0,
+        from_stored_depth,
         grid_dims: [grid.dims.x, grid.dims.y, grid.dims.z, 0],
+        near_far,
     };
     let init = |label, contents: &[u8], usage| {
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -90,10 +90,14 @@ pub struct ClusterCheckUniforms {
     pub target_size: [u32; 2],
     /// Number of samples.
     pub sample_count: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// 1: the sample depths are stored depth-buffer values, turned into view depth on the GPU
+    /// with `view_depth_from_ndc_depth` and `near_far` first (the shading passes' path); 0: they
+    /// are view depths.
+    pub from_stored_depth: u32,
     /// Grid X, Y, Z; `w` unused.
     pub grid_dims: [u32; 4],
+    /// The camera's near and far planes (for `from_stored_depth`); `zw` unused.
+    pub near_far: [f32; 4],
 }
 
 /// One vertex of the scene geometry, world space (vertex buffer, not a WGSL struct: its layout

@@ -60,7 +60,7 @@ fn structs_match_naga_layout() {
         (
             "ClusterCheck",
             size_of::<ClusterCheckUniforms>(),
-            rust_offsets!(ClusterCheckUniforms: target_size, sample_count, _pad, grid_dims),
+            rust_offsets!(ClusterCheckUniforms: target_size, sample_count, from_stored_depth, grid_dims, near_far),
         ),
     ];
     assert_eq!(
