@@ -15,7 +15,7 @@ use myriad_gpu::layout::{MaterialUniforms, Vertex};
 use myriad_gpu::wgpu;
 use myriad_gpu::{
     Blend, ClusterLists, Draw, FrameDesc, FrameReport, GpuContext, GpuError, LightColumns,
-    MaterialDesc, Renderer, SceneGeometry, ShadingMode,
+    MaterialDesc, Renderer, SceneGeometry, ShadingMode, ShadingSettings,
 };
 
 const SIZE: (u32, u32) = (320, 180);
@@ -153,6 +153,25 @@ fn frame(
     lights: &Lights,
     mode: ShadingMode,
 ) -> Result<(FrameReport, u64, Vec<u8>), GpuError> {
+    frame_with(
+        engine,
+        renderer,
+        scene,
+        lights,
+        mode,
+        ShadingSettings::default(),
+    )
+}
+
+/// [`frame`] with other shading settings.
+fn frame_with(
+    engine: &Engine,
+    renderer: &mut Renderer,
+    scene: &myriad_gpu::GpuScene,
+    lights: &Lights,
+    mode: ShadingMode,
+    settings: ShadingSettings,
+) -> Result<(FrameReport, u64, Vec<u8>), GpuError> {
     let (camera, grid) = view();
     let mut lists = LightLists::new();
     let pairs = if mode == ShadingMode::Lists {
@@ -177,7 +196,7 @@ fn frame(
                 counts: &lists.counts,
                 indices: &lists.indices,
             }),
-            settings: Default::default(),
+            settings,
         },
         &engine.target.create_view(&Default::default()),
     )?;
@@ -246,6 +265,24 @@ mod tests {
             worst <= 1,
             "clustered differs from brute force by {worst}/255"
         );
+        // The floor has no blended material: no forward pass, unless every feature is forced,
+        // and then the same image.
+        assert!(!report.forward_pass);
+        let everything = ShadingSettings {
+            force_all_features: true,
+            ..Default::default()
+        };
+        let (forced, _, all_features) = frame_with(
+            &engine,
+            &mut renderer,
+            &scene,
+            &lights,
+            ShadingMode::Lists,
+            everything,
+        )
+        .unwrap();
+        assert!(forced.forward_pass);
+        assert_eq!(all_features, clustered);
         // The 64 lights light a good part of the floor, and not all of the image.
         let lit = lit_pixels(&clustered);
         let all = (SIZE.0 * SIZE.1) as usize;
