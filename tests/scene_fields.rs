@@ -210,3 +210,39 @@ fn culled_lights_are_never_assigned() {
         assert_eq!([view.x[k], view.y[k], view.z[k]], p.to_array());
     }
 }
+
+#[test]
+fn model_lights_are_written_first_when_asked_for() {
+    let dir = work_dir("model_lights");
+    let model = Model::load(atrium_path(), &LoadOptions::without_images()).unwrap();
+    let own = model.lights.len();
+    assert!(own > 0 && model.lights.iter().any(|l| l.spot.is_some()));
+    let with = scene_from_atrium(
+        &dir.join("with.json"),
+        &["--model-lights", "--lights", "20"],
+    );
+    let without = scene_from_atrium(&dir.join("without.json"), &["--lights", "20"]);
+    assert_eq!(with.lights.len(), own + 20);
+    assert_eq!(without.lights.len(), 20);
+    for (written, original) in with.lights.iter().zip(model.lights.iter()) {
+        assert!(
+            (written.position - original.position).length()
+                <= 1e-5 * (1.0 + original.position.length())
+        );
+        assert_eq!(written.radius, original.radius);
+        assert_eq!(written.color, original.color);
+        assert_eq!(written.intensity, original.intensity);
+        match (written.spot, original.spot) {
+            (Some(a), Some(b)) => {
+                assert!((a.direction - b.direction).length() < 1e-5);
+                assert!((a.angle - b.angle).abs() < 1e-6);
+            }
+            (None, None) => {}
+            other => panic!("spot changed: {other:?}"),
+        }
+    }
+    // The field after them is the one written without them.
+    let field: Vec<Vec3> = with.lights.iter().skip(own).map(|l| l.position).collect();
+    let alone: Vec<Vec3> = without.lights.iter().map(|l| l.position).collect();
+    assert_eq!(field, alone);
+}

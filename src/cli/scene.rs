@@ -6,7 +6,8 @@ use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::source::{check_memory, parse_preset};
 use anyhow::{Context, Result, bail, ensure};
 use myriad::scene::{
-    ClusterGrid, LightField, LoadOptions, Placement, RadiusRule, Scene, SpotRule, SurfaceSampler,
+    ClusterGrid, LightField, Lights, LoadOptions, Placement, RadiusRule, Scene, SpotRule,
+    SurfaceSampler,
 };
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -71,9 +72,13 @@ pub struct Args {
     /// clumps: radius of each clump in metres [default: 1].
     #[arg(long, conflicts_with = "preset")]
     spread: Option<f32>,
-    /// Number of lights.
+    /// Number of lights (of the field, with --gltf).
     #[arg(long, value_parser = super::light_count, default_value_t = 1000)]
     lights: usize,
+    /// With --gltf: also write the model's own KHR_lights_punctual point and spot lights
+    /// (first, with their colours, intensities and cones), before the field's --lights.
+    #[arg(long, conflicts_with = "preset")]
+    model_lights: bool,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -190,10 +195,27 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
             path.display()
         );
     }
-    check_memory(&grid, args.lights)?;
-    let lights = field.generate(args.lights, args.seed);
+    let own = if args.model_lights {
+        model.lights.len()
+    } else {
+        0
+    };
+    check_memory(&grid, own + args.lights)?;
+    let mut lights = Lights::new();
+    for light in model.lights.iter().take(own) {
+        lights.push(light);
+    }
+    // Numbered after the model's (a scene file lists its lights in that order).
+    for (k, light) in field.generate(args.lights, args.seed).iter().enumerate() {
+        lights.push(light.with_source_index((own + k) as u32));
+    }
     let what = format!(
-        "{} lights, field {} in {}, camera {camera_name}, seed {}",
+        "{}{} lights, field {} in {}, camera {camera_name}, seed {}",
+        if args.model_lights {
+            format!("{own} of the model's own + ")
+        } else {
+            String::new()
+        },
         args.lights,
         field_name,
         path.display(),
