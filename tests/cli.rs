@@ -1241,7 +1241,8 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
         assert!(r["false_positive_ratio"].as_f64().unwrap() >= 0.0, "{r}");
     }
 
-    // report.svg: an SVG with the method and scene names and one Pareto-front line per scene
+    // report.svg: an SVG with the method and scene names and one Pareto-front line per scene and
+    // error measure (false positives, shading cost)
     // (drawn in the front colour, #FF7F0E; the legend has one more sample of it).
     let svg = std::fs::read_to_string(dir.join("report.svg")).unwrap();
     assert!(
@@ -1257,7 +1258,11 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
         .lines()
         .filter(|l| l.starts_with("<polyline") && l.contains(r##"stroke="#FF7F0E""##))
         .count();
-    assert_eq!(fronts, 1 + 3, "legend sample + one front per scene");
+    assert_eq!(
+        fronts,
+        1 + 6,
+        "legend sample + one front per scene and error measure"
+    );
 
     // Bad options fail before measuring anything.
     let out = myriad_fails(&[

@@ -338,7 +338,30 @@ fn method_colour(method: &str) -> RGBColor {
 const FRONT_COLOUR: RGBColor = RGBColor(255, 127, 14);
 
 /// Width × height of the SVG.
-const PLOT_SIZE: (u32, u32) = (1500, 620);
+const PLOT_SIZE: (u32, u32) = (1500, 1160);
+
+/// The two error measures the plot puts against time, one row of panels each.
+#[derive(Clone, Copy)]
+enum Error {
+    FalsePositives,
+    ShadingCost,
+}
+
+impl Error {
+    fn of(self, row: &Row) -> f64 {
+        match self {
+            Error::FalsePositives => row.result.false_positive_ratio,
+            Error::ShadingCost => row.shading_cost,
+        }
+    }
+
+    fn axis(self) -> &'static str {
+        match self {
+            Error::FalsePositives => "false-positive ratio",
+            Error::ShadingCost => "shading cost (lights per lit cluster)",
+        }
+    }
+}
 
 /// Marker shapes, one per grid in the order given (cycling past five grids).
 #[derive(Clone, Copy)]
@@ -383,8 +406,9 @@ impl Marker {
     }
 }
 
-/// `report.svg`: one panel per scene, assignment time (log) against false-positive ratio; colour =
-/// method, marker = grid; each scene's Pareto front as a line.
+/// `report.svg`: one panel per scene and error measure, assignment time (log) against the
+/// false-positive ratio (top row) and against the shading cost (bottom row, [`SHADING_COST`]);
+/// colour = method, marker = grid; each panel's Pareto front as a line.
 fn plot(report: &Report) -> Result<String> {
     let mut svg = String::new();
     {
@@ -392,17 +416,17 @@ fn plot(report: &Report) -> Result<String> {
         root.fill(&WHITE)?;
         let (top, panels) = root.split_vertically(78);
         legend(&top, report)?;
-        for (area, preset) in panels
-            .split_evenly((1, Preset::ALL.len()))
-            .iter()
-            .zip(Preset::ALL)
-        {
-            let rows: Vec<&Row> = report
-                .rows
-                .iter()
-                .filter(|r| r.scene == preset.name())
-                .collect();
-            panel(area, preset.name(), report.lights, &rows)?;
+        let areas = panels.split_evenly((2, Preset::ALL.len()));
+        let errors = [Error::FalsePositives, Error::ShadingCost];
+        for (row_of_panels, error) in areas.chunks(Preset::ALL.len()).zip(errors) {
+            for (area, preset) in row_of_panels.iter().zip(Preset::ALL) {
+                let rows: Vec<&Row> = report
+                    .rows
+                    .iter()
+                    .filter(|r| r.scene == preset.name())
+                    .collect();
+                panel(area, preset.name(), report.lights, &rows, error)?;
+            }
         }
         root.present()?;
     }
@@ -412,7 +436,8 @@ fn plot(report: &Report) -> Result<String> {
 /// The strip above the panels: title, methods by colour, grids by marker, the front's line.
 fn legend(area: &DrawingArea<SVGBackend<'_>, Shift>, report: &Report) -> Result<()> {
     let title = format!(
-        "Assignment time against false-positive ratio — {} lights per scene, {} threads",
+        "Assignment time against error (false positives, shading cost) — {} lights per scene, \
+         {} threads",
         report.lights, report.threads
     );
     area.draw(&Text::new(title, (20, 10), ("sans-serif", 20).into_font()))?;
@@ -445,14 +470,18 @@ fn legend(area: &DrawingArea<SVGBackend<'_>, Shift>, report: &Report) -> Result<
     Ok(())
 }
 
-/// One scene's panel.
+/// One scene's panel for one error measure.
 fn panel(
     area: &DrawingArea<SVGBackend<'_>, Shift>,
     scene: &str,
     lights: usize,
     rows: &[&Row],
+    error: Error,
 ) -> Result<()> {
-    let points: Vec<(f64, f64)> = rows.iter().map(|r| point(r)).collect();
+    let points: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.result.median_us, error.of(r)))
+        .collect();
     let (t_min, t_max) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
         (lo.min(p.0), hi.max(p.0))
     });
@@ -461,7 +490,7 @@ fn panel(
     } else {
         (1.0, 10.0)
     };
-    let fp_max = points.iter().fold(0.0f64, |m, p| m.max(p.1)).max(0.01);
+    let y_max = points.iter().fold(0.0f64, |m, p| m.max(p.1)).max(0.01);
     let mut chart = ChartBuilder::on(area)
         .caption(
             format!("{scene} ({lights} lights)"),
@@ -474,12 +503,12 @@ fn panel(
             (t_min..t_max)
                 .log_scale()
                 .with_key_points(time_ticks(t_min, t_max)),
-            -0.04 * fp_max..1.1 * fp_max,
+            -0.04 * y_max..1.1 * y_max,
         )?;
     chart
         .configure_mesh()
         .x_desc("assignment time, µs (median; log scale)")
-        .y_desc("false-positive ratio")
+        .y_desc(error.axis())
         .x_label_formatter(&|t| format_us(*t))
         .y_label_formatter(&|r| format_ratio(*r))
         .label_style(("sans-serif", 13).into_font())
