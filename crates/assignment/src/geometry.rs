@@ -260,7 +260,14 @@ pub(crate) fn cone_may_touch_sphere(
     centre: glam::Vec3,
     radius: f32,
 ) -> bool {
-    let slack = PAD * (apex.abs().element_sum() + centre.abs().element_sum() + range + radius);
+    // In f64: clusters of a far plane near f32::MAX have centres and radii whose squares, and
+    // even whose distances to the apex, overflow f32 (an infinite `across` rejected such
+    // clusters; found by an audit with far = 3.4e38). The inputs are f32, so f64 holds every
+    // product exactly enough and the padding below still covers the f32 inputs' own error.
+    let (apex, axis, centre) = (apex.as_dvec3(), axis.as_dvec3(), centre.as_dvec3());
+    let (range, radius) = (f64::from(range), f64::from(radius));
+    let slack =
+        f64::from(PAD) * (apex.abs().element_sum() + centre.abs().element_sum() + range + radius);
     let r = radius + slack;
     let v = centre - apex;
     let along = v.dot(axis);
@@ -270,7 +277,7 @@ pub(crate) fn cone_may_touch_sphere(
     }
     // Distance from the centre to the cone's surface when outside it (a lower bound otherwise).
     let across = (v - axis * along).length();
-    let (cos, sin) = cos_sin;
+    let (cos, sin) = (f64::from(cos_sin.0), f64::from(cos_sin.1));
     cos * across - along * sin <= r
 }
 

@@ -1,6 +1,7 @@
 //! Degenerate scenes through [`Assigner::assign`] with every method: 0 and 1 lights, every light
 //! outside the frustum, 100k lights in one cluster, one light covering everything, grids 1×1×1,
-//! 128×128×128 and wider or taller than 65 535 tiles, resolutions 1×1 and 16384×16384. Each checks the CSR invariants
+//! 128×128×128 and wider or taller than 65 535 tiles, resolutions 1×1 and 16384×16384, spot lights
+//! under a far plane near `f32::MAX`. Each checks the CSR invariants
 //! ([`LightLists::assert_well_formed`]), the counts the scene implies, and conservativeness
 //! against the f64 oracle — over every cluster where that is affordable, over a seeded sample of
 //! clusters for the 2M-cluster grid.
@@ -332,6 +333,53 @@ fn resolutions_one_pixel_and_16k_square() {
                     (c as usize) < grid.cluster_count(),
                     "{w}x{h} ({px},{py}) {depth}"
                 );
+            }
+        }
+    }
+}
+
+#[test]
+fn spot_lights_under_a_far_plane_near_f32_max() {
+    // Clusters whose centres lie ~1e37 from the light: their distances to the apex overflow f32
+    // (the cone test once rejected them as infinitely far from the axis; an audit found it).
+    for far in [1.0e30f32, 3.4e38] {
+        for slicing in [DepthSlicing::Linear, DepthSlicing::Log] {
+            let camera = Camera::new(
+                Vec3::new(0.0, 2.0, 10.0),
+                Vec3::new(0.0, 2.0, 0.0),
+                Vec3::Y,
+                60.0,
+                64,
+                32,
+                1.0e-3,
+                far,
+            );
+            let grid = ClusterGrid::new(UVec3::new(24, 12, 16), slicing, camera.near, far);
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+            let mut lights = Columns::default();
+            lights.push_spot(
+                Vec3::new(0.0, 5.0, 0.0),
+                8.0,
+                Vec3::NEG_Y,
+                30f32.to_radians(),
+            );
+            for _ in 0..40 {
+                let position = Vec3::new(
+                    rng.random_range(-20.0f32..20.0),
+                    rng.random_range(-10.0f32..10.0),
+                    rng.random_range(-30.0f32..9.0),
+                );
+                let radius = rng.random_range(0.5f32..1.0e6);
+                let angle = rng.random_range(0.05f32..1.5);
+                lights.push_spot(position, radius, random_dir(&mut rng), angle);
+            }
+            let truth = brute_force(&lights, true, &camera, &grid);
+            for method in Method::ALL {
+                let mut lists = LightLists::new();
+                Assigner::new().assign(method, &lights.input(true), &camera, &grid, &mut lists);
+                let context = format!("far {far:e}, {slicing:?}");
+                let (exact, _) = assert_conservative(method.name(), &lists, &truth, &context);
+                assert!(exact > 0, "{context}: the oracle sees no pair");
             }
         }
     }
