@@ -290,6 +290,55 @@ mod tests {
     }
 
     #[test]
+    fn a_refused_frame_changes_nothing() {
+        if GpuContext::headless_for_tests().is_none() {
+            return;
+        }
+        let engine = Engine::new().unwrap();
+        let mut renderer = Renderer::new(&engine.ctx, FORMAT);
+        let scene = renderer.upload_scene(&engine.ctx, &floor()).unwrap();
+        let (few, many) = (Lights::rows(8), Lights::rows(64));
+        let (report, _, before) =
+            frame(&engine, &mut renderer, &scene, &few, ShadingMode::Lists).unwrap();
+        assert_eq!(report.lights, 8);
+        // 64 lights with lists one cluster short: refused.
+        let (camera, grid) = view();
+        let mut lists = LightLists::new();
+        let input = LightInput::points(&many.x, &many.y, &many.z, &many.radius);
+        Assigner::new().assign(Method::Refined, &input, &camera, &grid, &mut lists);
+        let target = engine.target.create_view(&Default::default());
+        let columns = many.columns();
+        let desc = |lights: bool, clusters: usize| FrameDesc {
+            camera: &camera,
+            grid: &grid,
+            mode: ShadingMode::Lists,
+            heat_map: false,
+            lights: lights.then_some(columns),
+            lists: Some(ClusterLists {
+                offsets: &lists.offsets[..clusters],
+                counts: &lists.counts[..clusters],
+                indices: &lists.indices,
+            }),
+            settings: Default::default(),
+        };
+        let short = grid.cluster_count() - 1;
+        let refused = renderer.render(&engine.ctx, &scene, &desc(true, short), &target);
+        assert!(
+            matches!(refused, Err(GpuError::InvalidInput(_))),
+            "{refused:?}"
+        );
+        // The renderer still holds the 8 lights: the 64-light lists do not fit them, and the
+        // 8-light frame renders as before.
+        let all = grid.cluster_count();
+        let stale = renderer.render(&engine.ctx, &scene, &desc(false, all), &target);
+        assert!(matches!(stale, Err(GpuError::InvalidInput(_))), "{stale:?}");
+        let (report, _, after) =
+            frame(&engine, &mut renderer, &scene, &few, ShadingMode::Lists).unwrap();
+        assert_eq!(report.lights, 8);
+        assert_eq!(after, before);
+    }
+
+    #[test]
     fn an_engines_own_device_keeps_the_loop_guard() {
         let Some(headless) = GpuContext::headless_for_tests() else {
             return;

@@ -47,9 +47,9 @@ impl GrowableBuffer {
         self.buffer.size()
     }
 
-    /// Makes room for `bytes`; returns true when the buffer was replaced (its contents are lost
-    /// and bind groups naming it must be rebuilt).
-    pub fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> Result<bool, GpuError> {
+    /// Whether `bytes` fit in one binding on `device` (what [`GrowableBuffer::reserve`] would
+    /// refuse), without touching the buffer: a frame checks every buffer before changing any.
+    pub fn check_fits(&self, device: &wgpu::Device, bytes: u64) -> Result<(), GpuError> {
         let limit = device.limits().max_storage_buffer_binding_size;
         if bytes > limit {
             return Err(GpuError::BufferTooLarge {
@@ -58,6 +58,14 @@ impl GrowableBuffer {
                 limit,
             });
         }
+        Ok(())
+    }
+
+    /// Makes room for `bytes`; returns true when the buffer was replaced (its contents are lost
+    /// and bind groups naming it must be rebuilt).
+    pub fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> Result<bool, GpuError> {
+        self.check_fits(device, bytes)?;
+        let limit = device.limits().max_storage_buffer_binding_size;
         if bytes <= self.buffer.size() {
             return Ok(false);
         }

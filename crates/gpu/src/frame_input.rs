@@ -7,11 +7,11 @@ use glam::DVec3;
 /// Spot columns, one row per light (point lights: angle >= π).
 #[derive(Clone, Copy, Debug)]
 pub struct SpotColumns<'a> {
-    /// Unit axis, x.
+    /// Axis, x (any length: normalised on upload; a zero axis makes a point light).
     pub dir_x: &'a [f32],
-    /// Unit axis, y.
+    /// Axis, y.
     pub dir_y: &'a [f32],
-    /// Unit axis, z.
+    /// Axis, z.
     pub dir_z: &'a [f32],
     /// Outer half angle, radians.
     pub angle: &'a [f32],
@@ -161,10 +161,15 @@ pub fn fill_gpu_lights(
             let angle = s.angle[i];
             let dir = [s.dir_x[i], s.dir_y[i], s.dir_z[i]];
             valid &= angle.is_finite() && angle > 0.0 && dir.iter().all(|d| d.is_finite());
-            if angle < std::f32::consts::PI {
+            // Normalised here, as `myriad-assignment` does (its axis "need not be normalised"):
+            // the shader compares the cosine against a dot product with this axis, so a longer
+            // one would cut the cone off at cluster edges. A zero axis bounds nothing: the light
+            // shines all round, as the assignment treats it.
+            let axis = glam::Vec3::from_array(dir).normalize_or_zero();
+            if angle < std::f32::consts::PI && axis != glam::Vec3::ZERO {
                 light.spot_cos_outer = angle.cos();
                 light.spot_cos_inner = (angle * SPOT_INNER_FRACTION).cos();
-                light.spot_dir = dir;
+                light.spot_dir = axis.to_array();
             }
         }
         if !valid {
@@ -174,4 +179,37 @@ pub fn fill_gpu_lights(
         out.push(light);
     }
     skipped
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spot_axes_are_normalised_and_a_zero_axis_is_a_point_light() {
+        let one = [1.0f32; 3];
+        let columns = LightColumns {
+            x: &[0.0; 3],
+            y: &[0.0; 3],
+            z: &[0.0; 3],
+            radius: &[2.0; 3],
+            r: &one,
+            g: &one,
+            b: &one,
+            intensity: &one,
+            spot: Some(SpotColumns {
+                dir_x: &[0.0, 0.0, 0.0],
+                dir_y: &[-3.0, 0.0, 1.0],
+                dir_z: &[0.0, 0.0, 0.0],
+                angle: &[0.5, 0.5, std::f32::consts::PI],
+            }),
+        };
+        let mut out = Vec::new();
+        assert_eq!(fill_gpu_lights(&columns, DVec3::ZERO, &mut out), 0);
+        assert_eq!(out[0].spot_dir, [0.0, -1.0, 0.0]);
+        assert_eq!(out[0].spot_cos_outer, 0.5f32.cos());
+        for point in &out[1..] {
+            assert_eq!(point.spot_cos_outer, GpuLight::POINT_COS_OUTER);
+        }
+    }
 }

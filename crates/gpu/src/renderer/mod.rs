@@ -354,6 +354,48 @@ impl Renderer {
                 });
             }
         }
+        // Every input is checked before anything is staged, so a refused frame leaves the
+        // renderer as it was (lights, lists and counts of the last accepted frame).
+        let clusters = frame.grid.cluster_count();
+        let light_count = match &frame.lights {
+            Some(columns) => {
+                columns.check().map_err(GpuError::InvalidInput)?;
+                let bytes = (columns.len() * std::mem::size_of::<GpuLight>()) as u64;
+                self.lights.check_fits(device, bytes)?;
+                columns.len()
+            }
+            None => self.light_count,
+        };
+        if let Some(lists) = &frame.lists {
+            lists
+                .check(clusters, light_count)
+                .map_err(GpuError::InvalidInput)?;
+            for (buffer, data) in [
+                (&self.offsets, lists.offsets),
+                (&self.counts, lists.counts),
+                (&self.indices, lists.indices),
+            ] {
+                buffer.check_fits(device, std::mem::size_of_val(data) as u64)?;
+            }
+        }
+        let camera_position = frame.camera.position.to_array();
+        if frame.lights.is_none()
+            && self.light_count > 0
+            && self.lights_camera != Some(camera_position)
+        {
+            return Err(GpuError::InvalidInput(
+                "the camera moved, so the camera-relative lights must be uploaded again".into(),
+            ));
+        }
+        let lists_for_grid = match &frame.lists {
+            Some(_) => true,
+            None => self.lists_uploaded.is_some_and(|(c, _)| c == clusters),
+        };
+        if frame.mode == ShadingMode::Lists && !lists_for_grid {
+            return Err(GpuError::InvalidInput(format!(
+                "clustered shading needs light lists for this grid's {clusters} clusters"
+            )));
+        }
         profile_span!("upload lights and lists");
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
@@ -363,43 +405,29 @@ impl Renderer {
         let mut rebind_lights = self.lights_group.is_none();
 
         // Lights.
-        let camera_position = frame.camera.position.to_array();
-        match &frame.lights {
-            Some(columns) => {
-                columns.check().map_err(GpuError::InvalidInput)?;
-                report.skipped_lights = fill_gpu_lights(
-                    columns,
-                    frame.camera.position.as_dvec3(),
-                    &mut self.scratch_lights,
-                );
-                let bytes = std::mem::size_of_val(self.scratch_lights.as_slice()) as u64;
-                rebind_lights |= self.lights.reserve(device, bytes)?;
-                report.upload_bytes += stage(
-                    &mut self.belt,
-                    &mut encoder,
-                    &self.lights,
-                    &self.scratch_lights,
-                );
-                self.light_count = columns.len();
-                self.lights_camera = Some(camera_position);
-                self.uploads += 1;
-                self.has_spots = columns.spot.is_some();
-            }
-            None if self.lights_camera != Some(camera_position) && self.light_count > 0 => {
-                return Err(GpuError::InvalidInput(
-                    "the camera moved, so the camera-relative lights must be uploaded again".into(),
-                ));
-            }
-            None => {}
+        if let Some(columns) = &frame.lights {
+            report.skipped_lights = fill_gpu_lights(
+                columns,
+                frame.camera.position.as_dvec3(),
+                &mut self.scratch_lights,
+            );
+            let bytes = std::mem::size_of_val(self.scratch_lights.as_slice()) as u64;
+            rebind_lights |= self.lights.reserve(device, bytes)?;
+            report.upload_bytes += stage(
+                &mut self.belt,
+                &mut encoder,
+                &self.lights,
+                &self.scratch_lights,
+            );
+            self.light_count = columns.len();
+            self.lights_camera = Some(camera_position);
+            self.uploads += 1;
+            self.has_spots = columns.spot.is_some();
         }
         report.lights = self.light_count;
 
         // Lists and slice edges.
-        let clusters = frame.grid.cluster_count();
         if let Some(lists) = &frame.lists {
-            lists
-                .check(clusters, self.light_count)
-                .map_err(GpuError::InvalidInput)?;
             for (buffer, data) in [
                 (&mut self.offsets, lists.offsets),
                 (&mut self.counts, lists.counts),
