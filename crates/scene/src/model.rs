@@ -774,18 +774,21 @@ mod tests {
         assert_eq!((s.meshes, s.instances, s.triangles), (1, 3, 6));
     }
 
-    fn quad_at(world_from_local: Mat4) -> Model {
+    /// A model drawing the unit quad once per transform.
+    fn quads_at(transforms: &[Mat4]) -> Model {
         let mut model = Model::new("test");
         model.meshes.push(Mesh {
             name: None,
             primitives: vec![unit_quad()],
         });
-        model.instances.push(Instance {
-            mesh: 0,
-            world_from_local,
-            node: 0,
-            name: None,
-        });
+        for (node, &world_from_local) in transforms.iter().enumerate() {
+            model.instances.push(Instance {
+                mesh: 0,
+                world_from_local,
+                node,
+                name: None,
+            });
+        }
         model
     }
 
@@ -793,18 +796,11 @@ mod tests {
     fn a_model_without_a_camera_is_viewed_down_its_long_axis() {
         assert!(Model::new("empty").camera_or_view(0, 8, 4).is_none());
         // A courtyard 30 long in x, 12 high, 15 deep.
-        let model = quad_at(
-            Mat4::from_translation(Vec3::new(-15.0, 0.0, -7.5))
-                * Mat4::from_scale(Vec3::new(30.0, 12.0, 1.0)),
-        );
-        let mut model = model;
-        model.instances.push(Instance {
-            mesh: 0,
-            world_from_local: Mat4::from_translation(Vec3::new(-15.0, 0.0, 7.5))
-                * Mat4::from_scale(Vec3::new(30.0, 12.0, 1.0)),
-            node: 1,
-            name: None,
-        });
+        let wall = |z: f32| {
+            Mat4::from_translation(Vec3::new(-15.0, 0.0, z))
+                * Mat4::from_scale(Vec3::new(30.0, 12.0, 1.0))
+        };
+        let model = quads_at(&[wall(-7.5), wall(7.5)]);
         let b = model.bounds();
         let (c, name) = model.camera_or_view(0, 800, 400).unwrap();
         assert!(name.contains("camera 0 does not exist"), "{name}");
@@ -813,13 +809,10 @@ mod tests {
         assert!(c.far > b.size().length());
         assert_eq!((c.width, c.height), (800, 400));
         // Bounds whose size overflows f32 still give a finite camera inside them.
-        let mut huge = quad_at(Mat4::from_translation(Vec3::splat(-3.0e38)));
-        huge.instances.push(Instance {
-            mesh: 0,
-            world_from_local: Mat4::from_translation(Vec3::splat(3.0e38)),
-            node: 1,
-            name: None,
-        });
+        let huge = quads_at(&[
+            Mat4::from_translation(Vec3::splat(-3.0e38)),
+            Mat4::from_translation(Vec3::splat(3.0e38)),
+        ]);
         assert!(!huge.bounds().size().is_finite());
         let c = huge.view_of_bounds(8, 4).unwrap();
         assert!(c.position.is_finite() && c.target.is_finite());
@@ -839,17 +832,7 @@ mod tests {
 
     #[test]
     fn cameras_convert_with_the_resolution_and_a_finite_far() {
-        let mut model = Model::new("test");
-        model.meshes.push(Mesh {
-            name: None,
-            primitives: vec![unit_quad()],
-        });
-        model.instances.push(Instance {
-            mesh: 0,
-            world_from_local: Mat4::IDENTITY,
-            node: 0,
-            name: None,
-        });
+        let mut model = quads_at(&[Mat4::IDENTITY]);
         model.cameras.push(ModelCamera {
             name: "Infinite".into(),
             node: 1,
