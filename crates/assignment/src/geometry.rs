@@ -18,6 +18,8 @@
 //!    plane search per row.
 
 use crate::search::FramePlanes;
+use glam::DVec3;
+use myriad_cluster_math::Camera;
 
 /// Relative padding of light radii: 4e-6 of the light's view-space extent, about 34–67 f32 ulps of
 /// it (a ulp is 2⁻²³–2⁻²⁴ of a value).
@@ -56,9 +58,36 @@ pub(crate) fn z_phase(dc: f32, r: f32, planes: &FramePlanes<'_>) -> Option<ZRang
     Some(ZRange {
         da,
         db,
-        k0: planes.slice_of(da),
+        k0: planes.first_slice(da),
         k1: planes.slice_of(db),
     })
+}
+
+/// Whether a world-space sphere may touch the frustum (six plane tests, as the early cull), in f64:
+/// for the rare finite light whose view-space sphere does not fit in f32 (coordinates and radius
+/// near `f32::MAX`), which the f32 phases cannot take. `z_depths` are the frame's slice edges.
+#[cold]
+pub(crate) fn may_touch_frustum_f64(
+    camera: &Camera,
+    z_depths: &[f32],
+    world: DVec3,
+    r: f64,
+) -> bool {
+    let v = camera.view_from_world_point_f64(world);
+    let d = -v.z;
+    let (tx, ty) = camera.tan_half_fov_f64();
+    let (near, far) = (
+        f64::from(z_depths[0]),
+        f64::from(z_depths[z_depths.len() - 1]),
+    );
+    // Signed distances to the inside of each side plane: x ≥ −tx·d, x ≤ tx·d, the same for y.
+    let (sx, sy) = ((1.0 + tx * tx).sqrt(), (1.0 + ty * ty).sqrt());
+    (v.x + tx * d) / sx >= -r
+        && (tx * d - v.x) / sx >= -r
+        && (v.y + ty * d) / sy >= -r
+        && (ty * d - v.y) / sy >= -r
+        && d + r >= near
+        && d - r <= far
 }
 
 /// Half-width of the sphere's cross-section at the depth in `[da, db]` nearest its centre — the

@@ -11,7 +11,7 @@
 
 use crate::active::ActiveView;
 use crate::append::{Bucket, Span};
-use crate::geometry::{self, ClusterBox};
+use crate::geometry::{self, ClusterBox, ZRange};
 use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
 use crate::{LightInput, Method};
@@ -56,6 +56,24 @@ impl FrameContext<'_> {
             & (bottom.dot(c) >= -r)
             & (depth + r >= self.planes.sets.z_depths[0])
             & (depth - r <= self.planes.sets.z_depths[self.planes.sets.z_depths.len() - 1])
+    }
+
+    /// The whole grid as one box: what an overflowed light is given (see `run_task`).
+    fn whole_grid_box(&self) -> ClusterBox {
+        let d = self.grid.dims;
+        let z = &self.planes.sets.z_depths;
+        ClusterBox {
+            z: ZRange {
+                da: z[0],
+                db: z[z.len() - 1],
+                k0: 0,
+                k1: d.z - 1,
+            },
+            i0: 0,
+            i1: d.x - 1,
+            j0: 0,
+            j1: d.y - 1,
+        }
     }
 }
 
@@ -118,7 +136,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     // Pre-cull columns of the current block, indexed by position in the block.
     let (mut vx, mut vy, mut vd, mut vr) =
         ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
-    let (mut valid, mut inside) = ([false; BLOCK], [false; BLOCK]);
+    let (mut valid, mut inside, mut overflowed) = ([false; BLOCK], [false; BLOCK], [false; BLOCK]);
     let mut spots = [SpotView::default(); BLOCK];
     let l = &ctx.lights;
     let m = ctx.view_from_world;
@@ -182,8 +200,29 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         }
         // Phase 0c: the early frustum cull, then compaction of the survivors into the block's
         // columns, walking the set bits of a survivor mask (cheap whether few or most survive).
+        // A valid light whose view-space sphere overflowed f32 (coordinates and radius near
+        // `f32::MAX`) cannot go through the f32 phases: it is culled in f64 or, if it may touch
+        // the frustum, given the whole grid (the `exact` method still tests each cluster in f64).
+        // Rare and conservative; it once counted such lights as culled, a miss.
         for b in 0..n {
-            inside[b] = valid[b] & ctx.may_touch_frustum(vx[b], vy[b], vd[b], vr[b]);
+            // The padded radius sums |cx| + |cy| + |dc| + r: finite only when all of them are.
+            let fits = vr[b].is_finite();
+            overflowed[b] = valid[b] & !fits;
+            inside[b] = valid[b] & fits & ctx.may_touch_frustum(vx[b], vy[b], vd[b], vr[b]);
+        }
+        if overflowed[..n].contains(&true) {
+            for b in 0..n {
+                if overflowed[b] {
+                    let g = block_start + b;
+                    let world = DVec3::new(l.x[g].into(), l.y[g].into(), l.z[g].into());
+                    let z = &ctx.planes.sets.z_depths;
+                    inside[b] =
+                        geometry::may_touch_frustum_f64(ctx.camera, z, world, l.radius[g].into());
+                    // Finite stand-ins for the f32 phases, whose box is then ignored.
+                    (vx[b], vy[b], vd[b], vr[b]) = (0.0, 0.0, 1.0, 1.0);
+                    spots[b].active = false;
+                }
+            }
         }
         let mut alive = 0;
         for (word, flags) in inside[..n].chunks(64).enumerate() {
@@ -218,13 +257,32 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         block.run_phases(alive, &ctx.planes);
         // Phase 4: emit spans.
         for b in 0..alive {
+            let source = block.source[b] as usize;
+            let light = (block_start + source) as u32;
+            if overflowed[source] {
+                let whole = ctx.whole_grid_box();
+                // An infinite radius also keeps `refined` from cutting the box.
+                let (cx, cy, dc, r) = (0.0, 0.0, 0.0, f32::INFINITY);
+                let (buckets, gaps) = (&mut out.buckets[..ctx.parts], &mut out.gaps);
+                emit(
+                    ctx,
+                    light,
+                    cx,
+                    cy,
+                    dc,
+                    r,
+                    &whole,
+                    &spots[source],
+                    buckets,
+                    gaps,
+                );
+                continue;
+            }
             if !block.alive[b] {
                 out.culled += 1;
                 continue;
             }
             let bx = block.cluster_box(b);
-            let source = block.source[b] as usize;
-            let light = (block_start + source) as u32;
             let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
             emit(
                 ctx,
@@ -270,7 +328,7 @@ fn emit(
     // the slices at the ends of its depth band, rarely; skipping those costs a little accuracy
     // (`uniform` 100k: false positives 2.6% → 3.3%; `paper` 1000: 7.5% → 8.3%) for 14% less time
     // (`myriad bench`, 1 thread).
-    let refine = ctx.method == Method::Refined && bx.i1 > bx.i0 && bx.j1 > bx.j0;
+    let refine = ctx.method == Method::Refined && bx.i1 > bx.i0 && bx.j1 > bx.j0 && r.is_finite();
     let width = grid.dims.x;
     match ctx.method {
         Method::Binary | Method::Refined if !refine => {

@@ -78,6 +78,24 @@ pub(crate) fn assign_linear(
         }
         let dc = -c.z;
         let r = geometry::pad_radius(c.x, c.y, dc, radius);
+        if !(c.is_finite() && r.is_finite()) {
+            // The view-space sphere overflowed f32 (coordinates and radius near `f32::MAX`):
+            // culled in f64, or given the whole grid, as the other methods do.
+            let world = p.as_dvec3();
+            if geometry::may_touch_frustum_f64(
+                camera,
+                &planes.z_depths,
+                world,
+                lights.radius[g].into(),
+            ) {
+                for list in &mut scratch.lists[..clusters] {
+                    list.push(g as u32);
+                }
+            } else {
+                culled += 1;
+            }
+            continue;
+        }
         // Outer frustum: all six planes.
         let outside = xn[0].dot(c) < -r
             || xn[nx as usize].dot(c) > r
@@ -159,8 +177,10 @@ fn linear_z(dc: f32, r: f32, z: &[f32]) -> Option<ZRange> {
     if !(da <= db) {
         return None;
     }
+    // The first slice whose far edge reaches `da` (a closed slice ending exactly at `da`, or one
+    // of zero thickness there, touches the light too).
     let mut k0 = 0;
-    while k0 + 1 < slices && z[k0 as usize + 1] <= da {
+    while k0 + 1 < slices && z[k0 as usize + 1] < da {
         k0 += 1;
     }
     let mut k1 = k0;

@@ -104,7 +104,7 @@ impl Block {
         }
         for b in 0..n {
             if self.alive[b] {
-                self.k0[b] = planes.slice_exact(self.da[b], self.guess0[b]);
+                self.k0[b] = planes.first_slice_exact(self.da[b], self.guess0[b]);
                 self.k1[b] = planes.slice_exact(self.db[b], self.guess1[b]);
             }
         }

@@ -153,12 +153,34 @@ impl<'a> FramePlanes<'a> {
         clamp_index(self.slice_coordinate(d) + 1.0, self.sets.z_depths.len()) as u32
     }
 
-    /// Second half of [`Self::slice_of`]: the exact slice from any guess.
+    /// Second half of [`Self::slice_of`]: the exact slice from any guess. This is the *last*
+    /// slice a depth band ending at `d` reaches.
     #[inline]
     pub fn slice_exact(&self, d: f32, guess: u32) -> u32 {
         let z = &self.sets.z_depths;
         let slices = z.len() - 1;
         (partition_from(z, guess as usize, |e| e <= d).clamp(1, slices) - 1) as u32
+    }
+
+    /// The *first* slice a depth band starting at `d` reaches: the first whose far edge is
+    /// `>= d`, clamped to `0..Z`, from the same guess as [`Self::slice_exact`].
+    ///
+    /// It differs from the slice holding `d` only when `d` lies exactly on an edge: then the
+    /// closed slice ending there touches the band too, and so do slices of zero thickness (two
+    /// equal f32 edges, as a very thin log grid rounds to). No pixel lands in those, but the f64
+    /// oracle counts the contact, so skipping them would be a miss.
+    #[inline]
+    pub fn first_slice_exact(&self, d: f32, guess: u32) -> u32 {
+        let z = &self.sets.z_depths;
+        let slices = z.len() - 1;
+        let guess = (guess as usize).saturating_sub(1);
+        partition_from(&z[1..], guess, |e| e < d).min(slices - 1) as u32
+    }
+
+    /// [`Self::first_slice_exact`] with its own guess.
+    #[cfg(test)]
+    pub fn first_slice(&self, d: f32) -> u32 {
+        self.first_slice_exact(d, self.slice_guess(d))
     }
 
     /// Tile columns `[first, last]` whose slope span `[s_i, s_{i+1}]` overlaps `[min, max]`.
@@ -318,6 +340,10 @@ mod tests {
                 let slices = dims.z;
                 let want = (sets.z_depths.partition_point(|&e| e <= d) as u32).clamp(1, slices) - 1;
                 assert_eq!(fp.slice_of(d), want, "depth {d} in {grid:?}");
+                let first = sets.z_depths[1..]
+                    .partition_point(|&e| e < d)
+                    .min(slices as usize - 1);
+                assert_eq!(fp.first_slice(d), first as u32, "depth {d} in {grid:?}");
                 if d >= near && d < far {
                     assert_eq!(fp.slice_of(d), grid.slice_of_depth(d));
                 }

@@ -1,7 +1,8 @@
 //! Degenerate scenes through [`Assigner::assign`] with every method: 0 and 1 lights, every light
 //! outside the frustum, 100k lights in one cluster, one light covering everything, grids 1×1×1,
 //! 128×128×128 and wider or taller than 65 535 tiles, resolutions 1×1 and 16384×16384, spot lights
-//! under a far plane near `f32::MAX`. Each checks the CSR invariants
+//! under a far plane near `f32::MAX`, slices of zero thickness (equal f32 edges), and lights whose
+//! view-space sphere overflows f32. Each checks the CSR invariants
 //! ([`LightLists::assert_well_formed`]), the counts the scene implies, and conservativeness
 //! against the f64 oracle — over every cluster where that is affordable, over a seeded sample of
 //! clusters for the 2M-cluster grid.
@@ -381,6 +382,79 @@ fn spot_lights_under_a_far_plane_near_f32_max() {
                 let (exact, _) = assert_conservative(method.name(), &lists, &truth, &context);
                 assert!(exact > 0, "{context}: the oracle sees no pair");
             }
+        }
+    }
+}
+
+#[test]
+fn zero_thickness_slices_of_a_very_thin_log_grid() {
+    // near 5, far 5.00001 in 64 log slices: f32 rounds many adjacent slice edges to one value, so
+    // some slices have no thickness. No pixel lands in them, but the closed cells touch the
+    // lights, and the f64 oracle counts that (every method once skipped them; an audit found it).
+    for slicing in [DepthSlicing::Log, DepthSlicing::Linear] {
+        let (near, far) = (5.0f32, 5.00001f32);
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64, near, far);
+        let grid = ClusterGrid::new(UVec3::new(2, 2, 64), slicing, near, far);
+        let z = myriad_cluster_math::PlaneSets::new(&camera, &grid).z_depths;
+        assert!(
+            z.windows(2).any(|w| w[0] == w[1]),
+            "{slicing:?}: the grid must have zero-thickness slices to test them: {z:?}"
+        );
+        let mut lights = Columns::default();
+        lights.push(Vec3::new(0.0, 0.0, -5.000005), 1.0);
+        // Small lights whose depth band starts or ends exactly on each distinct slice edge.
+        let mut edges = z.clone();
+        edges.dedup();
+        for (n, &e) in edges.iter().enumerate() {
+            let r = 1.0e-6;
+            let x = (n as f32 - 4.0) * 0.3;
+            lights.push(Vec3::new(x, 0.5, -(e + r)), r);
+            lights.push(Vec3::new(x, -0.5, -(e - r)), r);
+        }
+        let truth = brute_force(&lights, false, &camera, &grid);
+        for method in Method::ALL {
+            let (lists, _) = assign(method, &lights, &camera, &grid);
+            let context = format!("{slicing:?}, z {z:?}");
+            let (exact, _) = assert_conservative(method.name(), &lists, &truth, &context);
+            assert!(exact > 0, "{context}: the oracle sees no pair");
+        }
+    }
+}
+
+#[test]
+fn lights_whose_view_space_sphere_overflows_f32() {
+    // Camera at the origin looking along +x+y, far near f32::MAX: a light at (3e38, 3e38, 0)
+    // lies ~4.2e38 from the eye, past f32's range once rotated into view space, yet its radius
+    // reaches into the frustum (it was once counted as culled). One behind the camera must still
+    // be culled.
+    let far = 3.0e38f32;
+    let camera = Camera::new(
+        Vec3::ZERO,
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::Z,
+        60.0,
+        64,
+        32,
+        1.0,
+        far,
+    );
+    let grid = ClusterGrid::new(UVec3::new(8, 4, 8), DepthSlicing::Linear, 1.0, far);
+    let mut lights = Columns::default();
+    lights.push(Vec3::new(3.0e38, 3.0e38, 0.0), 3.3e38);
+    lights.push(Vec3::new(-3.0e38, -3.0e38, 0.0), 1.0e38);
+    lights.push(Vec3::new(3.0e38, 3.0e38, 0.0), 1.0e30);
+    lights.push(Vec3::new(1.0e37, 1.0e37, 0.0), 1.0e36);
+    let truth = brute_force(&lights, false, &camera, &grid);
+    assert!(truth.iter().any(|l| l.contains(&0)), "light 0 must touch");
+    assert!(!truth.iter().any(|l| l.contains(&1)), "light 1 lies behind");
+    for method in Method::ALL {
+        let (lists, stats) = assign(method, &lights, &camera, &grid);
+        let (exact, extra) = assert_conservative(method.name(), &lists, &truth, "overflow");
+        assert!(exact > 0);
+        assert_eq!(stats.rejected, 0, "{method}: every light is valid");
+        assert!(stats.culled >= 1, "{method}: the light behind is culled");
+        if method == Method::Exact {
+            assert_eq!(extra, 0, "exact tests each cluster in f64");
         }
     }
 }
