@@ -144,6 +144,10 @@ impl Timing {
 /// Times `method` (median of `timing.runs` after one warm-up) and compares its output with
 /// `exact`. With a non-zero [`Idle`] the calling thread waits before each timed call, as an
 /// engine's frames are apart: the pool's other workers go to sleep in between.
+///
+/// Fails when the lists do not fit u32 offsets on `grid` (past 2³² pairs the assigner builds
+/// them on a coarser grid, which the exact lists cannot be compared with), or when `exact` is not
+/// for `grid`.
 pub fn measure(
     method: Method,
     lights: &LightInput<'_>,
@@ -151,7 +155,7 @@ pub fn measure(
     grid: &ClusterGrid,
     exact: &LightLists,
     timing: Timing,
-) -> MethodResult {
+) -> anyhow::Result<MethodResult> {
     let Timing {
         runs,
         idle,
@@ -160,6 +164,20 @@ pub fn measure(
     let mut assigner = Assigner::new().with_parallelism(parallelism);
     let mut lists = LightLists::new();
     let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
+    anyhow::ensure!(
+        stats.coarsened == 0,
+        "{method} needs more than 2^32 pairs on the {}x{}x{} grid (it fell back to a coarser one): \
+         too many to compare; use a coarser grid or fewer lights",
+        grid.dims.x,
+        grid.dims.y,
+        grid.dims.z
+    );
+    anyhow::ensure!(
+        exact.cluster_count() == grid.cluster_count(),
+        "the exact lists have {} clusters, the grid {}",
+        exact.cluster_count(),
+        grid.cluster_count()
+    );
     let mut times = Vec::with_capacity(runs);
     let mut pooled_runs = 0;
     for _ in 0..runs.max(1) {
@@ -173,7 +191,7 @@ pub fn measure(
     let median_us = times[times.len() / 2];
     let cmp = compare(&lists, exact);
     let bytes = lists.byte_size() as u64;
-    MethodResult {
+    Ok(MethodResult {
         method: method.name().to_string(),
         median_us,
         min_us: times[0],
@@ -185,7 +203,7 @@ pub fn measure(
         effective_gb_s: bytes as f64 / (median_us * 1e-6) / 1e9,
         visible_lights: stats.visible(),
         pooled_runs,
-    }
+    })
 }
 
 #[cfg(test)]

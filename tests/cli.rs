@@ -299,6 +299,69 @@ fn every_method_passes_the_oracle_check() {
 }
 
 #[test]
+fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
+    // Past its pair budget the assigner halves the grid; the dump must describe the grid its lists
+    // belong to (it once kept the scene's header, and `check` rejected the dump), and `check`
+    // must verify it on that grid.
+    let dir = work_dir("coarsened_dump");
+    let scene = dir.join("paper.json");
+    myriad_ok(&[
+        "scene".as_ref(),
+        "--preset".as_ref(),
+        "paper".as_ref(),
+        "--lights".as_ref(),
+        "300".as_ref(),
+        "--out".as_ref(),
+        scene.as_os_str(),
+    ]);
+    for method in ["exact", "linear", "binary", "refined"] {
+        let dump = dir.join(format!("{method}.dump.json"));
+        let out = myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--method".as_ref(),
+            method.as_ref(),
+            "--pair-budget".as_ref(),
+            "1000".as_ref(),
+            "--out".as_ref(),
+            dump.as_os_str(),
+        ]);
+        assert_mentions(&stderr(&out), &["24x12x16", "coarser", "6x3x4"]);
+        let d = read_json(&dump);
+        assert_eq!(d["grid"], serde_json::json!([6, 3, 4]), "{method}");
+        assert_eq!(d["offsets"].as_array().unwrap().len(), 6 * 3 * 4);
+        assert_eq!(d["z_planes"].as_array().unwrap().len(), 5);
+        let indices = d["indices"].as_array().unwrap().len();
+        assert!(indices <= 1000, "{method}: {indices} pairs over the budget");
+        let cmp = check_json(&scene, &dump);
+        let context = format!("{method}: {cmp}");
+        assert_eq!(cmp["grid"], serde_json::json!([6, 3, 4]), "{context}");
+        assert_eq!(u64_field(&cmp, "misses"), 0, "{context}");
+        assert!(u64_field(&cmp, "exact_pairs") > 0, "{context}");
+    }
+    // A grid no coarsening of the scene's reaches is still refused: 20x12x16 halves to
+    // 10x6x8, 5x3x4, 2x1x2, 1x1x1, never 6x3x4.
+    let other = write(
+        &dir,
+        "other.json",
+        &GOOD_SCENE.replace(r#""x": 24"#, r#""x": 20"#),
+    );
+    let dump = dir.join("binary.dump.json");
+    let err = myriad_fails(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        other.as_os_str(),
+        "--dump".as_ref(),
+        dump.as_os_str(),
+    ]);
+    assert_mentions(
+        &err,
+        &["binary.dump.json", "does not match the scene's 20x12x16"],
+    );
+}
+
+#[test]
 fn check_finds_a_removed_light_with_either_reference() {
     let dir = work_dir("check_references");
     let scene = dir.join("paper.json");

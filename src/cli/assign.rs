@@ -20,6 +20,11 @@ pub struct Args {
     /// Output dump file (JSON).
     #[arg(long)]
     out: PathBuf,
+    /// Most cluster–light pairs the lists may hold; past it the grid is halved until they fit
+    /// (no light is dropped). The dump then records the coarser grid. Default: what u32 offsets
+    /// hold.
+    #[arg(long)]
+    pair_budget: Option<u64>,
 }
 
 /// Parses a method name with a helpful error.
@@ -38,8 +43,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let (scene, name) = args.source.load()?;
     let pool = thread_pool(args.threads)?;
     let mut lists = LightLists::new();
+    let mut assigner = Assigner::new();
+    if let Some(pairs) = args.pair_budget {
+        assigner = assigner.with_pair_budget(pairs);
+    }
     let stats = pool.install(|| {
-        Assigner::new().assign(
+        assigner.assign(
             method,
             &myriad::light_input(&scene.lights),
             &scene.camera,
@@ -47,7 +56,26 @@ pub fn run(args: Args) -> Result<ExitCode> {
             &mut lists,
         )
     });
-    AssignmentDump::new(&scene.grid, &lists, &scene.lights.source_index).save(&args.out)?;
+    // The dump describes the grid the lists belong to, which the budget may have coarsened.
+    let grid = stats.grid_built(&scene.grid);
+    if stats.coarsened > 0 {
+        let (want, got) = (scene.grid.dims, grid.dims);
+        eprintln!(
+            "warning: {name}: the pairs exceed the budget on the {}x{}x{} grid; the lists were built on the coarser {}x{}x{} grid, which the dump records{}",
+            want.x,
+            want.y,
+            want.z,
+            got.x,
+            got.y,
+            got.z,
+            if stats.over_budget {
+                " (still over the budget: every visible light in one cluster)"
+            } else {
+                ""
+            }
+        );
+    }
+    AssignmentDump::new(&grid, &lists, &scene.lights.source_index).save(&args.out)?;
     println!(
         "{name}: {method} assigned {} lights ({} visible, {} culled, {} rejected) -> {} pairs; wrote {}",
         stats.lights,

@@ -109,7 +109,7 @@ fn bench(
     let input = myriad::light_input(&scene.lights);
     pool.install(|| {
         // The reference shares no code with the assignment but the f64 oracle.
-        let exact = independent_lists(&scene.lights, &scene.camera, &scene.grid);
+        let exact = independent_lists(&scene.lights, &scene.camera, &scene.grid)?;
         let before = core_link::measure();
         let methods = methods
             .iter()
@@ -123,7 +123,7 @@ fn bench(
                 let timing = Timing { runs, ..timing };
                 measure(m, &input, &scene.camera, &scene.grid, &exact, timing)
             })
-            .collect();
+            .collect::<Result<_>>()?;
         let core_link = before
             .zip(core_link::measure())
             .map(|(before, after)| LinkBeforeAfter { before, after });

@@ -9,7 +9,8 @@
 use super::oracle_check::{self, CheckReport, OracleLights, check_all, check_clusters};
 use super::source::SceneSource;
 use anyhow::{Context, Result};
-use myriad::assignment::LightLists;
+use myriad::assignment::{LightLists, coarser_grid};
+use myriad::cluster_math::ClusterGrid;
 use myriad::dump::AssignmentDump;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -42,6 +43,8 @@ enum Reference {
 #[derive(Serialize, Debug)]
 struct CheckOutput {
     reference: Reference,
+    /// The grid checked: the scene's, or the coarser one a pair budget made `assign` use.
+    grid: [u32; 3],
     exact_pairs: u64,
     reported_pairs: u64,
     misses: u64,
@@ -57,7 +60,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let dump = AssignmentDump::load(&args.dump)?;
     // Indices refer to the scene file's lights, skipped invalid ones included.
     let file_lights = scene.lights.len() + scene.skipped.len();
-    dump.check_against(&scene.grid, file_lights)
+    let grid = grid_of_dump(&scene.grid, dump.grid);
+    dump.check_against(&grid, file_lights)
         .with_context(|| format!("{} does not match {name}", args.dump.display()))?;
     // The checks work on the loaded lights' columns: a skipped (invalid) light listed in the
     // dump maps to no column, so it can only count as a false positive.
@@ -72,13 +76,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let report: CheckReport = match args.reference {
         Reference::Independent => {
             let oracle = OracleLights::new(&scene.lights, &scene.camera);
-            let every: Vec<u32> = (0..scene.grid.cluster_count() as u32).collect();
-            check_clusters(&oracle, &scene.camera, &scene.grid, &lists, &every)
+            let every: Vec<u32> = (0..grid.cluster_count() as u32).collect();
+            check_clusters(&oracle, &scene.camera, &grid, &lists, &every)
         }
-        Reference::ExactMethod => check_all(&scene.lights, &scene.camera, &scene.grid, &lists),
+        Reference::ExactMethod => check_all(&scene.lights, &scene.camera, &grid, &lists),
     };
     let out = CheckOutput {
         reference: args.reference,
+        grid: grid.dims.to_array(),
         exact_pairs: report.exact_pairs,
         reported_pairs: report.reported_pairs,
         misses: report.misses,
@@ -101,6 +106,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
             Reference::ExactMethod => "the exact method's lists",
         };
         println!("{name} vs {} (against {reference}):", args.dump.display());
+        if grid.dims != scene.grid.dims {
+            let [x, y, z] = out.grid;
+            println!(
+                "  grid                  {x}x{y}x{z} (coarsened from the scene's by a pair budget)"
+            );
+        }
         println!("  exact pairs           {}", out.exact_pairs);
         println!("  reported pairs        {}", out.reported_pairs);
         println!("  misses                {}", out.misses);
@@ -119,4 +130,19 @@ pub fn run(args: Args) -> Result<ExitCode> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// The grid a dump of `dims` was built for: the scene's, or one of the coarser grids a pair budget
+/// falls back to ([`coarser_grid`]). An unrelated size gives the scene's grid, which the dump's
+/// own check then rejects with the mismatch.
+fn grid_of_dump(scene: &ClusterGrid, dims: [u32; 3]) -> ClusterGrid {
+    let mut grid = *scene;
+    while grid.dims.to_array() != dims {
+        let coarser = coarser_grid(&grid);
+        if coarser.dims == grid.dims {
+            return *scene;
+        }
+        grid = coarser;
+    }
+    grid
 }

@@ -207,7 +207,7 @@ pub(crate) fn independent_lists(
     lights: &Lights,
     camera: &Camera,
     grid: &ClusterGrid,
-) -> LightLists {
+) -> anyhow::Result<LightLists> {
     let oracle = OracleLights::new(lights, camera);
     let per_cluster: Vec<Vec<u32>> = (0..grid.cluster_count() as u32)
         .into_par_iter()
@@ -218,13 +218,22 @@ pub(crate) fn independent_lists(
             exact
         })
         .collect();
+    let pairs: usize = per_cluster.iter().map(Vec::len).sum();
+    anyhow::ensure!(
+        u32::try_from(pairs).is_ok(),
+        "the oracle finds {pairs} pairs on the {}x{}x{} grid, more than CSR lists with u32 offsets \
+         hold; use a coarser grid or fewer lights",
+        grid.dims.x,
+        grid.dims.y,
+        grid.dims.z
+    );
     let mut lists = LightLists::new();
     for list in per_cluster {
         lists.offsets.push(lists.indices.len() as u32);
         lists.counts.push(list.len() as u32);
         lists.indices.extend(list);
     }
-    lists
+    Ok(lists)
 }
 
 /// Checks the reported lists of `clusters` against the oracle, light by light.
@@ -372,7 +381,7 @@ mod tests {
     #[test]
     fn independent_lists_equal_the_exact_methods() {
         let (scene, _) = scene_and_lists(2000);
-        let independent = independent_lists(&scene.lights, &scene.camera, &scene.grid);
+        let independent = independent_lists(&scene.lights, &scene.camera, &scene.grid).unwrap();
         let mut exact = LightLists::new();
         Assigner::new().assign(
             Method::Exact,

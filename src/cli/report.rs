@@ -107,7 +107,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
     let pool = thread_pool(args.threads)?;
-    let mut report = pool.install(|| measure_all(&args, &grids));
+    let mut report = pool.install(|| measure_all(&args, &grids))?;
     mark_pareto_fronts(&mut report.rows);
 
     let markdown = markdown(&report);
@@ -150,7 +150,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
 /// Measures every preset × grid × method on the current rayon pool; one stderr line per
 /// preset × grid.
-fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
+fn measure_all(args: &Args, grids: &[UVec3]) -> Result<Report> {
     let start = Instant::now();
     let total = Preset::ALL.len() * grids.len();
     let mut rows = Vec::with_capacity(total * Method::ALL.len());
@@ -167,7 +167,7 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
                 scene.grid.far(),
             );
             // The reference shares no code with the assignment but the f64 oracle.
-            let exact = independent_lists(&scene.lights, camera, &grid);
+            let exact = independent_lists(&scene.lights, camera, &grid)?;
             let mut lists = LightLists::new();
             let mut times = Vec::new();
             for method in Method::ALL {
@@ -182,7 +182,7 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
                     &grid,
                     &exact,
                     Timing::back_to_back(runs),
-                );
+                )?;
                 // `measure` keeps its lists to itself; one more assignment gives them back for the
                 // shading cost.
                 Assigner::new().assign(method, &input, camera, &grid, &mut lists);
@@ -207,7 +207,7 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
             );
         }
     }
-    Report {
+    Ok(Report {
         lights: args.lights,
         seed: args.seed,
         threads: rayon::current_num_threads(),
@@ -215,7 +215,7 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Report {
         exact_runs: args.runs.min(EXACT_RUNS),
         shading_cost_definition: SHADING_COST,
         rows,
-    }
+    })
 }
 
 /// The shading cost of `lists` (see [`SHADING_COST`]) and the number of clusters it averages

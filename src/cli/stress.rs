@@ -51,7 +51,7 @@ use super::render::parse_size;
 use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists};
 use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
-use myriad::render::{RenderScene, Viewer, cluster_lists, grid_of, light_columns};
+use myriad::render::{RenderScene, Viewer, cluster_lists, light_columns};
 use myriad::scene::DepthSlicing;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -190,7 +190,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     })?;
     stages.assign_again_ms = seconds * 1e3;
     drop(assigner);
-    let grid = grid_of(&stats, &scene.grid);
+    let grid = stats.grid_built(&scene.grid);
     let assignment = Assignment {
         pairs: stats.pairs,
         visible: stats.visible(),

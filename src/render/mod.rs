@@ -15,4 +15,4 @@ pub use pipelined::{FRAMES_IN_FLIGHT, GpuStage, LoopReport, StageTimes, run_fram
 pub use pixel_stats::{PixelStats, pixel_stats};
 pub use setup::{DEFAULT_GRID, RenderScene};
 pub use skips::{SkipFrame, Skips};
-pub use viewer::{Shading, Viewer, ViewerFrame, cluster_lists, grid_of, light_columns};
+pub use viewer::{Shading, Viewer, ViewerFrame, cluster_lists, light_columns};

@@ -15,7 +15,7 @@
 //! pipelines and buffers, left out).
 
 use super::setup::RenderScene;
-use super::viewer::{cluster_lists, grid_of, light_columns};
+use super::viewer::{cluster_lists, light_columns};
 use crate::light_input;
 use anyhow::{Context, Result};
 use crossbeam::channel;
@@ -181,7 +181,7 @@ pub struct GpuStage<'a> {
 impl GpuStage<'_> {
     /// Uploads, renders and waits for frame `work`.
     fn run(&mut self, scene: &RenderScene, work: &FrameWork) -> Result<StageTimes> {
-        let grid = grid_of(&work.stats, &scene.grid);
+        let grid = work.stats.grid_built(&scene.grid);
         let frame = FrameDesc {
             settings: self.settings,
             ..FrameDesc::clustered(

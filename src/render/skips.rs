@@ -24,7 +24,7 @@
 
 use super::depth_buffer::{fitted_grid, mark_active};
 use super::setup::RenderScene;
-use super::viewer::{Viewer, cluster_lists, grid_of, light_columns};
+use super::viewer::{Viewer, cluster_lists, light_columns};
 use crate::light_input;
 use anyhow::{Context, Result};
 use myriad_assignment::{ActiveClusters, AssignStats, Method};
@@ -262,7 +262,7 @@ impl Viewer {
             &mut self.lists,
         );
         frame.assign_seconds = start.elapsed().as_secs_f64();
-        frame.grid = grid_of(&stats, &grid);
+        frame.grid = stats.grid_built(&grid);
         frame.stats = Some(stats);
 
         let desc = FrameDesc {

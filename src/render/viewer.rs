@@ -4,7 +4,7 @@
 use super::setup::RenderScene;
 use crate::light_input;
 use anyhow::Result;
-use myriad_assignment::{AssignStats, Assigner, LightLists, Method, coarser_grid};
+use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
 use myriad_gpu::{
     ClusterLists, FrameDesc, FrameReport, GpuContext, GpuScene, HEADLESS_FORMAT, HeadlessTarget,
     LightColumns, Renderer, ShadingMode, ShadingSettings, SpotColumns,
@@ -79,11 +79,6 @@ pub fn cluster_lists(lists: &LightLists) -> ClusterLists<'_> {
     }
 }
 
-/// The grid lists were built for: `grid`, coarsened as many times as the stats say.
-pub fn grid_of(stats: &AssignStats, grid: &ClusterGrid) -> ClusterGrid {
-    (0..stats.coarsened).fold(*grid, |g, _| coarser_grid(&g))
-}
-
 /// What one frame did.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewerFrame {
@@ -153,7 +148,7 @@ impl Viewer {
                 &mut self.lists,
             );
             assign_seconds = start.elapsed().as_secs_f64();
-            grid = grid_of(&s, &grid);
+            grid = s.grid_built(&grid);
             stats = Some(s);
         }
         let lists = (shading != Shading::BruteForce).then(|| cluster_lists(&self.lists));

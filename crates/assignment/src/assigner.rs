@@ -102,6 +102,12 @@ impl AssignStats {
     pub fn visible(&self) -> u32 {
         self.lights - self.rejected - self.culled
     }
+
+    /// The grid the lists were built for: `requested` (the grid passed to
+    /// [`Assigner::assign`]), made [`coarser_grid`] as many times as the pair budget forced.
+    pub fn grid_built(&self, requested: &ClusterGrid) -> ClusterGrid {
+        (0..self.coarsened).fold(*requested, |g, _| coarser_grid(&g))
+    }
 }
 
 /// Below this many lights the frame runs as one task on the calling thread (below two tasks'
@@ -170,7 +176,7 @@ impl Assigner {
 
     /// Assigns `lights` to the clusters of `grid` seen by `camera` with `method`, refilling `out`.
     /// The lists are for `grid`, or for a coarser grid when the pair budget demands it: check
-    /// [`AssignStats::coarsened`] (and rebuild that grid with [`coarser_grid`]).
+    /// [`AssignStats::coarsened`] (and get that grid from [`AssignStats::grid_built`]).
     ///
     /// From [`SERIAL_LIGHTS`] lights the frame is split into tasks, which run on the current
     /// rayon pool — unless the previous call of this assigner ended more than 20 µs ago and was
