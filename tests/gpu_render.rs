@@ -178,3 +178,41 @@ fn targets_beyond_the_device_limit_are_errors_not_panics() {
     let e = Viewer::new(ctx, &scene).err().expect("an error");
     assert!(e.to_string().contains("pixels a side"), "{e}");
 }
+
+#[test]
+fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let max = ctx.device.limits().max_texture_dimension_2d;
+    assert!(myriad::gpu::GBuffer::new(&ctx.device, 0, 0).is_err());
+    let mut scene = RenderScene::default_scene(10, 64, 32).unwrap();
+    let wide = myriad::gpu::TextureRgba8 {
+        width: max + 1,
+        height: 2,
+        pixels: vec![200; (max as usize + 1) * 2 * 4],
+    };
+    scene.geometry.textures.push(wide);
+    let texture = scene.geometry.textures.len() as u32 - 1;
+    scene.geometry.materials[0].base_color_texture = Some(texture);
+    // The renderer refuses it (wgpu would panic in its error handler)...
+    let renderer = myriad::gpu::Renderer::new(&ctx, myriad::gpu::HEADLESS_FORMAT);
+    let e = renderer.upload_scene(&ctx, &scene.geometry).unwrap_err();
+    assert!(
+        e.to_string().contains(&format!("{}x2", max + 1)) && e.to_string().contains("limit"),
+        "{e}"
+    );
+    // ...`fit_textures` scales it to the limit, keeping the aspect and the colour...
+    let mut fitted = scene.geometry.clone();
+    let notes = fitted.fit_textures(max);
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    let t = &fitted.textures[texture as usize];
+    assert_eq!((t.width, t.height), (max, 1));
+    assert!(t.pixels.iter().all(|&p| p == 200));
+    assert!(renderer.upload_scene(&ctx, &fitted).is_ok());
+    // ...and the viewer does that itself and renders.
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+}

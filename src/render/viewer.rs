@@ -7,7 +7,7 @@ use anyhow::Result;
 use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
 use myriad_gpu::{
     ClusterLists, FrameDesc, FrameReport, GpuContext, GpuScene, HEADLESS_FORMAT, HeadlessTarget,
-    LightColumns, Renderer, ShadingMode, ShadingSettings, SpotColumns,
+    LightColumns, Renderer, ShadingMode, ShadingSettings, SpotColumns, TextureRgba8,
 };
 use myriad_scene::{ClusterGrid, DepthSlicing, Lights};
 use std::time::Instant;
@@ -113,7 +113,18 @@ impl Viewer {
     /// Uploads `scene`'s geometry and makes a target of its camera's size.
     pub fn new(ctx: GpuContext, scene: &RenderScene) -> Result<Self> {
         let renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
-        let gpu_scene = renderer.upload_scene(&ctx, &scene.geometry)?;
+        // A model's texture larger than the device samples is scaled down, with a warning.
+        let max_side = ctx.device.limits().max_texture_dimension_2d;
+        let too_large = |t: &TextureRgba8| t.width.max(t.height) > max_side;
+        let fitted = scene.geometry.textures.iter().any(too_large).then(|| {
+            let mut geometry = scene.geometry.clone();
+            for note in geometry.fit_textures(max_side) {
+                eprintln!("warning: {}: {note}", scene.name);
+            }
+            geometry
+        });
+        let geometry = fitted.as_ref().unwrap_or(&scene.geometry);
+        let gpu_scene = renderer.upload_scene(&ctx, geometry)?;
         let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height)?;
         Ok(Self {
             ctx,

@@ -124,6 +124,79 @@ impl SceneGeometry {
         }
         Ok(())
     }
+
+    /// Checks the sizes against what `limits` allow: every texture's sides against
+    /// `max_texture_dimension_2d`, the vertex and index buffers against `max_buffer_size`. Past
+    /// them wgpu raises a validation error, which panics in its default handler, so the upload
+    /// refuses them first ([`Self::fit_textures`] scales textures down instead).
+    pub fn check_limits(&self, limits: &wgpu::Limits) -> Result<(), String> {
+        let max_side = limits.max_texture_dimension_2d;
+        if let Some((n, t)) = self
+            .textures
+            .iter()
+            .enumerate()
+            .find(|(_, t)| t.width.max(t.height) > max_side)
+        {
+            return Err(format!(
+                "texture {n} is {}x{}, larger than this device's {max_side}-pixel limit \
+                 (SceneGeometry::fit_textures scales textures down to fit)",
+                t.width, t.height
+            ));
+        }
+        for (what, bytes) in [
+            ("vertex", std::mem::size_of_val(self.vertices.as_slice())),
+            ("index", std::mem::size_of_val(self.indices.as_slice())),
+        ] {
+            if bytes as u64 > limits.max_buffer_size {
+                return Err(format!(
+                    "the {what} buffer needs {bytes} bytes, more than this device's buffer limit \
+                     ({} bytes)",
+                    limits.max_buffer_size
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Scales every texture with a side above `max_side` down to fit (aspect kept, each side at
+    /// least 1 pixel; a triangle filter on the sRGB values) and returns one note per texture
+    /// scaled. A renderer must take what the device can sample; a smaller texture is the
+    /// usual engine answer to one that is too large.
+    pub fn fit_textures(&mut self, max_side: u32) -> Vec<String> {
+        let max_side = max_side.max(1);
+        let mut notes = Vec::new();
+        for (n, t) in self.textures.iter_mut().enumerate() {
+            let side = t.width.max(t.height);
+            if side <= max_side {
+                continue;
+            }
+            let scale = |v: u32| ((v as u64 * max_side as u64 / side as u64) as u32).max(1);
+            let (width, height) = (scale(t.width), scale(t.height));
+            let Some(image) =
+                image::RgbaImage::from_raw(t.width, t.height, std::mem::take(&mut t.pixels))
+            else {
+                // `check` reports the size mismatch; leave the texture as it was.
+                continue;
+            };
+            let small = image::imageops::resize(
+                &image,
+                width,
+                height,
+                image::imageops::FilterType::Triangle,
+            );
+            notes.push(format!(
+                "texture {n} scaled from {}x{} to {width}x{height} (the device's limit is \
+                 {max_side} pixels a side)",
+                t.width, t.height
+            ));
+            *t = TextureRgba8 {
+                width,
+                height,
+                pixels: small.into_raw(),
+            };
+        }
+        notes
+    }
 }
 
 /// The scene's GPU resources.

@@ -34,8 +34,10 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
-    /// Creates the textures for a `width × height` target.
-    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+    /// Creates the textures for a `width × height` target. A size of 0 or beyond the device's
+    /// largest 2D texture is [`GpuError::InvalidInput`] (wgpu would panic on it).
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, GpuError> {
+        check_target_size(device, width, height)?;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
@@ -44,14 +46,14 @@ impl GBuffer {
             texture(label, format).create_view(&wgpu::TextureViewDescriptor::default())
         };
         let depth_texture = texture("gbuffer depth", DEPTH_FORMAT);
-        Self {
+        Ok(Self {
             size: (width, height),
             albedo: view("gbuffer albedo", ALBEDO_FORMAT),
             normal: view("gbuffer normal", NORMAL_FORMAT),
             material: view("gbuffer material", MATERIAL_FORMAT),
             depth: depth_texture.create_view(&wgpu::TextureViewDescriptor::default()),
             depth_texture,
-        }
+        })
     }
 }
 

@@ -187,6 +187,9 @@ impl Renderer {
         geometry: &SceneGeometry,
     ) -> Result<GpuScene, GpuError> {
         geometry.check().map_err(GpuError::InvalidInput)?;
+        geometry
+            .check_limits(&ctx.device.limits())
+            .map_err(GpuError::InvalidInput)?;
         Ok(GpuScene::new(
             &ctx.device,
             &ctx.queue,
@@ -296,8 +299,7 @@ impl Renderer {
         height: u32,
     ) -> Result<(), GpuError> {
         if self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
-            crate::targets::check_target_size(device, width, height)?;
-            let gbuffer = GBuffer::new(device, width, height);
+            let gbuffer = GBuffer::new(device, width, height)?;
             self.deferred_inputs = Some(self.deferred_bind_group(device, &gbuffer));
             self.gbuffer = Some(gbuffer);
         }
