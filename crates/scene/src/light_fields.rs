@@ -381,12 +381,20 @@ impl LightField {
 }
 
 /// Uniform in `[min, max)`; `min` itself, with no draw, when the range is empty.
+///
+/// A range whose width overflows f32 (a model's bounds near ±`f32::MAX`) is drawn in f64, where
+/// `rand`'s f32 sampler would panic; every other range keeps `rand`'s sampler, so seeded scenes
+/// stay what they were.
 fn draw(rng: &mut impl Rng, min: f32, max: f32) -> f32 {
-    if min < max {
-        rng.random_range(min..max)
-    } else {
-        min
+    if !(min < max) {
+        return min;
     }
+    if (max - min).is_finite() {
+        return rng.random_range(min..max);
+    }
+    let (lo, hi) = (f64::from(min), f64::from(max));
+    let t: f64 = rng.random_range(0.0..1.0);
+    ((lo + t * (hi - lo)) as f32).clamp(min, max.next_down())
 }
 
 /// A point uniform in a box (three draws: x, y, z).
@@ -461,6 +469,36 @@ mod tests {
         let r = radius_from_intensity(50.0, 0.5);
         assert!((50.0 / (r * r) - 0.5).abs() < 1e-5);
         assert_eq!(radius_from_intensity(0.0, 0.1), 0.0);
+    }
+
+    #[test]
+    fn boxes_wider_than_f32_spans_are_drawn_without_panicking() {
+        // A model's bounds near ±f32::MAX: the box is finite but its width is not (rand's f32
+        // sampler panicked on it).
+        let huge = Aabb::new(Vec3::splat(-3.0e38), Vec3::splat(3.0e38));
+        for placement in [
+            Placement::Box(huge),
+            Placement::Clumps {
+                within: huge,
+                clumps: 4,
+                spread: 1.0,
+            },
+        ] {
+            let field = LightField::new(placement);
+            assert_eq!(field.problem(), None);
+            let lights = field.generate(2000, 3);
+            assert!(lights.problems().is_empty(), "{:?}", lights.problems());
+            let xs: Vec<f32> = lights.iter().map(|l| l.position.x).collect();
+            assert!(xs.iter().all(|x| x.is_finite()));
+            // Spread over the whole box, both signs.
+            assert!(xs.iter().any(|&x| x < -1.0e38) && xs.iter().any(|&x| x > 1.0e38));
+        }
+        // Ordinary ranges keep their old draws (seeded scenes must not change).
+        let mut a = rand_pcg::Pcg64::seed_from_u64(1);
+        let mut b = rand_pcg::Pcg64::seed_from_u64(1);
+        for _ in 0..100 {
+            assert_eq!(draw(&mut a, -2.0, 3.0), b.random_range(-2.0f32..3.0));
+        }
     }
 
     #[test]
