@@ -454,19 +454,24 @@ fn position_of_missing_accessor_is_an_error() {
 }
 
 /// A buffer URI naming a device (`/dev/zero` would be read forever) or a folder is refused,
-/// however it is spelled (percent-encoded, relative, `file:`).
+/// however it is spelled (percent-encoded, relative); absolute paths and `file:` URIs are refused
+/// whatever they name.
 #[test]
 fn buffer_uris_naming_devices_or_folders_are_refused() {
     let dir = temp_dir("devices");
     let uris = [
-        "/dev/zero",
-        ".",
-        "/",
-        "/dev/%7Aero",
-        "../../../../../../../../../../dev/zer%6F",
-        "file:///dev/zero",
+        ("/dev/zero", "absolute path"),
+        (".", "not a regular file"),
+        ("/", "absolute path"),
+        ("/dev/%7Aero", "absolute path"),
+        (
+            "../../../../../../../../../../dev/zer%6F",
+            "not a regular file",
+        ),
+        ("file:///dev/zero", "absolute path"),
+        ("FILE:relative.bin", "absolute path"),
     ];
-    for uri in uris {
+    for (uri, expected) in uris {
         let text = format!(
             r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 16, "uri": "{uri}"}}]}}"#
         );
@@ -478,8 +483,63 @@ fn buffer_uris_naming_devices_or_folders_are_refused() {
                 .map_err(|e| e.to_string())
         });
         let message = r.expect_err(uri);
-        assert!(message.contains("not a regular file"), "{uri}: {message}");
+        assert!(message.contains(expected), "{uri}: {message}");
+        assert!(message.contains(uri), "{uri}: {message}");
     }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A model names its files relative to itself: an absolute path to a perfectly readable file is
+/// refused (an untrusted model must not read `/etc/passwd` as vertices), `../` is followed, and
+/// only a buffer's declared length is read, however large the file its URI names.
+#[test]
+fn buffer_files_are_relative_and_read_only_to_their_declared_length() {
+    let dir = temp_dir("buffer_files");
+    let sub = dir.join("model");
+    std::fs::create_dir_all(&sub).unwrap();
+    // Three vertices of a triangle, then 8 GiB of sparse zeros.
+    let mut bytes = Vec::new();
+    for v in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for c in v {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let buffer = dir.join("huge.bin");
+    std::fs::write(&buffer, &bytes).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&buffer)
+        .unwrap()
+        .set_len(8 << 30)
+        .unwrap();
+    let gltf = |uri: &str| {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 36, "uri": "{uri}"}}],
+            "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+            "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+            "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}], "scene": 0}}"#
+        )
+    };
+    let path = sub.join("relative.gltf");
+    std::fs::write(&path, gltf("../huge.bin")).unwrap();
+    let model = guarded("relative buffer", Duration::from_secs(20), move || {
+        Model::load(&path, &LoadOptions::without_images()).map_err(|e| e.to_string())
+    })
+    .expect("a relative buffer file loads");
+    assert_eq!(model.triangle_count(), 1);
+    let absolute = buffer.display().to_string();
+    let path = sub.join("absolute.gltf");
+    std::fs::write(&path, gltf(&absolute)).unwrap();
+    let message = Model::load(&path, &LoadOptions::without_images())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("absolute path") && message.contains(&absolute),
+        "{message}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -496,8 +556,12 @@ fn image_uris_naming_devices_and_bad_escapes_are_errors() {
         "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
         "textures": [{"source": 0}]"#;
     for (uri, expected) in [
-        ("/dev/zero", "not a regular file"),
-        ("/dev/%7Aero", "not a regular file"),
+        ("/dev/zero", "absolute path"),
+        ("/dev/%7Aero", "absolute path"),
+        (
+            "../../../../../../../../../../dev/zer%6F",
+            "not a regular file",
+        ),
         ("%FF.png", "does not percent-decode to UTF-8"),
     ] {
         let text = format!(

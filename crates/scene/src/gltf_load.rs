@@ -17,8 +17,8 @@
 //!    `gltf::Gltf::from_slice` parses and validates the JSON (unknown required extensions,
 //!    bad enum values and out-of-range indices are errors there).
 //! 2. **Buffers.** Each buffer is fetched (GLB chunk, `data:` URI, or a file relative to the
-//!    glTF file) and must hold its declared `byteLength`; every buffer view must lie inside its
-//!    buffer.
+//!    glTF file; absolute paths and `file:` URIs are refused) and must hold its declared
+//!    `byteLength`, of which only that much is read; every buffer view must lie inside its buffer.
 //! 3. **Materials**, then **meshes**: each triangle primitive's accessors are read with bounds
 //!    checks (`gltf_accessors.rs`); strips and fans become lists; indices are checked against the
 //!    vertex count; missing normals become flat normals; tangents are generated when the
@@ -265,20 +265,33 @@ fn check_json_start(bytes: &[u8]) -> Result<(), String> {
     }
 }
 
-/// The file an external (non-data) URI names, resolved as the gltf crate resolves it: `file:`
-/// URIs as paths, other URIs without a scheme percent-decoded and relative to `base`. `None`
-/// for data URIs and other schemes (the crate reports those). An escape that does not decode to
-/// UTF-8 is an error here (the crate would panic on it).
+/// The file an external (non-data) URI names: percent-decoded and relative to `base`. `None` for
+/// data URIs and schemes other than `file:` (the crate reports those). An escape that does not
+/// decode to UTF-8 is an error here (the crate would panic on it).
+///
+/// Absolute paths and `file:` URIs are refused. The gltf crate would follow them anywhere, so an
+/// untrusted model could read `/etc/passwd` as vertices; a portable asset names its files
+/// relative to itself (`../textures/a.png` is fine), as the glTF specification's examples do.
 fn external_file(base: &Path, uri: &str) -> Result<Option<std::path::PathBuf>, String> {
+    let refused = || {
+        format!(
+            "URI \"{uri}\" is an absolute path; only paths relative to the glTF file (and data: \
+             URIs) are read"
+        )
+    };
     if uri.contains(':') {
-        let path = uri
-            .strip_prefix("file://")
-            .or_else(|| uri.strip_prefix("file:"));
-        return Ok(path.map(std::path::PathBuf::from));
+        let file = uri
+            .get(..5)
+            .is_some_and(|s| s.eq_ignore_ascii_case("file:"));
+        return if file { Err(refused()) } else { Ok(None) };
     }
     let decoded = urlencoding::decode(uri)
         .map_err(|_| format!("URI \"{uri}\" does not percent-decode to UTF-8"))?;
-    Ok(Some(base.join(&*decoded)))
+    let path = Path::new(&*decoded);
+    if path.has_root() {
+        return Err(refused());
+    }
+    Ok(Some(base.join(path)))
 }
 
 fn load(
@@ -333,9 +346,12 @@ fn load(
         };
         let data = match external {
             Some(path) => {
-                let mut bytes = crate::read_regular_file(&path).map_err(|e| {
-                    format!("buffers[{i}]{name}: cannot read {}: {e}", path.display())
-                })?;
+                // Only the declared length is needed (a shorter file is reported below).
+                let mut bytes =
+                    crate::read_file::read_regular_file_up_to(&path, declared.byte_length.0)
+                        .map_err(|e| {
+                            format!("buffers[{i}]{name}: cannot read {}: {e}", path.display())
+                        })?;
                 // As the gltf crate does: buffers are padded to a multiple of 4 bytes.
                 bytes.resize(bytes.len().next_multiple_of(4), 0);
                 gltf::buffer::Data(bytes)

@@ -70,7 +70,10 @@ impl Parsed {
 }
 
 /// Reads a scene document from JSON bytes. `Err` only when there is no JSON object to read.
+/// A leading UTF-8 byte-order mark, which some Windows editors write, is skipped (RFC 8259 lets
+/// a parser ignore it; serde_json does not).
 pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, serde_json::Error> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut de = serde_json::Deserializer::from_slice(bytes);
     let mut parsed = Parsed::default();
     DocumentSeed {

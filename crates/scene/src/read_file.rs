@@ -12,6 +12,12 @@ use std::path::Path;
 
 /// Reads all of `path`, which must be a regular file (not a device, pipe or folder).
 pub fn read_regular_file(path: &Path) -> io::Result<Vec<u8>> {
+    read_regular_file_up_to(path, u64::MAX)
+}
+
+/// Reads at most `limit` bytes of `path`, which must be a regular file: a glTF buffer needs only
+/// its declared `byteLength`, whatever the size of the file its URI names.
+pub fn read_regular_file_up_to(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
     let not_regular = || {
         io::Error::new(
             io::ErrorKind::InvalidInput,
@@ -21,19 +27,22 @@ pub fn read_regular_file(path: &Path) -> io::Result<Vec<u8>> {
     if !std::fs::metadata(path)?.is_file() {
         return Err(not_regular());
     }
-    let mut file = std::fs::File::open(path)?;
+    let file = std::fs::File::open(path)?;
     let meta = file.metadata()?;
     if !meta.is_file() {
         return Err(not_regular());
     }
+    let wanted = meta.len().min(limit);
     let mut bytes = Vec::new();
-    bytes.try_reserve_exact(meta.len() as usize).map_err(|_| {
-        io::Error::new(
-            io::ErrorKind::OutOfMemory,
-            format!("too large to read into memory ({} bytes)", meta.len()),
-        )
-    })?;
-    file.read_to_end(&mut bytes)?;
+    bytes
+        .try_reserve_exact(usize::try_from(wanted).unwrap_or(usize::MAX))
+        .map_err(|_| {
+            io::Error::new(
+                io::ErrorKind::OutOfMemory,
+                format!("too large to read into memory ({wanted} bytes)"),
+            )
+        })?;
+    file.take(limit).read_to_end(&mut bytes)?;
     Ok(bytes)
 }
 
@@ -61,5 +70,7 @@ mod tests {
         let file = dir.path().join("a.txt");
         std::fs::write(&file, b"bytes").unwrap();
         assert_eq!(read_regular_file(&file).unwrap(), b"bytes");
+        assert_eq!(read_regular_file_up_to(&file, 2).unwrap(), b"by");
+        assert_eq!(read_regular_file_up_to(&file, 99).unwrap(), b"bytes");
     }
 }

@@ -177,6 +177,18 @@ fn hand_written_file_round_trips_bit_for_bit_through_a_file() {
     assert_eq!(v["lights"].as_array().unwrap().len(), 4);
 }
 
+#[test]
+fn a_utf8_byte_order_mark_is_skipped() {
+    let s = Scene::load(data("hand_written.json"), LightPolicy::Strict).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bom.json");
+    let mut bytes = b"\xEF\xBB\xBF".to_vec();
+    bytes.extend_from_slice(hand_written_text().as_bytes());
+    std::fs::write(&out, bytes).unwrap();
+    let back = Scene::load(&out, LightPolicy::Strict).unwrap();
+    assert_bit_identical(&s, &back);
+}
+
 fn random_scene(rng: &mut Rng, lights: usize, spots: bool) -> Scene {
     let near = rng.f32_in(0.001, 1.0);
     let far = near + rng.f32_in(0.5, 1000.0);
