@@ -186,6 +186,12 @@ impl Assigner {
     /// in a benchmark loop or several views in a row, and big frames run in parallel;
     /// [`Parallelism::Always`] runs every split frame in parallel, and
     /// [`Parallelism::PacedWith`] sets other limits.
+    ///
+    /// # Panics
+    ///
+    /// On a camera [`Camera::problem`] rejects (a NaN field of view, a zero size, …): no
+    /// method could place a light in its frustum, so any lists would be wrong. Check
+    /// `camera.problem()` first when the camera comes from user input.
     pub fn assign(
         &mut self,
         method: Method,
@@ -202,6 +208,10 @@ impl Assigner {
     /// clusters with no active one is dropped as it is emitted). `None` is every cluster. When
     /// the pair budget coarsens the grid, the mask no longer fits and is dropped: the coarser
     /// lists are full.
+    ///
+    /// # Panics
+    ///
+    /// As [`Assigner::assign`], and when `active` is for another grid.
     pub fn assign_active(
         &mut self,
         method: Method,
@@ -211,6 +221,9 @@ impl Assigner {
         active: Option<&ActiveClusters>,
         out: &mut LightLists,
     ) -> AssignStats {
+        if let Some(problem) = camera.problem() {
+            panic!("light assignment needs a valid camera: {problem}");
+        }
         if let Some(a) = active {
             assert_eq!(
                 a.dims(),

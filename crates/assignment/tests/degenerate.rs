@@ -458,3 +458,36 @@ fn lights_whose_view_space_sphere_overflows_f32() {
         }
     }
 }
+
+#[test]
+fn every_method_refuses_an_unusable_camera_with_one_clear_message() {
+    // Once `linear` indexed out of bounds on a NaN field of view while the other methods culled
+    // every light (and a zero height listed every light everywhere in `linear`).
+    let good = camera(64, 32);
+    let grid = ClusterGrid::new(UVec3::new(8, 4, 4), DepthSlicing::Log, 0.1, 100.0);
+    let lights = random_lights(&good, 50, 3);
+    for bad in [
+        Camera {
+            fov_y: f32::NAN,
+            ..good
+        },
+        Camera { height: 0, ..good },
+        Camera {
+            position: Vec3::NAN,
+            ..good
+        },
+    ] {
+        for method in Method::ALL {
+            let r = std::panic::catch_unwind(|| {
+                let mut lists = LightLists::new();
+                Assigner::new().assign(method, &lights.input(false), &bad, &grid, &mut lists)
+            });
+            let panic = r.expect_err("an unusable camera is refused");
+            let message = panic.downcast_ref::<String>().expect("a formatted message");
+            assert!(
+                message.contains("needs a valid camera"),
+                "{method}: {message}"
+            );
+        }
+    }
+}

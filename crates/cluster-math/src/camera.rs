@@ -56,6 +56,38 @@ impl Camera {
         }
     }
 
+    /// What makes this camera unusable, if anything: a non-finite position or target, a field of
+    /// view outside (0, π), a zero width or height, or a depth range not `0 < near < far`
+    /// (finite). A degenerate `up` or `target == position` is not a problem: those have the
+    /// documented fallbacks. For engines that take cameras from users; the assignment asserts it.
+    pub fn problem(&self) -> Option<String> {
+        if !(self.position.is_finite() && self.target.is_finite()) {
+            return Some(format!(
+                "position {} and target {} must be finite",
+                self.position, self.target
+            ));
+        }
+        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
+            return Some(format!(
+                "vertical field of view must lie in (0, π) radians, got {}",
+                self.fov_y
+            ));
+        }
+        if self.width == 0 || self.height == 0 {
+            return Some(format!(
+                "size must be at least 1x1 pixels, got {}x{}",
+                self.width, self.height
+            ));
+        }
+        if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
+            return Some(format!(
+                "depth range must satisfy 0 < near < far (finite), got [{}, {}]",
+                self.near, self.far
+            ));
+        }
+        None
+    }
+
     /// Width over height.
     pub fn aspect(&self) -> f32 {
         self.width as f32 / self.height as f32

@@ -34,6 +34,18 @@ pub enum DepthSlicing {
     },
 }
 
+/// Why [`ClusterGrid::try_new`] refused a grid.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InvalidGrid(pub String);
+
+impl std::fmt::Display for InvalidGrid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InvalidGrid {}
+
 /// A cluster grid of `dims.x × dims.y × dims.z` cells over the view depth range `[near, far]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterGrid {
@@ -46,33 +58,49 @@ pub struct ClusterGrid {
 }
 
 impl ClusterGrid {
-    /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range.
+    /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range
+    /// (with [`Self::try_new`]'s message).
     pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
-        assert!(
-            dims.min_element() >= 1,
-            "cluster grid dimensions must be >= 1: {dims}"
-        );
-        assert!(
-            near.is_finite() && far.is_finite() && near > 0.0 && near < far,
-            "cluster grid depth range must satisfy 0 < near < far: [{near}, {far}]"
-        );
-        if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing {
-            assert!(
-                dims.z == 1 || (first_slice_depth > near && first_slice_depth < far),
+        Self::try_new(dims, slicing, near, far).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`Self::new`] for grids from user settings: an error that says what is wrong instead of
+    /// a panic.
+    pub fn try_new(
+        dims: UVec3,
+        slicing: DepthSlicing,
+        near: f32,
+        far: f32,
+    ) -> Result<Self, InvalidGrid> {
+        if dims.min_element() < 1 {
+            return Err(InvalidGrid(format!(
+                "cluster grid dimensions must be >= 1: {dims}"
+            )));
+        }
+        if !(near.is_finite() && far.is_finite() && near > 0.0 && near < far) {
+            return Err(InvalidGrid(format!(
+                "cluster grid depth range must satisfy 0 < near < far: [{near}, {far}]"
+            )));
+        }
+        if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing
+            && !(dims.z == 1 || (first_slice_depth > near && first_slice_depth < far))
+        {
+            return Err(InvalidGrid(format!(
                 "first_slice_depth {first_slice_depth} must lie inside ({near}, {far})"
-            );
+            )));
         }
         // Cluster ids are u32 in the output lists.
-        assert!(
-            (dims.x as u64) * (dims.y as u64) * (dims.z as u64) <= u32::MAX as u64,
-            "cluster grid {dims} has more clusters than fit in a u32 id"
-        );
-        Self {
+        if (dims.x as u64) * (dims.y as u64) * (dims.z as u64) > u32::MAX as u64 {
+            return Err(InvalidGrid(format!(
+                "cluster grid {dims} has more clusters than fit in a u32 id"
+            )));
+        }
+        Ok(Self {
             dims,
             slicing,
             near,
             far,
-        }
+        })
     }
 
     /// The same grid over a different depth range (a fitted, dynamic near/far).
@@ -232,7 +260,8 @@ fn ndc_edge_from_left(i: u32, n: u32) -> f32 {
 /// `⌊(2p + 1)·tiles / (2·pixels)⌋`: the tile whose NDC span holds the pixel centre.
 #[inline]
 fn tile_of_pixel(p: u32, pixels: u32, tiles: u32) -> u32 {
-    debug_assert!(p < pixels, "pixel {p} outside 0..{pixels}");
+    // A pixel outside the target would give another cluster's id, silently.
+    assert!(p < pixels, "pixel {p} outside 0..{pixels}");
     (((2 * p as u64 + 1) * tiles as u64) / (2 * pixels as u64)) as u32
 }
 

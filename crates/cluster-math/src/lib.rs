@@ -42,7 +42,7 @@ mod planes;
 
 pub use bounds::{SpotCone, spot_bounding_sphere};
 pub use camera::Camera;
-pub use grid::{ClusterGrid, DepthSlicing};
+pub use grid::{ClusterGrid, DepthSlicing, InvalidGrid};
 pub use planes::PlaneSets;
 
 /// Re-exported so callers use the same `glam` version as the crate's public types.

@@ -1,0 +1,123 @@
+//! What the math crate refuses, and how: invalid grids ([`ClusterGrid::try_new`] errors, `new`
+//! panics with the same message), unusable cameras ([`Camera::problem`]) and pixels outside the
+//! target — each the kind of value an engine may take from user settings.
+
+use glam::{UVec3, Vec3};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+
+#[test]
+fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
+    let log = DepthSlicing::Log;
+    let near_slice = DepthSlicing::LogWithNearSlice {
+        first_slice_depth: 50.0,
+    };
+    for (dims, slicing, near, far, needle) in [
+        (UVec3::new(0, 12, 16), log, 0.1, 100.0, "dimensions"),
+        (UVec3::new(24, 12, 16), log, 0.0, 100.0, "0 < near < far"),
+        (UVec3::new(24, 12, 16), log, 1.0, 1.0, "0 < near < far"),
+        (
+            UVec3::new(24, 12, 16),
+            log,
+            f32::NAN,
+            100.0,
+            "0 < near < far",
+        ),
+        (
+            UVec3::new(24, 12, 16),
+            log,
+            0.1,
+            f32::INFINITY,
+            "0 < near < far",
+        ),
+        (
+            UVec3::new(24, 12, 16),
+            near_slice,
+            0.1,
+            20.0,
+            "first_slice_depth",
+        ),
+        (UVec3::new(65536, 65536, 2), log, 0.1, 100.0, "u32 id"),
+    ] {
+        let e = ClusterGrid::try_new(dims, slicing, near, far).unwrap_err();
+        assert!(
+            e.to_string().contains(needle),
+            "{dims} [{near}, {far}]: {e}"
+        );
+        let panic = std::panic::catch_unwind(|| ClusterGrid::new(dims, slicing, near, far))
+            .expect_err("new panics where try_new fails");
+        let message = panic.downcast_ref::<String>().expect("a formatted message");
+        assert_eq!(message, &e.to_string());
+    }
+    let ok = ClusterGrid::try_new(UVec3::new(24, 12, 16), near_slice, 0.1, 100.0).unwrap();
+    assert_eq!(
+        ok,
+        ClusterGrid::new(UVec3::new(24, 12, 16), near_slice, 0.1, 100.0)
+    );
+}
+
+#[test]
+fn camera_problems_are_named() {
+    let good = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 32, 0.1, 100.0);
+    assert_eq!(good.problem(), None);
+    // Degenerate directions have fallbacks: not problems.
+    let same_point = Camera {
+        target: Vec3::ZERO,
+        up: Vec3::ZERO,
+        ..good
+    };
+    assert_eq!(same_point.problem(), None);
+    for (camera, needle) in [
+        (
+            Camera {
+                fov_y: f32::NAN,
+                ..good
+            },
+            "field of view",
+        ),
+        (Camera { fov_y: 0.0, ..good }, "field of view"),
+        (
+            Camera {
+                fov_y: std::f32::consts::PI,
+                ..good
+            },
+            "field of view",
+        ),
+        (Camera { height: 0, ..good }, "at least 1x1"),
+        (Camera { width: 0, ..good }, "at least 1x1"),
+        (
+            Camera {
+                position: Vec3::NAN,
+                ..good
+            },
+            "finite",
+        ),
+        (
+            Camera {
+                target: Vec3::INFINITY,
+                ..good
+            },
+            "finite",
+        ),
+        (Camera { near: 0.0, ..good }, "0 < near < far"),
+        (
+            Camera {
+                far: f32::INFINITY,
+                ..good
+            },
+            "0 < near < far",
+        ),
+    ] {
+        let problem = camera.problem().expect("a problem");
+        assert!(problem.contains(needle), "{camera:?}: {problem}");
+    }
+}
+
+#[test]
+fn a_pixel_outside_the_target_is_refused() {
+    let grid = ClusterGrid::new(UVec3::new(4, 4, 4), DepthSlicing::Log, 0.1, 100.0);
+    for (x, y, w, h) in [(64, 0, 64, 32), (0, 32, 64, 32), (0, 0, 0, 32)] {
+        let r = std::panic::catch_unwind(|| grid.cluster_of_pixel(x, y, 1.0, w, h));
+        assert!(r.is_err(), "pixel ({x}, {y}) of {w}x{h}");
+    }
+    assert!(grid.cluster_of_pixel(63, 31, 1.0, 64, 32) < grid.cluster_count() as u32);
+}
