@@ -4,24 +4,29 @@
 //! needs ([`PassShader::helpers`], in [`COMMON`] order) followed by the pass's own file. A helper
 //! may rely on globals its includer declares (`cluster.wgsl` reads `slice_edges`). Keeping the text in `shaders/` (not in
 //! Rust strings) lets editors, naga's CLI and the validation test see real `.wgsl` files.
+//! `build.rs` says where that folder is (`MYRIAD_SHADER_DIR`): the workspace's top-level
+//! `shaders/`, reached through the crate's own `shaders` link so the packaged crate carries it.
 
 /// The shared helpers, in the order they are prepended: structs first, then functions.
 pub const COMMON: [(&str, &str); 4] = [
     (
         "common/layout.wgsl",
-        include_str!("../../../shaders/common/layout.wgsl"),
+        include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/common/layout.wgsl")),
     ),
     (
         "common/cluster.wgsl",
-        include_str!("../../../shaders/common/cluster.wgsl"),
+        include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/common/cluster.wgsl")),
     ),
     (
         "common/octahedral.wgsl",
-        include_str!("../../../shaders/common/octahedral.wgsl"),
+        include_str!(concat!(
+            env!("MYRIAD_SHADER_DIR"),
+            "/common/octahedral.wgsl"
+        )),
     ),
     (
         "common/lighting.wgsl",
-        include_str!("../../../shaders/common/lighting.wgsl"),
+        include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/common/lighting.wgsl")),
     ),
 ];
 
@@ -60,11 +65,20 @@ impl PassShader {
     /// The pass file's own text.
     pub fn own_source(self) -> &'static str {
         match self {
-            PassShader::GBuffer => include_str!("../../../shaders/gbuffer.wgsl"),
-            PassShader::Deferred => include_str!("../../../shaders/deferred.wgsl"),
-            PassShader::Forward => include_str!("../../../shaders/forward.wgsl"),
+            PassShader::GBuffer => {
+                include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/gbuffer.wgsl"))
+            }
+            PassShader::Deferred => {
+                include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/deferred.wgsl"))
+            }
+            PassShader::Forward => {
+                include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/forward.wgsl"))
+            }
             PassShader::ClusterIndexCheck => {
-                include_str!("../../../shaders/cluster_index_check.wgsl")
+                include_str!(concat!(
+                    env!("MYRIAD_SHADER_DIR"),
+                    "/cluster_index_check.wgsl"
+                ))
             }
         }
     }

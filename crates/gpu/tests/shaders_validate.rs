@@ -125,7 +125,7 @@ fn a_variant_that_breaks_only_once_its_constant_is_known_is_caught() {
 
 #[test]
 fn every_wgsl_file_on_disk_is_compiled_in() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders");
+    let root = Path::new(env!("MYRIAD_SHADER_DIR")).to_path_buf();
     let mut on_disk = Vec::new();
     for dir in [root.clone(), root.join("common")] {
         for entry in std::fs::read_dir(&dir).unwrap() {
