@@ -877,6 +877,35 @@ fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
         "scene", "--gltf", &atrium, "--depth", far_slice, "--out", out_path,
     ]);
     assert_mentions(&out, &["log_near:5000", "strictly between", "far (50)"]);
+    // A cut-off that makes radii overflow is named as the cause.
+    let out = myriad_fails(&[
+        "scene", "--gltf", &atrium, "--cutoff", "1e-45", "--out", out_path,
+    ]);
+    assert_mentions(&out, &["atrium.glb", "cut-off", "too small"]);
+    // A model whose only node is scaled to nothing gives no usable camera: the model is blamed,
+    // not the output file.
+    let flat = write(
+        &dir,
+        "flat.gltf",
+        r#"{"asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0, "matrix": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,1]}],
+        "scenes": [{"nodes": [0]}], "scene": 0}"#,
+    );
+    let out = myriad_fails(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        flat.as_os_str(),
+        "--field".as_ref(),
+        "box".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    assert_mentions(&out, &["flat.gltf", "camera.target"]);
+    assert!(!out.contains("s.scene"), "{out}");
     assert!(!out_file.exists(), "nothing is written on bad options");
 }
 

@@ -221,7 +221,16 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
         path.display(),
         args.seed
     );
-    Ok((Scene::new(camera, grid, lights), what))
+    // A model can give a camera no scene file may hold (a node scaled to zero puts the target
+    // on the eye): blame the model, not the output file.
+    let scene = Scene::new(camera, grid, lights);
+    if let Some(problem) = scene.problems().first() {
+        bail!(
+            "{}: the scene made from it (camera {camera_name}) is not valid: {problem}",
+            path.display()
+        );
+    }
+    Ok((scene, what))
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {

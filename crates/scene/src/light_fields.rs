@@ -241,7 +241,11 @@ impl LightField {
             }
             Placement::Surfaces { surfaces, offset } => {
                 if surfaces.triangle_count() == 0 {
-                    return Some("no surfaces to place lights on (no drawn triangles)".into());
+                    return Some(
+                        "no surfaces to place lights on: no drawn triangle has a positive, finite \
+                         area"
+                            .into(),
+                    );
                 }
                 if !(*offset >= 0.0 && offset.is_finite()) {
                     return Some(format!(
@@ -301,6 +305,29 @@ impl LightField {
                      not a light)"
                         .into(),
                 );
+            }
+            // The brightest channel of a random hue is 1; of a fixed colour, its largest.
+            let channel = match self.color {
+                ColorRule::Fixed(c) => c.max_element(),
+                ColorRule::RandomHue => 1.0,
+            };
+            if let RadiusRule::FromIntensity { cutoff } = self.radius {
+                let (shortest, longest) = (
+                    radius_from_intensity(i0 * channel, cutoff),
+                    radius_from_intensity(i1 * channel, cutoff),
+                );
+                if !longest.is_finite() {
+                    return Some(format!(
+                        "cut-off {cutoff:e} is too small for intensities up to {i1}: the radius \
+                         overflows f32; raise the cut-off"
+                    ));
+                }
+                if !(shortest > 0.0) {
+                    return Some(format!(
+                        "cut-off {cutoff:e} is too large for intensities from {i0:e}: the radius \
+                         rounds to 0; lower the cut-off"
+                    ));
+                }
             }
         }
         if let Some(s) = self.spots {
@@ -469,6 +496,21 @@ mod tests {
         let r = radius_from_intensity(50.0, 0.5);
         assert!((50.0 / (r * r) - 0.5).abs() < 1e-5);
         assert_eq!(radius_from_intensity(0.0, 0.1), 0.0);
+    }
+
+    #[test]
+    fn cut_offs_that_overflow_or_vanish_the_radius_are_named() {
+        let field = |cutoff: f32| {
+            LightField::new(Placement::Box(unit_box()))
+                .with_radius(RadiusRule::FromIntensity { cutoff })
+                .with_intensity(1e-10, 100.0)
+        };
+        let tiny = field(1e-45).problem().expect("a problem");
+        assert!(tiny.contains("too small"), "{tiny}");
+        let huge = field(1e38).problem().expect("a problem");
+        assert!(huge.contains("too large"), "{huge}");
+        assert_eq!(field(0.01).problem(), None);
+        assert!(field(0.01).generate(50, 1).problems().is_empty());
     }
 
     #[test]
