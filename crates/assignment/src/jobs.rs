@@ -259,31 +259,16 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         for b in 0..alive {
             let source = block.source[b] as usize;
             let light = (block_start + source) as u32;
-            if overflowed[source] {
-                let whole = ctx.whole_grid_box();
-                // An infinite radius also keeps `refined` from cutting the box.
-                let (cx, cy, dc, r) = (0.0, 0.0, 0.0, f32::INFINITY);
-                let (buckets, gaps) = (&mut out.buckets[..ctx.parts], &mut out.gaps);
-                emit(
-                    ctx,
-                    light,
-                    cx,
-                    cy,
-                    dc,
-                    r,
-                    &whole,
-                    &spots[source],
-                    buckets,
-                    gaps,
-                );
-                continue;
-            }
-            if !block.alive[b] {
+            let (bx, cx, cy, dc, r) = if overflowed[source] {
+                // An infinite radius also keeps `refined` from cutting the whole-grid box.
+                (ctx.whole_grid_box(), 0.0, 0.0, 0.0, f32::INFINITY)
+            } else if block.alive[b] {
+                let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
+                (block.cluster_box(b), cx, cy, dc, r)
+            } else {
                 out.culled += 1;
                 continue;
-            }
-            let bx = block.cluster_box(b);
-            let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
+            };
             emit(
                 ctx,
                 light,
