@@ -189,9 +189,10 @@ impl Assigner {
     ///
     /// # Panics
     ///
-    /// On a camera [`Camera::problem`] rejects (a NaN field of view, a zero size, …): no
-    /// method could place a light in its frustum, so any lists would be wrong. Check
-    /// `camera.problem()` first when the camera comes from user input.
+    /// On a camera [`Camera::view_problem`] rejects (a NaN field of view, a zero size, …): no
+    /// method could place a light in its frustum, so any lists would be wrong. Check it first
+    /// when the camera comes from user input. (The camera's near and far are not used: depth is
+    /// sliced by `grid`'s range, so an infinite far plane is fine.)
     pub fn assign(
         &mut self,
         method: Method,
@@ -221,7 +222,7 @@ impl Assigner {
         active: Option<&ActiveClusters>,
         out: &mut LightLists,
     ) -> AssignStats {
-        if let Some(problem) = camera.problem() {
+        if let Some(problem) = camera.view_problem() {
             panic!("light assignment needs a valid camera: {problem}");
         }
         if let Some(a) = active {

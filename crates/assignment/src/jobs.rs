@@ -366,14 +366,17 @@ fn push_spot_row(
 ) {
     push_filtered(ctx, bucket, light, first, len, |c| {
         let s = ctx.cluster_spheres[c as usize];
-        geometry::cone_may_touch_sphere(
-            spot.apex,
-            spot.axis,
-            spot.cos_sin,
-            spot.range,
-            s.truncate(),
-            s.w,
-        )
+        // A cluster whose corners lie past f32's range (a wide view under a far plane near
+        // `f32::MAX`) has no finite bounding sphere: it is kept, as the cone cannot be tested.
+        !s.is_finite()
+            || geometry::cone_may_touch_sphere(
+                spot.apex,
+                spot.axis,
+                spot.cos_sin,
+                spot.range,
+                s.truncate(),
+                s.w,
+            )
     });
 }
 

@@ -1,8 +1,9 @@
 //! Degenerate scenes through [`Assigner::assign`] with every method: 0 and 1 lights, every light
 //! outside the frustum, 100k lights in one cluster, one light covering everything, grids 1×1×1,
 //! 128×128×128 and wider or taller than 65 535 tiles, resolutions 1×1 and 16384×16384, spot lights
-//! under a far plane near `f32::MAX`, slices of zero thickness (equal f32 edges), and lights whose
-//! view-space sphere overflows f32. Each checks the CSR invariants
+//! under a far plane near `f32::MAX` (also in clusters whose bounding sphere overflows f32), slices
+//! of zero thickness (equal f32 edges), lights whose view-space sphere overflows f32, and cameras
+//! no method can use. Each checks the CSR invariants
 //! ([`LightLists::assert_well_formed`]), the counts the scene implies, and conservativeness
 //! against the f64 oracle — over every cluster where that is affordable, over a seeded sample of
 //! clusters for the 2M-cluster grid.
@@ -488,6 +489,54 @@ fn every_method_refuses_an_unusable_camera_with_one_clear_message() {
                 message.contains("needs a valid camera"),
                 "{method}: {message}"
             );
+        }
+    }
+    // An infinite far plane is not a problem: depth is sliced by the grid's own range.
+    let infinite_far = Camera {
+        far: f32::INFINITY,
+        ..good
+    };
+    let truth = brute_force(&lights, false, &infinite_far, &grid);
+    for method in Method::ALL {
+        let (lists, _) = assign(method, &lights, &infinite_far, &grid);
+        let (exact, _) = assert_conservative(method.name(), &lists, &truth, "infinite far");
+        assert!(exact > 0);
+    }
+}
+
+#[test]
+fn spot_lights_in_clusters_whose_bounding_sphere_overflows_f32() {
+    // fov 170° under a far plane of 3e38: the last slices' corners lie past f32's range, so
+    // their bounding spheres are infinite and the cone test rejected them (an audit found it).
+    let far = 3.0e38f32;
+    let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 170.0, 16, 16, 1.0, far);
+    for dims in [UVec3::new(2, 2, 9), UVec3::new(4, 4, 16)] {
+        let grid = ClusterGrid::new(dims, DepthSlicing::Log, 1.0, far);
+        let mut lights = Columns::default();
+        lights.push_spot(
+            Vec3::new(0.0, 0.0, -10.0),
+            1.0e35,
+            Vec3::NEG_Z,
+            45f32.to_radians(),
+        );
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        for _ in 0..30 {
+            let position = Vec3::new(
+                rng.random_range(-1.0e30f32..1.0e30),
+                rng.random_range(-1.0e30f32..1.0e30),
+                -rng.random_range(1.0f32..1.0e36),
+            );
+            let radius = 10f32.powf(rng.random_range(30.0f32..38.0));
+            let angle = rng.random_range(0.05f32..1.5);
+            lights.push_spot(position, radius, random_dir(&mut rng), angle);
+        }
+        let truth = brute_force(&lights, true, &camera, &grid);
+        for method in Method::ALL {
+            let mut lists = LightLists::new();
+            Assigner::new().assign(method, &lights.input(true), &camera, &grid, &mut lists);
+            let context = format!("{dims}");
+            let (exact, _) = assert_conservative(method.name(), &lists, &truth, &context);
+            assert!(exact > 0, "{context}: the oracle sees no pair");
         }
     }
 }

@@ -56,11 +56,26 @@ impl Camera {
         }
     }
 
-    /// What makes this camera unusable, if anything: a non-finite position or target, a field of
-    /// view outside (0, π), a zero width or height, or a depth range not `0 < near < far`
-    /// (finite). A degenerate `up` or `target == position` is not a problem: those have the
-    /// documented fallbacks. For engines that take cameras from users; the assignment asserts it.
+    /// What makes this camera unusable, if anything: [`Self::view_problem`], or a depth range
+    /// not `0 < near < far` (finite). For engines that take cameras from users.
     pub fn problem(&self) -> Option<String> {
+        self.view_problem().or_else(|| {
+            (!(self.near > 0.0 && self.near < self.far && self.far.is_finite())).then(|| {
+                format!(
+                    "depth range must satisfy 0 < near < far (finite), got [{}, {}]",
+                    self.near, self.far
+                )
+            })
+        })
+    }
+
+    /// What makes the view and its screen mapping unusable, if anything: a non-finite position
+    /// or target, a field of view outside (0, π), or a zero width or height. A degenerate `up` or
+    /// `target == position` is not a problem: those have the documented fallbacks. The depth
+    /// range is not looked at: light assignment slices depth by its grid's range, so a camera with
+    /// an infinite far plane (reversed-Z engines) and a finite grid is fine there, and the
+    /// assignment asserts only this.
+    pub fn view_problem(&self) -> Option<String> {
         if !(self.position.is_finite() && self.target.is_finite()) {
             return Some(format!(
                 "position {} and target {} must be finite",
@@ -77,12 +92,6 @@ impl Camera {
             return Some(format!(
                 "size must be at least 1x1 pixels, got {}x{}",
                 self.width, self.height
-            ));
-        }
-        if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
-            return Some(format!(
-                "depth range must satisfy 0 < near < far (finite), got [{}, {}]",
-                self.near, self.far
             ));
         }
         None

@@ -109,6 +109,9 @@ fn camera_problems_are_named() {
     ] {
         let problem = camera.problem().expect("a problem");
         assert!(problem.contains(needle), "{camera:?}: {problem}");
+        // The view alone ignores the depth range (assignment slices by the grid's).
+        let depth = needle == "0 < near < far";
+        assert_eq!(camera.view_problem().is_none(), depth, "{camera:?}");
     }
 }
 
