@@ -454,22 +454,19 @@ fn position_of_missing_accessor_is_an_error() {
 }
 
 /// A buffer URI naming a device (`/dev/zero` would be read forever) or a folder is refused,
-/// however it is spelled (percent-encoded, relative); absolute paths and `file:` URIs are refused
-/// whatever they name.
+/// however it is spelled (percent-encoded, relative); absolute paths, `file:` URIs and paths
+/// above the model's folder are refused whatever they name.
 #[test]
 fn buffer_uris_naming_devices_or_folders_are_refused() {
     let dir = temp_dir("devices");
     let uris = [
-        ("/dev/zero", "absolute path"),
+        ("/dev/zero", "outside the glTF file's folder"),
         (".", "not a regular file"),
-        ("/", "absolute path"),
-        ("/dev/%7Aero", "absolute path"),
-        (
-            "../../../../../../../../../../dev/zer%6F",
-            "not a regular file",
-        ),
-        ("file:///dev/zero", "absolute path"),
-        ("FILE:relative.bin", "absolute path"),
+        ("/", "outside the glTF file's folder"),
+        ("/dev/%7Aero", "outside the glTF file's folder"),
+        ("../../../../../../../../../../dev/zer%6F", "outside"),
+        ("file:///dev/zero", "file: URIs are not read"),
+        ("FILE:relative.bin", "file: URIs are not read"),
     ];
     for (uri, expected) in uris {
         let text = format!(
@@ -489,9 +486,10 @@ fn buffer_uris_naming_devices_or_folders_are_refused() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// A model names its files relative to itself: an absolute path to a perfectly readable file is
-/// refused (an untrusted model must not read `/etc/passwd` as vertices), `../` is followed, and
-/// only a buffer's declared length is read, however large the file its URI names.
+/// A model reads files from its own folder and below: an absolute path or a `../` above the folder
+/// to a perfectly readable file is refused (an untrusted model must not read `/etc/passwd` as
+/// vertices), `../` inside the folder is followed, and only a buffer's declared length is read,
+/// however large the file its URI names.
 #[test]
 fn buffer_files_are_relative_and_read_only_to_their_declared_length() {
     let dir = temp_dir("buffer_files");
@@ -522,24 +520,25 @@ fn buffer_files_are_relative_and_read_only_to_their_declared_length() {
             "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}], "scene": 0}}"#
         )
     };
-    let path = sub.join("relative.gltf");
-    std::fs::write(&path, gltf("../huge.bin")).unwrap();
+    let path = dir.join("relative.gltf");
+    std::fs::write(&path, gltf("model/../huge.bin")).unwrap();
     let model = guarded("relative buffer", Duration::from_secs(20), move || {
         Model::load(&path, &LoadOptions::without_images()).map_err(|e| e.to_string())
     })
     .expect("a relative buffer file loads");
     assert_eq!(model.triangle_count(), 1);
-    let absolute = buffer.display().to_string();
-    let path = sub.join("absolute.gltf");
-    std::fs::write(&path, gltf(&absolute)).unwrap();
-    let message = Model::load(&path, &LoadOptions::without_images())
-        .map(|_| ())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        message.contains("absolute path") && message.contains(&absolute),
-        "{message}"
-    );
+    for uri in [buffer.display().to_string(), "../huge.bin".to_string()] {
+        let path = sub.join("outside.gltf");
+        std::fs::write(&path, gltf(&uri)).unwrap();
+        let message = Model::load(&path, &LoadOptions::without_images())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("outside the glTF file's folder") && message.contains(&uri),
+            "{message}"
+        );
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -556,12 +555,10 @@ fn image_uris_naming_devices_and_bad_escapes_are_errors() {
         "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
         "textures": [{"source": 0}]"#;
     for (uri, expected) in [
-        ("/dev/zero", "absolute path"),
-        ("/dev/%7Aero", "absolute path"),
-        (
-            "../../../../../../../../../../dev/zer%6F",
-            "not a regular file",
-        ),
+        ("/dev/zero", "outside the glTF file's folder"),
+        ("/dev/%7Aero", "outside the glTF file's folder"),
+        ("../../../../../../../../../../dev/zer%6F", "outside"),
+        ("sub/../../x.png", "outside"),
         ("%FF.png", "does not percent-decode to UTF-8"),
     ] {
         let text = format!(

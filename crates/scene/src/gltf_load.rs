@@ -16,9 +16,10 @@
 //!    declared length within the file) before the `gltf` crate splits the chunks. Then
 //!    `gltf::Gltf::from_slice` parses and validates the JSON (unknown required extensions,
 //!    bad enum values and out-of-range indices are errors there).
-//! 2. **Buffers.** Each buffer is fetched (GLB chunk, `data:` URI, or a file relative to the
-//!    glTF file; absolute paths and `file:` URIs are refused) and must hold its declared
-//!    `byteLength`, of which only that much is read; every buffer view must lie inside its buffer.
+//! 2. **Buffers.** Each buffer is fetched (GLB chunk, `data:` URI, or a file in the glTF file's
+//!    folder or below; absolute paths, `file:` URIs and `../` above it are refused) and must hold
+//!    its declared `byteLength`, of which only that much is read; every buffer view must lie
+//!    inside its buffer.
 //! 3. **Materials**, then **meshes**: each triangle primitive's accessors are read with bounds
 //!    checks (`gltf_accessors.rs`); strips and fans become lists; indices are checked against the
 //!    vertex count; missing normals become flat normals; tangents are generated when the
@@ -269,27 +270,46 @@ fn check_json_start(bytes: &[u8]) -> Result<(), String> {
 /// data URIs and schemes other than `file:` (the crate reports those). An escape that does not
 /// decode to UTF-8 is an error here (the crate would panic on it).
 ///
-/// Absolute paths and `file:` URIs are refused. The gltf crate would follow them anywhere, so an
-/// untrusted model could read `/etc/passwd` as vertices; a portable asset names its files
-/// relative to itself (`../textures/a.png` is fine), as the glTF specification's examples do.
+/// A model reads files only from its own folder and the folders below it: absolute paths,
+/// `file:` URIs and paths that climb above the folder (`../`) are refused. The gltf crate would
+/// follow them anywhere, so an untrusted model could read `/etc/passwd` as vertices; a portable
+/// asset keeps its files beside it, as the glTF specification's examples do. (The check is on the
+/// path's text; links inside the model's folder are followed as the file system resolves them.)
 fn external_file(base: &Path, uri: &str) -> Result<Option<std::path::PathBuf>, String> {
-    let refused = || {
-        format!(
-            "URI \"{uri}\" is an absolute path; only paths relative to the glTF file (and data: \
-             URIs) are read"
-        )
-    };
     if uri.contains(':') {
         let file = uri
             .get(..5)
             .is_some_and(|s| s.eq_ignore_ascii_case("file:"));
-        return if file { Err(refused()) } else { Ok(None) };
+        return if file {
+            Err(format!(
+                "URI \"{uri}\": file: URIs are not read; name the file by a path relative to the \
+                 glTF file"
+            ))
+        } else {
+            Ok(None)
+        };
     }
     let decoded = urlencoding::decode(uri)
         .map_err(|_| format!("URI \"{uri}\" does not percent-decode to UTF-8"))?;
     let path = Path::new(&*decoded);
+    let outside = || {
+        format!(
+            "URI \"{uri}\" names a file outside the glTF file's folder; only files in that folder \
+             and below are read"
+        )
+    };
     if path.has_root() {
-        return Err(refused());
+        return Err(outside());
+    }
+    let mut depth = 0usize;
+    for part in path.components() {
+        match part {
+            std::path::Component::ParentDir => {
+                depth = depth.checked_sub(1).ok_or_else(outside)?;
+            }
+            std::path::Component::Normal(_) => depth += 1,
+            _ => {}
+        }
     }
     Ok(Some(base.join(path)))
 }
