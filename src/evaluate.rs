@@ -145,7 +145,7 @@ impl Timing {
 /// `exact`. With a non-zero [`Idle`] the calling thread waits before each timed call, as an
 /// engine's frames are apart: the pool's other workers go to sleep in between.
 ///
-/// Fails when the lists do not fit u32 offsets on `grid` (past 2³² pairs the assigner builds
+/// Fails when the lists do not fit u32 offsets on `grid` (past 2³² − 1 pairs the assigner builds
 /// them on a coarser grid, which the exact lists cannot be compared with), or when `exact` is not
 /// for `grid`.
 pub fn measure(
@@ -166,7 +166,7 @@ pub fn measure(
     let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
     anyhow::ensure!(
         stats.coarsened == 0,
-        "{method} needs more than 2^32 pairs on the {}x{}x{} grid (it fell back to a coarser one): \
+        "{method} needs more than 2^32 - 1 pairs (u32 offsets) on the {}x{}x{} grid (it fell back to a coarser one): \
          too many to compare; use a coarser grid or fewer lights",
         grid.dims.x,
         grid.dims.y,

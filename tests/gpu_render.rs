@@ -210,6 +210,15 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
     assert_eq!((t.width, t.height), (max, 1));
     assert!(t.pixels.iter().all(|&p| p == 200));
     assert!(renderer.upload_scene(&ctx, &fitted).is_ok());
+    // A texture whose bytes do not match its size is not scaled into a valid one: `check`
+    // still reports it.
+    let mut odd = scene.geometry.clone();
+    odd.textures[texture as usize].pixels.extend([0; 4]);
+    let bytes = odd.textures[texture as usize].pixels.len();
+    assert!(odd.fit_textures(max).is_empty());
+    assert_eq!(odd.textures[texture as usize].pixels.len(), bytes);
+    let e = renderer.upload_scene(&ctx, &odd).unwrap_err();
+    assert!(e.to_string().contains(&format!("{bytes} bytes")), "{e}");
     // ...and the viewer does that itself and renders.
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
     viewer

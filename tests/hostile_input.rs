@@ -621,6 +621,17 @@ fn overflowing_and_degenerate_models_are_errors_not_panics() {
         camera.far,
     );
     assert_eq!(grid.cluster_count(), 64);
+    // znear at f32::MAX without zfar leaves no far plane above it: refused at load (the grid
+    // once panicked on near == far).
+    let no_room = gltf_edit(&[(
+        r#""nodes":[{"mesh":0}],
+ "scenes":[{"nodes":[0]}]"#,
+        r#""nodes":[{"mesh":0},{"camera":0}],
+ "cameras":[{"type":"perspective","perspective":{"yfov":1.0,"znear":3.4028235e38}}],
+ "scenes":[{"nodes":[0,1]}]"#,
+    )]);
+    let e = load_gltf(&dir, "no_room.gltf", no_room).unwrap_err();
+    assert!(e.contains("znear") && e.contains("no room"), "{e}");
 
     // A mesh scaled to nothing: no surface to put lights on is an error naming the model.
     let flat = gltf_edit(&[(

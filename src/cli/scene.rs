@@ -140,7 +140,8 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let slicing = parse_slicing(args.depth.as_deref().unwrap_or("log"))?;
     let dims = parse_grid("--grid", args.grid.as_deref().unwrap_or("24x12x16"))?;
     check_slicing(slicing, dims.z, camera.near, camera.far)?;
-    let grid = ClusterGrid::new(dims, slicing, camera.near, camera.far);
+    let grid = ClusterGrid::try_new(dims, slicing, camera.near, camera.far)
+        .with_context(|| format!("{}: camera {camera_name}", path.display()))?;
     let placement = match field_name {
         "surfaces" => Placement::Surfaces {
             surfaces: SurfaceSampler::new(&model),

@@ -80,7 +80,8 @@ impl RenderScene {
                     .0
             }
         };
-        let grid = ClusterGrid::new(DEFAULT_GRID, DepthSlicing::Log, camera.near, camera.far);
+        let grid = ClusterGrid::try_new(DEFAULT_GRID, DepthSlicing::Log, camera.near, camera.far)
+            .with_context(|| format!("{name}: its camera"))?;
         let mut all = Lights::new();
         for light in model.lights.iter().take(lights) {
             all.push(light);

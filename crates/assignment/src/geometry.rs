@@ -80,6 +80,8 @@ pub(crate) fn may_touch_frustum_f64(
         f64::from(z_depths[0]),
         f64::from(z_depths[z_depths.len() - 1]),
     );
+    // Padded by 1e-9 of the extent, far above f64's rounding here, so tangency is kept.
+    let r = r + 1e-9 * (v.length() + r);
     // Signed distances to the inside of each side plane: x ≥ −tx·d, x ≤ tx·d, the same for y.
     let (sx, sy) = ((1.0 + tx * tx).sqrt(), (1.0 + ty * ty).sqrt());
     (v.x + tx * d) / sx >= -r

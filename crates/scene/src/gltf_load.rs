@@ -1056,6 +1056,15 @@ impl Loader<'_> {
                 if !(p.znear > 0.0 && p.znear.is_finite()) {
                     return Err(format!("{at}: znear {} is not finite and > 0", p.znear));
                 }
+                // An infinite projection (no zfar) gets a far plane beyond znear, which f32
+                // cannot hold past f32::MAX.
+                if p.zfar.is_none() && !(p.znear < f32::MAX) {
+                    return Err(format!(
+                        "{at}: znear {:e} without a zfar leaves no room for a far plane (it must \
+                         be below f32::MAX)",
+                        p.znear
+                    ));
+                }
                 if let Some(f) = p.zfar
                     && !(f > p.znear && f.is_finite())
                 {

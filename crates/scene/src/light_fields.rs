@@ -316,6 +316,12 @@ impl LightField {
                     radius_from_intensity(i0 * channel, cutoff),
                     radius_from_intensity(i1 * channel, cutoff),
                 );
+                if !(i1 * channel).is_finite() {
+                    return Some(format!(
+                        "intensity {i1:e} times the colour's brightest channel {channel:e} \
+                         overflows f32"
+                    ));
+                }
                 if !longest.is_finite() {
                     return Some(format!(
                         "cut-off {cutoff:e} is too small for intensities up to {i1}: the radius \
