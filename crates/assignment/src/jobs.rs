@@ -259,16 +259,16 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         for b in 0..alive {
             let source = block.source[b] as usize;
             let light = (block_start + source) as u32;
-            let (bx, cx, cy, dc, r) = if overflowed[source] {
-                // An infinite radius also keeps `refined` from cutting the whole-grid box.
-                (ctx.whole_grid_box(), 0.0, 0.0, 0.0, f32::INFINITY)
-            } else if block.alive[b] {
-                let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
-                (block.cluster_box(b), cx, cy, dc, r)
-            } else {
+            if overflowed[source] {
+                emit_overflowed(ctx, light, &spots[source], out);
+                continue;
+            }
+            if !block.alive[b] {
                 out.culled += 1;
                 continue;
-            };
+            }
+            let bx = block.cluster_box(b);
+            let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
             emit(
                 ctx,
                 light,
@@ -284,6 +284,28 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         }
         block_start += n;
     }
+}
+
+/// A light whose view-space sphere overflowed f32 (see phase 0c): the whole grid, unrefined (an
+/// infinite radius keeps `refined` from cutting it). Out of line: rare, and it keeps the hot
+/// loop small.
+#[cold]
+#[inline(never)]
+fn emit_overflowed(ctx: &FrameContext<'_>, light: u32, spot: &SpotView, out: &mut TaskOutput) {
+    let whole = ctx.whole_grid_box();
+    let buckets = &mut out.buckets[..ctx.parts];
+    emit(
+        ctx,
+        light,
+        0.0,
+        0.0,
+        0.0,
+        f32::INFINITY,
+        &whole,
+        spot,
+        buckets,
+        &mut out.gaps,
+    );
 }
 
 #[allow(clippy::too_many_arguments)] // The per-light columns of one block, passed by value.
