@@ -120,6 +120,21 @@ fn assert_rejected(cases: &[(&[&str], &[&str])]) {
     }
 }
 
+/// `myriad scene --preset paper --lights N` into `dir/paper.json`; its path.
+fn paper_scene(dir: &Path, lights: usize) -> PathBuf {
+    let scene = dir.join("paper.json");
+    myriad_ok(&[
+        "scene".as_ref(),
+        "--preset".as_ref(),
+        "paper".as_ref(),
+        "--lights".as_ref(),
+        lights.to_string().as_ref(),
+        "--out".as_ref(),
+        scene.as_os_str(),
+    ]);
+    scene
+}
+
 /// `myriad assign` then `myriad check --json`; returns the parsed comparison.
 fn assign_and_check(scene: &Path, method: &str, dump: &Path) -> Value {
     myriad_ok(&[
@@ -260,16 +275,7 @@ fn generated_scenes_validate() {
 #[test]
 fn every_method_passes_the_oracle_check() {
     let dir = work_dir("methods_check");
-    let scene = dir.join("paper.json");
-    myriad_ok(&[
-        "scene".as_ref(),
-        "--preset".as_ref(),
-        "paper".as_ref(),
-        "--lights".as_ref(),
-        "300".as_ref(),
-        "--out".as_ref(),
-        scene.as_os_str(),
-    ]);
+    let scene = paper_scene(&dir, 300);
     let hand_written = write(&dir, "good.json", GOOD_SCENE);
     for scene in [&scene, &hand_written] {
         for method in ["exact", "linear", "binary", "refined"] {
@@ -304,16 +310,7 @@ fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
     // belong to (it once kept the scene's header, and `check` rejected the dump), and `check`
     // must verify it on that grid.
     let dir = work_dir("coarsened_dump");
-    let scene = dir.join("paper.json");
-    myriad_ok(&[
-        "scene".as_ref(),
-        "--preset".as_ref(),
-        "paper".as_ref(),
-        "--lights".as_ref(),
-        "300".as_ref(),
-        "--out".as_ref(),
-        scene.as_os_str(),
-    ]);
+    let scene = paper_scene(&dir, 300);
     for method in ["exact", "linear", "binary", "refined"] {
         let dump = dir.join(format!("{method}.dump.json"));
         let out = myriad_ok(&[

@@ -68,6 +68,17 @@ fn random_lights(camera: &Camera, count: usize, seed: u64) -> Columns {
     lights
 }
 
+/// Every method on spot lights, against the oracle over every cluster; some pair must exist.
+fn assert_spots_conservative(lights: &Columns, camera: &Camera, grid: &ClusterGrid, context: &str) {
+    let truth = brute_force(lights, true, camera, grid);
+    for method in Method::ALL {
+        let mut lists = LightLists::new();
+        Assigner::new().assign(method, &lights.input(true), camera, grid, &mut lists);
+        let (exact, _) = assert_conservative(method.name(), &lists, &truth, context);
+        assert!(exact > 0, "{context}: the oracle sees no pair");
+    }
+}
+
 /// Oracle check of the clusters in `sample` only: each list holds every light the oracle says
 /// touches that cluster.
 fn assert_conservative_on(
@@ -375,14 +386,8 @@ fn spot_lights_under_a_far_plane_near_f32_max() {
                 let angle = rng.random_range(0.05f32..1.5);
                 lights.push_spot(position, radius, random_dir(&mut rng), angle);
             }
-            let truth = brute_force(&lights, true, &camera, &grid);
-            for method in Method::ALL {
-                let mut lists = LightLists::new();
-                Assigner::new().assign(method, &lights.input(true), &camera, &grid, &mut lists);
-                let context = format!("far {far:e}, {slicing:?}");
-                let (exact, _) = assert_conservative(method.name(), &lists, &truth, &context);
-                assert!(exact > 0, "{context}: the oracle sees no pair");
-            }
+            let context = format!("far {far:e}, {slicing:?}");
+            assert_spots_conservative(&lights, &camera, &grid, &context);
         }
     }
 }
@@ -530,13 +535,6 @@ fn spot_lights_in_clusters_whose_bounding_sphere_overflows_f32() {
             let angle = rng.random_range(0.05f32..1.5);
             lights.push_spot(position, radius, random_dir(&mut rng), angle);
         }
-        let truth = brute_force(&lights, true, &camera, &grid);
-        for method in Method::ALL {
-            let mut lists = LightLists::new();
-            Assigner::new().assign(method, &lights.input(true), &camera, &grid, &mut lists);
-            let context = format!("{dims}");
-            let (exact, _) = assert_conservative(method.name(), &lists, &truth, &context);
-            assert!(exact > 0, "{context}: the oracle sees no pair");
-        }
+        assert_spots_conservative(&lights, &camera, &grid, &format!("{dims}"));
     }
 }
