@@ -203,35 +203,66 @@ impl OracleLights {
 
 /// Every cluster's exact list from the independent oracle (ascending column indices): the
 /// reference `bench` and `report` measure misses and false positives against.
+///
+/// Errs when the lists hold more pairs than u32 offsets can address.
 pub(crate) fn independent_lists(
     lights: &Lights,
     camera: &Camera,
     grid: &ClusterGrid,
 ) -> anyhow::Result<LightLists> {
+    independent_lists_up_to(lights, camera, grid, u32::MAX as u64, CLUSTERS_PER_CHUNK)
+}
+
+/// Clusters whose lists are found in parallel before they are appended to the CSR arrays.
+const CLUSTERS_PER_CHUNK: u32 = 4096;
+
+/// [`independent_lists`] with the pair limit and the chunk size as parameters (the tests use
+/// small ones).
+///
+/// Built a chunk of clusters at a time, the chunk's lists appended to the CSR arrays with the
+/// running total checked before each append: the memory held is the output plus one chunk, and a
+/// frame past `max_pairs` is refused once the total crosses it — before it has used up the
+/// machine's memory (16 GiB of indices at the u32 limit; lists for every cluster first, then
+/// flattened, took twice the output and ran out of memory before the check).
+fn independent_lists_up_to(
+    lights: &Lights,
+    camera: &Camera,
+    grid: &ClusterGrid,
+    max_pairs: u64,
+    clusters_per_chunk: u32,
+) -> anyhow::Result<LightLists> {
     let oracle = OracleLights::new(lights, camera);
-    let per_cluster: Vec<Vec<u32>> = (0..grid.cluster_count() as u32)
-        .into_par_iter()
-        .map(|c| {
-            let t = grid.cluster_coords(c);
-            let mut exact = Vec::new();
-            oracle.touching(&Cell::of_cluster(camera, grid, t.x, t.y, t.z), &mut exact);
-            exact
-        })
-        .collect();
-    let pairs: usize = per_cluster.iter().map(Vec::len).sum();
-    anyhow::ensure!(
-        u32::try_from(pairs).is_ok(),
-        "the oracle finds {pairs} pairs on the {}x{}x{} grid, more than CSR lists with u32 offsets \
-         hold; use a coarser grid or fewer lights",
-        grid.dims.x,
-        grid.dims.y,
-        grid.dims.z
-    );
+    let clusters = grid.cluster_count() as u32;
     let mut lists = LightLists::new();
-    for list in per_cluster {
-        lists.offsets.push(lists.indices.len() as u32);
-        lists.counts.push(list.len() as u32);
-        lists.indices.extend(list);
+    let mut chunk_start = 0;
+    while chunk_start < clusters {
+        let chunk_end = clusters.min(chunk_start.saturating_add(clusters_per_chunk.max(1)));
+        let chunk: Vec<Vec<u32>> = (chunk_start..chunk_end)
+            .into_par_iter()
+            .map(|c| {
+                let t = grid.cluster_coords(c);
+                let mut exact = Vec::new();
+                oracle.touching(&Cell::of_cluster(camera, grid, t.x, t.y, t.z), &mut exact);
+                exact
+            })
+            .collect();
+        let pairs = lists.indices.len() as u64 + chunk.iter().map(|l| l.len() as u64).sum::<u64>();
+        anyhow::ensure!(
+            pairs <= max_pairs,
+            "the oracle finds more than {max_pairs} pairs on the {}x{}x{} grid (the first {} of \
+             its {clusters} clusters hold {pairs}), more than CSR lists with u32 offsets hold; use \
+             a coarser grid or fewer lights",
+            grid.dims.x,
+            grid.dims.y,
+            grid.dims.z,
+            chunk_end,
+        );
+        for list in chunk {
+            lists.offsets.push(lists.indices.len() as u32);
+            lists.counts.push(list.len() as u32);
+            lists.indices.extend(list);
+        }
+        chunk_start = chunk_end;
     }
     Ok(lists)
 }
@@ -392,6 +423,27 @@ mod tests {
         );
         assert!(exact.pair_count() > 5_000, "{}", exact.pair_count());
         assert_eq!(independent, exact);
+    }
+
+    #[test]
+    fn independent_lists_past_the_pair_limit_are_refused() {
+        let (scene, _) = scene_and_lists(2000);
+        let lists = independent_lists(&scene.lights, &scene.camera, &scene.grid).unwrap();
+        let pairs = lists.pair_count() as u64;
+        assert!(pairs > 5_000, "{pairs}");
+        let build = |max_pairs, chunk| {
+            independent_lists_up_to(&scene.lights, &scene.camera, &scene.grid, max_pairs, chunk)
+        };
+        // Chunks of 1000 clusters: the limit is checked part-way, and a chunk ends mid-slice.
+        assert!(scene.grid.cluster_count() > 3000, "{:?}", scene.grid.dims);
+        assert_eq!(build(pairs, 1000).unwrap(), lists);
+        assert_eq!(build(pairs, 1).unwrap(), lists);
+        let error = build(pairs - 1, 1000).unwrap_err().to_string();
+        assert!(
+            error.contains(&format!("more than {} pairs", pairs - 1))
+                && error.contains("coarser grid"),
+            "{error}"
+        );
     }
 
     #[test]
