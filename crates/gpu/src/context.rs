@@ -26,6 +26,7 @@ impl GpuContext {
         }
     }
 
+    #[cfg(feature = "headless")]
     /// Creates a headless device on the best adapter wgpu finds (a real GPU, else a software
     /// one such as Mesa's llvmpipe), with timestamp queries when the adapter has them and the
     /// adapter's own limits (so large light lists fit).
@@ -106,6 +107,7 @@ impl GpuContext {
 /// Without it, a GPU test on a machine without any adapter fails and says how to get one.
 pub const SKIP_GPU_TESTS_VAR: &str = "MYRIAD_SKIP_GPU_TESTS";
 
+#[cfg(feature = "headless")]
 impl GpuContext {
     /// For tests: a headless context; `None` only when there is no adapter *and*
     /// [`SKIP_GPU_TESTS_VAR`] is `1`; otherwise a missing adapter panics with the reason.

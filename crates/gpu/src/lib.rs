@@ -13,6 +13,16 @@
 //! nothing that knows scenes or assignment methods: light columns and CSR lists arrive as plain
 //! slices ([`LightColumns`], [`ClusterLists`]).
 //!
+//! ## Features
+//! - `headless` (default): [`GpuContext::headless`], which creates a device of its own (through
+//!   `pollster`).
+//! - `image` (default): PNG read-back ([`save_png`], [`encode_png`]) and
+//!   [`SceneGeometry::fit_textures`], through `image`.
+//! - `tracy`: Tracy spans for upload and encoding.
+//!
+//! An engine that brings its device and does its own image I/O can set
+//! `default-features = false` and depends on neither `pollster` nor `image`.
+//!
 //! ```no_run
 //! use myriad_gpu::{GpuContext, HeadlessTarget, Renderer, HEADLESS_FORMAT};
 //! let ctx = GpuContext::headless()?;
@@ -47,7 +57,9 @@ pub use frame_input::{
     ClusterLists, LightColumns, SPOT_INNER_FRACTION, SpotColumns, fill_gpu_lights,
 };
 pub use pipelines::ShadingMode;
-pub use readback::{encode_png, read_depth, read_rgba8, save_png};
+#[cfg(feature = "image")]
+pub use readback::{encode_png, save_png};
+pub use readback::{read_depth, read_rgba8};
 pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_uniforms};
 pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
 pub use targets::{GBuffer, HEADLESS_FORMAT, HeadlessTarget};

@@ -1,7 +1,6 @@
 //! Reading a rendered texture back to the CPU and saving it as PNG.
 
 use crate::{GpuContext, GpuError};
-use std::path::Path;
 
 /// Copies an RGBA8 (`Rgba8Unorm` or `Rgba8UnormSrgb`) texture into a tightly packed
 /// `width·height·4` byte vector, rows top to bottom. Blocks until the GPU is done.
@@ -81,12 +80,13 @@ pub(crate) fn map_and_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Ve
     Ok(bytes)
 }
 
+#[cfg(feature = "image")]
 /// Saves tightly packed RGBA8 pixels as a PNG, creating the parent directory. It writes in
 /// place; to replace an existing file only once the new one is whole, write [`encode_png`]'s
 /// bytes to a temporary file and rename it (the `myriad` tool does, with
 /// `myriad_scene::replace_file`).
 pub fn save_png(
-    path: &Path,
+    path: &std::path::Path,
     rgba: &[u8],
     width: u32,
     height: u32,
@@ -97,6 +97,7 @@ pub fn save_png(
     image::save_buffer(path, rgba, width, height, image::ExtendedColorType::Rgba8)
 }
 
+#[cfg(feature = "image")]
 /// Tightly packed RGBA8 pixels as the bytes of a PNG file. A buffer whose length is not
 /// `4 · width · height` is an error (the encoder itself would panic).
 pub fn encode_png(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>, image::ImageError> {
@@ -117,7 +118,7 @@ pub fn encode_png(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>, image
     Ok(png)
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "image"))]
 mod tests {
     use super::*;
 

@@ -158,6 +158,7 @@ impl SceneGeometry {
         Ok(())
     }
 
+    #[cfg(feature = "image")]
     /// Scales every texture with a side above `max_side` down to fit (aspect kept, each side at
     /// least 1 pixel; a triangle filter on the sRGB values) and returns one note per texture
     /// scaled. A renderer must take what the device can sample; a smaller texture is the
