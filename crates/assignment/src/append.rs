@@ -326,12 +326,17 @@ pub(crate) struct AtomicCounters {
 }
 
 impl AtomicCounters {
-    /// Counts, scans, fills and sorts the tasks' spans into `out`; returns the pair count, or
-    /// `Err(pairs)` without writing when they exceed `budget`.
+    /// Counts, scans, fills and sorts the spans of the tasks' first `parts` buckets (the later
+    /// ones may hold an earlier frame's spans) into `out`, only in `active` clusters when a mask
+    /// is given; returns the pair count, or `Err(pairs)` without writing when they exceed
+    /// `budget`.
+    #[allow(clippy::too_many_arguments)] // One frame's tasks, grid size, mask and output.
     pub fn assign(
         &mut self,
         tasks: &[crate::jobs::TaskOutput],
+        parts: usize,
         clusters: usize,
+        active: Option<&ActiveView<'_>>,
         parallel: bool,
         budget: u64,
         out: &mut crate::LightLists,
@@ -341,10 +346,16 @@ impl AtomicCounters {
         }
         let counters = &self.counters[..clusters];
         counters.iter().for_each(|c| c.store(0, Relaxed));
+        let flags = active.map(|a| a.flags);
+        // The clusters of a span that take its light: all of them, or the active ones.
+        let clusters_of = move |s: &Span| {
+            let (first, end) = (s.first as usize, (s.first + s.len) as usize);
+            (first..end).filter(move |&c| flags.is_none_or(|f| f[c]))
+        };
         let count = |task: &crate::jobs::TaskOutput| {
-            for s in task.buckets.iter().flat_map(|b| &b.spans) {
-                for c in &counters[s.first as usize..(s.first + s.len) as usize] {
-                    c.fetch_add(1, Relaxed);
+            for s in frame_spans(task, parts) {
+                for c in clusters_of(s) {
+                    counters[c].fetch_add(1, Relaxed);
                 }
             }
         };
@@ -373,9 +384,9 @@ impl AtomicCounters {
         out.indices.resize(running as usize, 0);
         let shared = SharedIndices::new(&mut out.indices);
         let fill = |task: &crate::jobs::TaskOutput| {
-            for s in task.buckets.iter().flat_map(|b| &b.spans) {
-                for c in &counters[s.first as usize..(s.first + s.len) as usize] {
-                    let at = c.fetch_add(1, Relaxed);
+            for s in frame_spans(task, parts) {
+                for c in clusters_of(s) {
+                    let at = counters[c].fetch_add(1, Relaxed);
                     // SAFETY: `fetch_add` hands every caller a distinct slot of the cluster's
                     // range [offset, offset + count), which lies inside `0..pairs`.
                     unsafe { shared.write(at as usize, s.light) };
@@ -390,6 +401,11 @@ impl AtomicCounters {
         sort_lists(&mut out.indices, &out.offsets, 0, 0..clusters, parallel);
         Ok(running as usize)
     }
+}
+
+/// The spans of a task's first `parts` buckets: this frame's.
+fn frame_spans(task: &crate::jobs::TaskOutput, parts: usize) -> impl Iterator<Item = &Span> {
+    task.buckets[..parts].iter().flat_map(|b| &b.spans)
 }
 
 /// Sorts every cluster's list in `indices` (which starts at pair `base`), splitting the cluster

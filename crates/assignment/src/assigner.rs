@@ -329,14 +329,12 @@ impl Assigner {
                 camera,
                 grid,
                 &self.planes,
+                active,
                 budget,
                 out,
             )?;
             stats.rejected = rejected;
             stats.culled = culled;
-            if let Some(a) = active {
-                out.retain_active(a);
-            }
             stats.pairs = out.indices.len() as u64;
             stats.tasks = 1;
             return Ok(stats);
@@ -399,14 +397,9 @@ impl Assigner {
                 total as usize
             }
             AppendStrategy::AtomicCounters => {
-                let pairs = self.atomic.assign(work, clusters, parallel, budget, out)?;
-                match active {
-                    Some(a) => {
-                        out.retain_active(a);
-                        out.indices.len()
-                    }
-                    None => pairs,
-                }
+                let (parts, active) = (parts.count, view.as_ref());
+                self.atomic
+                    .assign(work, parts, clusters, active, parallel, budget, out)?
             }
         };
         for task in work {

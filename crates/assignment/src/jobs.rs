@@ -171,7 +171,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
             for b in 0..n {
                 let g = block_start + b;
                 let angle = s.angle[g];
-                let axis = (m * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g])).normalize_or_zero();
+                let axis = geometry::spot_view_axis(m, s.dir_x[g], s.dir_y[g], s.dir_z[g]);
                 spots[b].active = false;
                 // Strictly below f32's π/2, which is a hair *above* the real π/2: the f64 oracle
                 // (and `emit_exact`) treat that angle as "wider than 90°", i.e. as the whole ball.

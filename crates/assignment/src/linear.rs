@@ -12,7 +12,7 @@
 //! paper's algorithm is silent on this case, and conservative is the only correct choice).
 
 use crate::geometry::{self, ZRange};
-use crate::{LightInput, LightLists};
+use crate::{ActiveClusters, LightInput, LightLists};
 use glam::Vec3;
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets, SpotCone, spot_bounding_sphere};
 
@@ -25,13 +25,16 @@ pub(crate) struct LinearScratch {
 }
 
 /// Counts of one run: `Ok((rejected, culled))`, or `Err(pairs)` without writing `out` when the
-/// pairs exceed `budget`.
+/// pairs exceed `budget`. Under an `active` mask only the active clusters' lists are kept, and
+/// only their pairs count against the budget.
+#[allow(clippy::too_many_arguments)] // One frame's inputs, scratch and output.
 pub(crate) fn assign_linear(
     scratch: &mut LinearScratch,
     lights: &LightInput<'_>,
     camera: &Camera,
     grid: &ClusterGrid,
     planes: &PlaneSets,
+    active: Option<&ActiveClusters>,
     budget: u64,
     out: &mut LightLists,
 ) -> Result<(u32, u32), u64> {
@@ -62,8 +65,8 @@ pub(crate) fn assign_linear(
         let mut c = view_from_world * (p - camera.position);
         let mut radius = r;
         if let Some(s) = &lights.spot {
-            let axis = (view_from_world * Vec3::new(s.dir_x[g], s.dir_y[g], s.dir_z[g]))
-                .normalize_or_zero();
+            let axis =
+                geometry::spot_view_axis(view_from_world, s.dir_x[g], s.dir_y[g], s.dir_z[g]);
             let angle = s.angle[g];
             if angle.is_finite() && angle > 0.0 && axis != Vec3::ZERO {
                 (c, radius) = spot_bounding_sphere(
@@ -126,20 +129,26 @@ pub(crate) fn assign_linear(
             }
         }
     }
-    let total: u64 = scratch.lists[..clusters]
+    let kept = |c: usize| active.is_none_or(|a| a.is_active(c as u32));
+    let lists = &scratch.lists[..clusters];
+    let total: u64 = lists
         .iter()
-        .map(|l| l.len() as u64)
+        .enumerate()
+        .filter(|&(c, _)| kept(c))
+        .map(|(_, l)| l.len() as u64)
         .sum();
     if total > budget {
         return Err(total);
     }
     out.reset(clusters);
     let mut at = 0u32;
-    for (c, list) in scratch.lists[..clusters].iter().enumerate() {
+    for (c, list) in lists.iter().enumerate() {
         out.offsets[c] = at;
-        out.counts[c] = list.len() as u32;
-        at += list.len() as u32;
-        out.indices.extend_from_slice(list);
+        if kept(c) {
+            out.counts[c] = list.len() as u32;
+            at += list.len() as u32;
+            out.indices.extend_from_slice(list);
+        }
     }
     Ok((rejected, culled))
 }

@@ -66,23 +66,6 @@ impl LightLists {
         self.counts.resize(clusters, 0);
     }
 
-    /// Empties the lists of clusters outside `active`, compacting `indices` in place (the
-    /// masked assignment for methods whose writers do not take a mask).
-    pub(crate) fn retain_active(&mut self, active: &crate::ActiveClusters) {
-        let mut write = 0u32;
-        for c in 0..self.counts.len() {
-            let (start, n) = (self.offsets[c] as usize, self.counts[c] as usize);
-            if !active.is_active(c as u32) {
-                self.counts[c] = 0;
-            } else if write as usize != start {
-                self.indices.copy_within(start..start + n, write as usize);
-            }
-            self.offsets[c] = write;
-            write += self.counts[c];
-        }
-        self.indices.truncate(write as usize);
-    }
-
     /// Checks the CSR invariants; used by tests and debug builds.
     pub fn assert_well_formed(&self, light_count: usize) {
         assert_eq!(self.offsets.len(), self.counts.len());

@@ -35,9 +35,12 @@ pub(crate) fn partition_from(items: &[f32], guess: usize, pred: impl Fn(f32) -> 
 /// Clamped and floored as a float, then read from the bits of `t + 2²³` (whose mantissa is then
 /// the integer itself): all plain vector arithmetic. A saturating `as usize` took about a dozen
 /// instructions per guess — 73 per light, the largest line of the `uniform` 100k profile — and
-/// `as i32` still seven. Exact while `max < 2²³` (planes per axis); a grid past that would only get
-/// poor guesses, which cost search steps, never a wrong answer (`partition_from` is exact from
-/// any guess).
+/// `as i32` still seven. Exact while `max < 2²³` (planes per axis); a grid past that only gets
+/// poor guesses, which cost search steps, never a wrong answer (`partition_from` is exact from any
+/// guess). Those steps add up: an audit's 1×1×12 000 000 grid took 3.6 s for 2000 lights, against
+/// 0.18 s at 8 000 000 slices. Bounding the walk (a bisection after eight steps) made every frame
+/// of ordinary grids 17–35% slower (`uniform` 100k `binary`, one thread, interleaved builds), so
+/// it was not kept: no real grid comes near 2²³ slices or tiles an axis.
 #[inline]
 fn clamp_index(t: f32, max: usize) -> usize {
     const TWO_23: f32 = (1u32 << 23) as f32;
@@ -261,6 +264,26 @@ mod tests {
         let first = s[1..].partition_point(|&e| e > max);
         let after = s[..rows].partition_point(|&e| e >= min);
         (first < after).then(|| (first as u32, after as u32 - 1))
+    }
+
+    #[test]
+    fn partition_from_is_exact_from_any_guess() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        for len in 0..60 {
+            let mut items: Vec<f32> = (0..len).map(|_| rng.random_range(-5.0f32..5.0)).collect();
+            items.sort_by(f32::total_cmp);
+            for _ in 0..20 {
+                let v = rng.random_range(-6.0f32..6.0);
+                let want = items.partition_point(|&e| e <= v);
+                for guess in 0..len + 4 {
+                    assert_eq!(
+                        partition_from(&items, guess, |e| e <= v),
+                        want,
+                        "{v} {guess}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -79,3 +79,47 @@ fn masked_lists_are_the_full_lists_on_active_clusters() {
         5,
     );
 }
+
+#[test]
+fn a_budget_that_fits_the_masked_pairs_keeps_the_grid_and_the_mask() {
+    // Only the active clusters' pairs count against the budget. `linear` and the atomic-counter
+    // append once counted every cluster's: a budget of exactly the masked pairs coarsened the
+    // grid (to 3x1x2 for `linear`) and dropped the mask (an audit found it).
+    let scene = make_scene(&SceneParams {
+        seed: 9,
+        lights: 4000,
+        ..SceneParams::HD
+    });
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
+    let mut mask = ActiveClusters::new(&scene.grid);
+    for c in 0..scene.grid.cluster_count() as u32 {
+        if rng.random_bool(0.1) {
+            mask.mark(c);
+        }
+    }
+    let input = scene.lights.input(true);
+    for method in Method::ALL {
+        for strategy in [
+            AppendStrategy::PartitionedByDepth,
+            AppendStrategy::AtomicCounters,
+        ] {
+            let assign = |assigner: &mut Assigner, lists: &mut LightLists| {
+                let (camera, grid) = (&scene.camera, &scene.grid);
+                assigner.assign_active(method, &input, camera, grid, Some(&mask), lists)
+            };
+            let mut free = LightLists::new();
+            let stats = assign(
+                &mut Assigner::new().with_append_strategy(strategy),
+                &mut free,
+            );
+            assert!(stats.pairs > 100, "{method} {strategy:?}: {stats:?}");
+            let mut capped = LightLists::new();
+            let mut assigner = Assigner::new()
+                .with_append_strategy(strategy)
+                .with_pair_budget(stats.pairs);
+            let capped_stats = assign(&mut assigner, &mut capped);
+            assert_eq!(capped_stats, stats, "{method} {strategy:?}");
+            assert!(capped == free, "{method} {strategy:?}");
+        }
+    }
+}

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use glam::UVec3;
-use myriad_assignment::{Assigner, LightLists, Method, coarser_grid};
+use myriad_assignment::{AppendStrategy, AssignStats, Assigner, LightLists, Method, coarser_grid};
 use myriad_cluster_math::ClusterGrid;
 
 fn scene() -> Scene {
@@ -85,6 +85,31 @@ fn over_budget_frames_coarsen_the_grid_and_stay_conservative() {
         });
         assert_eq!(again_stats.coarsened, stats.coarsened);
         assert!(again == lists);
+        // The other append strategy coarsens alike, on one thread and on several. (Its first
+        // attempt fills more buckets than the coarser one: it once read the stale ones and
+        // panicked, an audit found.)
+        if matches!(method, Method::Binary | Method::Refined) {
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut atomic = LightLists::new();
+                let atomic_stats = pool.install(|| {
+                    Assigner::new()
+                        .with_pair_budget(budget)
+                        .with_append_strategy(AppendStrategy::AtomicCounters)
+                        .assign(method, &input, &scene.camera, &scene.grid, &mut atomic)
+                });
+                let outcome = |s: AssignStats| (s.pairs, s.coarsened, s.grid_dims, s.over_budget);
+                assert_eq!(
+                    outcome(atomic_stats),
+                    outcome(stats),
+                    "{method}, {threads} threads"
+                );
+                assert!(atomic == lists, "{method}, {threads} threads");
+            }
+        }
     }
 }
 

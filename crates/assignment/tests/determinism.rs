@@ -164,27 +164,37 @@ fn reused_lists_and_assigner_hold_nothing_from_the_previous_frame() {
             spots: seed % 2 == 0,
         })
     };
-    // Big then small then different grid, each compared with a fresh assignment.
+    // Big then small then different grid, each compared with a fresh assignment. Fewer parts
+    // than the frame before (a smaller grid, a frame of one task) leave a task's later buckets
+    // holding old spans, which the atomic-counter append once read: wrong lists, light indices
+    // past the input, or a panic (an audit found it).
     let frames = [
         make(1, 30_000, UVec3::new(16, 9, 24)),
         make(2, 3_000, UVec3::new(16, 9, 24)),
         make(3, 8_000, UVec3::new(8, 8, 8)),
         make(4, 0, UVec3::new(8, 8, 8)),
         make(5, 20_000, UVec3::new(24, 12, 16)),
+        make(6, 300, UVec3::new(24, 12, 16)),
+        make(7, 2_000, UVec3::new(4, 4, 4)),
     ];
-    for method in [Method::Binary, Method::Refined, Method::Linear] {
-        let mut assigner = Assigner::new();
-        let mut lists = LightLists::new();
-        for (f, scene) in frames.iter().enumerate() {
-            let spots = f % 2 == 1;
-            let input = scene.lights.input(spots);
-            assigner.assign(method, &input, &scene.camera, &scene.grid, &mut lists);
-            let mut fresh = LightLists::new();
-            Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut fresh);
-            assert!(
-                lists == fresh,
-                "{method}: frame {f} differs from a fresh assignment"
-            );
+    for strategy in [
+        AppendStrategy::PartitionedByDepth,
+        AppendStrategy::AtomicCounters,
+    ] {
+        for method in [Method::Binary, Method::Refined, Method::Linear] {
+            let mut assigner = Assigner::new().with_append_strategy(strategy);
+            let mut lists = LightLists::new();
+            for (f, scene) in frames.iter().enumerate() {
+                let spots = f % 2 == 1;
+                let input = scene.lights.input(spots);
+                assigner.assign(method, &input, &scene.camera, &scene.grid, &mut lists);
+                let mut fresh = LightLists::new();
+                Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut fresh);
+                assert!(
+                    lists == fresh,
+                    "{method} {strategy:?}: frame {f} differs from a fresh assignment"
+                );
+            }
         }
     }
 }
