@@ -225,3 +225,78 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
         .frame(&scene, Shading::Clustered, Method::Refined, false)
         .unwrap();
 }
+
+#[test]
+fn unusable_cameras_and_lists_of_another_grid_are_errors() {
+    use myriad::cluster_math::glam::UVec3;
+    use myriad::gpu::{FrameDesc, GpuError, ShadingMode, ShadingSettings};
+    use myriad::scene::{Camera, ClusterGrid};
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(200, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    let Viewer {
+        ctx,
+        renderer,
+        scene: geometry,
+        target,
+        ..
+    } = &mut viewer;
+    fn frame<'a>(camera: &'a Camera, grid: &'a ClusterGrid) -> FrameDesc<'a> {
+        FrameDesc {
+            camera,
+            grid,
+            mode: ShadingMode::Lists,
+            heat_map: false,
+            lights: None,
+            lists: None,
+            settings: ShadingSettings::default(),
+        }
+    }
+    let invalid = |result: Result<_, GpuError>, want: &str| match result {
+        Err(GpuError::InvalidInput(message)) => assert!(message.contains(want), "{message}"),
+        other => panic!("want an error with {want:?}, got {:?}", other.map(|_| ())),
+    };
+    // The renderer projects with near and far: an infinite far plane (fine for the assignment)
+    // rendered a blank image with Ok, and the prepass panicked; a NaN field of view rendered too.
+    let mut infinite_far = scene.camera;
+    infinite_far.far = f32::INFINITY;
+    let mut nan_fov = scene.camera;
+    nan_fov.fov_y = f32::NAN;
+    for camera in [infinite_far, nan_fov] {
+        let desc = frame(&camera, &scene.grid);
+        invalid(
+            renderer
+                .render(ctx, geometry, &desc, &target.view)
+                .map(|_| ()),
+            "unusable camera",
+        );
+        invalid(
+            renderer.render_prepass(ctx, geometry, &camera),
+            "unusable camera",
+        );
+    }
+    // The uploaded lists are for the scene's grid; a grid of as many clusters in another shape
+    // reused them (only the count was compared).
+    let g = scene.grid;
+    let turned = ClusterGrid::new(
+        UVec3::new(g.dims.z, g.dims.y, g.dims.x),
+        g.slicing,
+        g.near(),
+        g.far(),
+    );
+    assert_eq!(turned.cluster_count(), g.cluster_count());
+    invalid(
+        renderer
+            .render(ctx, geometry, &frame(&scene.camera, &turned), &target.view)
+            .map(|_| ()),
+        "needs light lists for this grid",
+    );
+    // The scene's own grid still renders with the kept lists.
+    let kept = renderer.render(ctx, geometry, &frame(&scene.camera, &g), &target.view);
+    assert!(kept.is_ok(), "{:?}", kept.err());
+}

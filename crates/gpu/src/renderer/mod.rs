@@ -127,7 +127,7 @@ pub struct Renderer {
     scratch_draws: Vec<crate::scene::Draw>,
     light_count: usize,
     lights_camera: Option<[f32; 3]>,
-    lists_uploaded: Option<(usize, u32)>,
+    lists_uploaded: Option<(glam::UVec3, u32)>,
     edges_uploaded: Option<ClusterGrid>,
     has_spots: bool,
     /// Bumped by every frame that uploads lights or lists (see [`Renderer::upload_generation`]).
@@ -248,6 +248,7 @@ impl Renderer {
         scene: &GpuScene,
         camera: &Camera,
     ) -> Result<(), GpuError> {
+        check_camera(camera)?;
         let (width, height) = (camera.width, camera.height);
         self.ensure_gbuffer(&ctx.device, width, height)?;
         let grid = ClusterGrid::new(
@@ -315,6 +316,7 @@ impl Renderer {
         draw_gbuffer: bool,
     ) -> Result<FrameReport, GpuError> {
         let device = &ctx.device;
+        check_camera(frame.camera)?;
         let (width, height) = (frame.camera.width, frame.camera.height);
         let target_size = target.texture().size();
         if (target_size.width, target_size.height) != (width, height) {
@@ -391,11 +393,14 @@ impl Renderer {
         }
         let lists_for_grid = match &frame.lists {
             Some(_) => true,
-            None => self.lists_uploaded.is_some_and(|(c, _)| c == clusters),
+            None => self
+                .lists_uploaded
+                .is_some_and(|(dims, _)| dims == frame.grid.dims),
         };
         if frame.mode == ShadingMode::Lists && !lists_for_grid {
             return Err(GpuError::InvalidInput(format!(
-                "clustered shading needs light lists for this grid's {clusters} clusters"
+                "clustered shading needs light lists for this grid ({}x{}x{}, {clusters} clusters)",
+                frame.grid.dims.x, frame.grid.dims.y, frame.grid.dims.z
             )));
         }
         profile_span!("upload lights and lists");
@@ -438,12 +443,12 @@ impl Renderer {
                 rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
                 report.upload_bytes += stage(&mut self.belt, &mut encoder, buffer, data);
             }
-            self.lists_uploaded = Some((clusters, lists.max_count()));
+            self.lists_uploaded = Some((frame.grid.dims, lists.max_count()));
             self.uploads += 1;
         }
         let max_count = match (frame.mode, self.lists_uploaded) {
             (ShadingMode::BruteForce, _) => self.light_count as u32,
-            (ShadingMode::Lists, Some((c, max))) if c == clusters => max,
+            (ShadingMode::Lists, Some((dims, max))) if dims == frame.grid.dims => max,
             (ShadingMode::Lists, _) => {
                 return Err(GpuError::InvalidInput(format!(
                     "clustered shading needs light lists for this grid's {clusters} clusters"
@@ -495,6 +500,19 @@ impl Renderer {
         self.belt.recall();
         report.encode_seconds = encode_start.elapsed().as_secs_f64();
         Ok(report)
+    }
+}
+
+/// Refuses a camera the renderer cannot draw with: [`Camera::problem`] (a non-finite eye, a field
+/// of view outside (0, π), a zero size, or a depth range not `0 < near < far` finite — the
+/// projection is built from near and far, so unlike the assignment the renderer needs a finite
+/// far plane). Such a camera rendered a blank image with `Ok`, and the prepass panicked.
+fn check_camera(camera: &Camera) -> Result<(), GpuError> {
+    match camera.problem() {
+        Some(problem) => Err(GpuError::InvalidInput(format!(
+            "unusable camera: {problem}"
+        ))),
+        None => Ok(()),
     }
 }
 
