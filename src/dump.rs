@@ -1,5 +1,5 @@
 //! The assignment dump: the JSON file `myriad assign` writes and `myriad check` reads
-//! (format in DESIGN.md, "Assignment dump").
+//! (format in the README, "`myriad assign`": `grid`, the plane edges and the CSR lists).
 
 use anyhow::{Context, Result, bail, ensure};
 use myriad_assignment::LightLists;

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 /// `--scene FILE` or `--preset P [--lights N] [--seed K]`.
 #[derive(clap::Args, Debug)]
 pub struct SceneSource {
-    /// Scene file (JSON, see DESIGN.md).
+    /// Scene file (JSON; format in the README, "Scene files").
     #[arg(long, conflicts_with = "preset")]
     pub scene: Option<PathBuf>,
     /// Generate a standard scene instead: paper, uniform or sphere.

@@ -192,7 +192,8 @@ impl Assigner {
     /// On a camera [`Camera::view_problem`] rejects (a NaN field of view, a zero size, …): no
     /// method could place a light in its frustum, so any lists would be wrong. Check it first
     /// when the camera comes from user input. (The camera's near and far are not used: depth is
-    /// sliced by `grid`'s range, so an infinite far plane is fine.)
+    /// sliced by `grid`'s range, so an infinite far plane is fine.) Also when `lights`' columns
+    /// differ in length, or hold more than `u32::MAX` lights (light indices are u32).
     pub fn assign(
         &mut self,
         method: Method,

@@ -1,6 +1,7 @@
 //! The assignment's input: plain SoA light columns, borrowed from the caller.
 
-/// World-space light columns, one entry per light; all slices have the same length.
+/// World-space light columns, one entry per light; all slices must have the same length
+/// ([`Assigner::assign`](crate::Assigner::assign) panics otherwise).
 ///
 /// Lights whose position or radius is not finite, or whose radius is not positive, are skipped
 /// and counted in [`crate::AssignStats::rejected`]; they never reach the output.

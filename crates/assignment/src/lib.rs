@@ -6,6 +6,29 @@
 //! Figure 3, written into caller-owned storage that is reused from frame to frame.
 //! This crate knows nothing of scenes, files or GPUs.
 //!
+//! ## Example (the README's, run as a test)
+//!
+//! ```
+//! use myriad_assignment::{Assigner, LightInput, LightLists, Method};
+//! use myriad_cluster_math::glam::{UVec3, Vec3};
+//! use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+//!
+//! let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 1920, 1080, 0.1, 100.0);
+//! let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, camera.far);
+//! // SoA columns: world-space positions and ranges, one entry per light.
+//! let (x, y, z) = (vec![0.0, 2.0], vec![0.0, 1.0], vec![-5.0, -20.0]);
+//! let radius = vec![1.0, 3.0];
+//! let mut assigner = Assigner::new(); // keep both across frames:
+//! let mut lists = LightLists::new(); // steady-state frames allocate nothing
+//! let input = LightInput::points(&x, &y, &z, &radius);
+//! let stats = assigner.assign(Method::Refined, &input, &camera, &grid, &mut lists);
+//! assert_eq!(stats.pairs, 57);
+//! // What the shader does per pixel: pixel + view depth -> cluster -> its lights.
+//! let c = grid.cluster_of_pixel(960, 540, 5.0, camera.width, camera.height);
+//! assert_eq!(lists.lights_of(c as usize), &[0]);
+//! // Upload lists.offsets, lists.counts and lists.indices: plain u32 arrays.
+//! ```
+//!
 //! ## Methods ([`Method`]), all conservative
 //! | method | how | cost |
 //! | --- | --- | --- |

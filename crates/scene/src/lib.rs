@@ -2,7 +2,7 @@
 //!
 //! A scene, for the assignment, is a camera, a cluster grid and lights; for the renderer it is
 //! also geometry. This crate reads and writes the JSON scene file (the shared contract of the
-//! CLI, the benches and the tests, see DESIGN.md), holds lights the way the rest of myriad
+//! CLI, the benches and the tests; its format is below), holds lights the way the rest of myriad
 //! consumes them — as structure-of-arrays columns ([`Lights`]) — loads glTF 2.0 models
 //! ([`Model`]), generates the project's default scene (the atrium) and seeded light fields, and
 //! runs the per-frame ECS-style systems on light columns (animate, cull, to view space).

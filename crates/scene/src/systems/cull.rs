@@ -1,7 +1,7 @@
 //! Frustum culling of lights: which lights' volumes can touch the view frustum.
 //!
 //! Why before assignment: a light entirely outside the frustum lights no visible pixel, and the
-//! cheapest work is the work not done (DESIGN.md, "skip what the scene does not need"). The
+//! cheapest work is the work not done (the project brief: "skip what a scene doesn't need"). The
 //! test is **conservative**: it may keep a light that misses the frustum (near the frustum's
 //! edges and corners, where six plane tests cannot see that a sphere passes outside), never
 //! drop one that touches it.

@@ -5,7 +5,7 @@
 //! row per light, as in [`crate::Lights`]) and each system is a plain function over slices
 //! that writes into caller-owned outputs. An engine calls them with its own columns; there is
 //! no world, no registry, no scheduler, nothing to adopt. Chained, they are the first stage of
-//! a frame (DESIGN.md, "The frame, as data flows", step 1):
+//! a frame (ARCHITECTURE.md, "A frame, as data flows", step 1):
 //!
 //! 1. [`animate_orbits`] / [`animate_wander`] move lights (positions updated in place).
 //! 2. [`cull_lights`] tests each light's volume — its sphere, or for a spot its cone (the
