@@ -300,3 +300,46 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
     let kept = renderer.render(ctx, geometry, &frame(&scene.camera, &g), &target.view);
     assert!(kept.is_ok(), "{:?}", kept.err());
 }
+
+#[test]
+fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
+    use myriad::gpu::{Renderer, wgpu};
+    // The GPU-test policy first (fail without an adapter unless told to skip).
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    // An engine's device, created with the renderer's documented minimum rather than the
+    // adapter's limits, and one with wgpu's downlevel defaults (one storage buffer short).
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    let device_with = |required_limits| {
+        let descriptor = wgpu::DeviceDescriptor {
+            required_limits,
+            ..Default::default()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
+        GpuContext::from_device(device, queue)
+    };
+    let low = device_with(wgpu::Limits::downlevel_defaults());
+    let error = Renderer::try_new(&low, myriad::gpu::HEADLESS_FORMAT)
+        .err()
+        .expect("downlevel limits accepted")
+        .to_string();
+    assert!(
+        error.contains("max_storage_buffers_per_shader_stage 4 (needs 5)"),
+        "{error}"
+    );
+    let scene = RenderScene::default_scene(300, 192, 96).unwrap();
+    let mut viewer = Viewer::new(device_with(Renderer::required_limits()), &scene).unwrap();
+    for shading in Shading::ALL {
+        viewer
+            .frame(&scene, shading, Method::Refined, false)
+            .unwrap();
+    }
+    let image = viewer.image().unwrap();
+    let lit = image
+        .chunks(4)
+        .filter(|p| p[..3].iter().any(|&c| c > 40))
+        .count();
+    assert!(lit > 192 * 96 / 8, "only {lit} lit pixels");
+}

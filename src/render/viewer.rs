@@ -112,7 +112,7 @@ pub struct Viewer {
 impl Viewer {
     /// Uploads `scene`'s geometry and makes a target of its camera's size.
     pub fn new(ctx: GpuContext, scene: &RenderScene) -> Result<Self> {
-        let renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
+        let renderer = Renderer::try_new(&ctx, HEADLESS_FORMAT)?;
         // A model's texture larger than the device samples is scaled down, with a warning.
         let max_side = ctx.device.limits().max_texture_dimension_2d;
         let too_large = |t: &TextureRgba8| t.width.max(t.height) > max_side;

@@ -135,8 +135,42 @@ pub struct Renderer {
 }
 
 impl Renderer {
+    /// The device limits the renderer needs: wgpu's downlevel defaults, with five storage buffers
+    /// per shader stage (the shading passes read the lights, offsets, counts, indices and slice
+    /// edges in the fragment stage; the downlevel defaults allow four). An engine creating its
+    /// device for the renderer can request these (or more); [`Renderer::try_new`] checks them.
+    pub fn required_limits() -> wgpu::Limits {
+        wgpu::Limits {
+            max_storage_buffers_per_shader_stage: 5,
+            ..wgpu::Limits::downlevel_defaults()
+        }
+    }
+
+    /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`]: an
+    /// error naming every limit that is too low, where `new` would panic in wgpu's validation.
+    pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        let mut short = Vec::new();
+        Self::required_limits().check_limits_with_fail_fn(
+            &ctx.device.limits(),
+            false,
+            |name, needed, allowed| short.push(format!("{name} {allowed} (needs {needed})")),
+        );
+        if !short.is_empty() {
+            return Err(GpuError::InvalidInput(format!(
+                "the device's limits are below the renderer's (Renderer::required_limits): {}",
+                short.join(", ")
+            )));
+        }
+        Ok(Self::new(ctx, output_format))
+    }
+
     /// A renderer that writes its output into textures of `output_format` (the headless target's
     /// [`crate::HEADLESS_FORMAT`], or an engine's).
+    ///
+    /// # Panics
+    ///
+    /// In wgpu's validation (with its default error handler) on a device below
+    /// [`Renderer::required_limits`]; [`Renderer::try_new`] returns an error instead.
     pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Self {
         let device = &ctx.device;
         let pipelines = Pipelines::new(device, output_format);
