@@ -322,8 +322,7 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
     };
     let low = device_with(wgpu::Limits::downlevel_defaults());
     let error = Renderer::try_new(&low, myriad::gpu::HEADLESS_FORMAT)
-        .err()
-        .expect("downlevel limits accepted")
+        .expect_err("downlevel limits accepted")
         .to_string();
     assert!(
         error.contains("max_storage_buffers_per_shader_stage 4 (needs 5)"),
