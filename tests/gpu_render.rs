@@ -342,3 +342,72 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
         .count();
     assert!(lit > 192 * 96 / 8, "only {lit} lit pixels");
 }
+
+#[test]
+fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
+    use myriad::gpu::{FrameDesc, GpuError, read_rgba8, wgpu};
+    use myriad::render::{cluster_lists, light_columns};
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(100, 64, 32).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    let texture = |format, usage| {
+        viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("wrong target"),
+            size: wgpu::Extent3d {
+                width: 64,
+                height: 32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+    let invalid = |result: Result<(), GpuError>, want: &str| match result {
+        Err(GpuError::InvalidInput(message)) => assert!(message.contains(want), "{message}"),
+        other => panic!("want an error with {want:?}, got {other:?}"),
+    };
+    // A swap-chain format the renderer was not built for, and a texture it cannot draw into:
+    // both were wgpu validation panics inside a function returning Result.
+    let lists = viewer.lists().clone();
+    for target in [
+        texture(wgpu::TextureFormat::Bgra8Unorm, attachment),
+        texture(myriad::gpu::HEADLESS_FORMAT, wgpu::TextureUsages::COPY_SRC),
+    ] {
+        let view = target.create_view(&Default::default());
+        let frame = FrameDesc::clustered(
+            &scene.camera,
+            &scene.grid,
+            light_columns(&scene.lights),
+            cluster_lists(&lists),
+        );
+        let result = viewer
+            .renderer
+            .render(&viewer.ctx, &viewer.scene, &frame, &view);
+        invalid(result.map(|_| ()), "the renderer draws into");
+    }
+    // Read-backs: BGRA came back with its channels swapped, and a texture without COPY_SRC
+    // was a wgpu validation error.
+    let bgra = texture(wgpu::TextureFormat::Bgra8Unorm, attachment);
+    invalid(read_rgba8(&viewer.ctx, &bgra).map(|_| ()), "not Bgra8Unorm");
+    let no_copy = texture(
+        myriad::gpu::HEADLESS_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
+    invalid(
+        read_rgba8(&viewer.ctx, &no_copy).map(|_| ()),
+        "lacks COPY_SRC",
+    );
+    // The right kind still works.
+    let good = texture(myriad::gpu::HEADLESS_FORMAT, attachment);
+    assert_eq!(read_rgba8(&viewer.ctx, &good).unwrap().len(), 64 * 32 * 4);
+}

@@ -165,6 +165,11 @@ fn depth_test(write: bool) -> Option<wgpu::DepthStencilState> {
 }
 
 impl Pipelines {
+    /// The format of the textures the final passes draw into.
+    pub fn output_format(&self) -> wgpu::TextureFormat {
+        self.output_format
+    }
+
     pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

@@ -4,12 +4,28 @@ use crate::{GpuContext, GpuError};
 
 /// Copies an RGBA8 (`Rgba8Unorm` or `Rgba8UnormSrgb`) texture into a tightly packed
 /// `width·height·4` byte vector, rows top to bottom. Blocks until the GPU is done.
+///
+/// Any other format (a `Bgra8` swap chain's came back with its channels swapped), or a texture
+/// without `COPY_SRC` usage, is an [`GpuError::InvalidInput`].
 pub fn read_rgba8(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
+    use wgpu::TextureFormat::{Rgba8Unorm, Rgba8UnormSrgb};
+    if !matches!(texture.format(), Rgba8Unorm | Rgba8UnormSrgb) {
+        return Err(GpuError::InvalidInput(format!(
+            "read_rgba8 reads Rgba8Unorm or Rgba8UnormSrgb textures, not {:?}",
+            texture.format()
+        )));
+    }
     read_texels(ctx, texture, 4, wgpu::TextureAspect::All)
 }
 
 /// Copies a `Depth32Float` texture into one f32 per pixel, rows top to bottom.
 pub fn read_depth(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<f32>, GpuError> {
+    if texture.format() != wgpu::TextureFormat::Depth32Float {
+        return Err(GpuError::InvalidInput(format!(
+            "read_depth reads Depth32Float textures, not {:?}",
+            texture.format()
+        )));
+    }
     let bytes = read_texels(ctx, texture, 4, wgpu::TextureAspect::DepthOnly)?;
     Ok(bytemuck::cast_slice(&bytes).to_vec())
 }
@@ -21,6 +37,11 @@ fn read_texels(
     texel_bytes: u32,
     aspect: wgpu::TextureAspect,
 ) -> Result<Vec<u8>, GpuError> {
+    if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
+        return Err(GpuError::InvalidInput(
+            "the texture to read back lacks COPY_SRC usage".into(),
+        ));
+    }
     let (width, height) = (texture.width(), texture.height());
     let row = width * texel_bytes;
     let padded_row =

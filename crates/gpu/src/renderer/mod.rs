@@ -352,7 +352,24 @@ impl Renderer {
         let device = &ctx.device;
         check_camera(frame.camera)?;
         let (width, height) = (frame.camera.width, frame.camera.height);
-        let target_size = target.texture().size();
+        // A view may reinterpret only the sRGB-ness of its texture's format (`view_formats`), and
+        // wgpu does not say which one a view has: compare without the sRGB suffix.
+        let texture = target.texture();
+        let output = self.pipelines.output_format();
+        if texture.format().remove_srgb_suffix() != output.remove_srgb_suffix()
+            || !texture
+                .usage()
+                .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+        {
+            return Err(GpuError::InvalidInput(format!(
+                "the target is a {:?} texture with {:?} usage; the renderer draws into {:?} \
+                 render attachments",
+                texture.format(),
+                texture.usage(),
+                output
+            )));
+        }
+        let target_size = texture.size();
         if (target_size.width, target_size.height) != (width, height) {
             return Err(GpuError::InvalidInput(format!(
                 "camera is {width}x{height} but the target is {}x{}",
