@@ -226,19 +226,26 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
         .unwrap();
 }
 
+/// The default scene with `lights` lights at `width × height`, on a viewer that has rendered one
+/// clustered frame (`None` where GPU tests are skipped).
+fn viewer_after_one_frame(lights: usize, width: u32, height: u32) -> Option<(RenderScene, Viewer)> {
+    let ctx = GpuContext::headless_for_tests()?;
+    let scene = RenderScene::default_scene(lights, width, height).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    Some((scene, viewer))
+}
+
 #[test]
 fn unusable_cameras_and_lists_of_another_grid_are_errors() {
     use myriad::cluster_math::glam::UVec3;
     use myriad::gpu::{FrameDesc, GpuError, ShadingMode, ShadingSettings};
     use myriad::scene::{Camera, ClusterGrid};
-    let Some(ctx) = GpuContext::headless_for_tests() else {
+    let Some((scene, mut viewer)) = viewer_after_one_frame(200, 192, 96) else {
         return;
     };
-    let scene = RenderScene::default_scene(200, 192, 96).unwrap();
-    let mut viewer = Viewer::new(ctx, &scene).unwrap();
-    viewer
-        .frame(&scene, Shading::Clustered, Method::Refined, false)
-        .unwrap();
     let Viewer {
         ctx,
         renderer,
@@ -347,14 +354,9 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
 fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
     use myriad::gpu::{FrameDesc, GpuError, read_rgba8, wgpu};
     use myriad::render::{cluster_lists, light_columns};
-    let Some(ctx) = GpuContext::headless_for_tests() else {
+    let Some((scene, mut viewer)) = viewer_after_one_frame(100, 64, 32) else {
         return;
     };
-    let scene = RenderScene::default_scene(100, 64, 32).unwrap();
-    let mut viewer = Viewer::new(ctx, &scene).unwrap();
-    viewer
-        .frame(&scene, Shading::Clustered, Method::Refined, false)
-        .unwrap();
     let texture = |format, usage| {
         viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("wrong target"),
