@@ -129,26 +129,30 @@ pub(crate) fn assign_linear(
             }
         }
     }
-    let kept = |c: usize| active.is_none_or(|a| a.is_active(c as u32));
-    let lists = &scratch.lists[..clusters];
-    let total: u64 = lists
+    // Under a mask, the inactive clusters' lists are emptied first, so only active pairs count
+    // against the budget and reach the output. (Testing the mask per cluster in the loops below
+    // made every unmasked `linear` frame 10% slower: `paper` 1000, 96 → 106 µs.)
+    if let Some(a) = active {
+        for (c, list) in scratch.lists[..clusters].iter_mut().enumerate() {
+            if !a.is_active(c as u32) {
+                list.clear();
+            }
+        }
+    }
+    let total: u64 = scratch.lists[..clusters]
         .iter()
-        .enumerate()
-        .filter(|&(c, _)| kept(c))
-        .map(|(_, l)| l.len() as u64)
+        .map(|l| l.len() as u64)
         .sum();
     if total > budget {
         return Err(total);
     }
     out.reset(clusters);
     let mut at = 0u32;
-    for (c, list) in lists.iter().enumerate() {
+    for (c, list) in scratch.lists[..clusters].iter().enumerate() {
         out.offsets[c] = at;
-        if kept(c) {
-            out.counts[c] = list.len() as u32;
-            at += list.len() as u32;
-            out.indices.extend_from_slice(list);
-        }
+        out.counts[c] = list.len() as u32;
+        at += list.len() as u32;
+        out.indices.extend_from_slice(list);
     }
     Ok((rejected, culled))
 }
