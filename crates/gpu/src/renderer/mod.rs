@@ -449,10 +449,7 @@ impl Renderer {
                 .is_some_and(|(dims, _)| dims == frame.grid.dims),
         };
         if frame.mode == ShadingMode::Lists && !lists_for_grid {
-            return Err(GpuError::InvalidInput(format!(
-                "clustered shading needs light lists for this grid ({}x{}x{}, {clusters} clusters)",
-                frame.grid.dims.x, frame.grid.dims.y, frame.grid.dims.z
-            )));
+            return Err(missing_lists(frame.grid));
         }
         profile_span!("upload lights and lists");
         let upload_start = Instant::now();
@@ -501,9 +498,7 @@ impl Renderer {
             (ShadingMode::BruteForce, _) => self.light_count as u32,
             (ShadingMode::Lists, Some((dims, max))) if dims == frame.grid.dims => max,
             (ShadingMode::Lists, _) => {
-                return Err(GpuError::InvalidInput(format!(
-                    "clustered shading needs light lists for this grid's {clusters} clusters"
-                )));
+                return Err(missing_lists(frame.grid));
             }
         };
         if self.edges_uploaded != Some(*frame.grid) {
@@ -552,6 +547,18 @@ impl Renderer {
         report.encode_seconds = encode_start.elapsed().as_secs_f64();
         Ok(report)
     }
+}
+
+/// The error of a clustered frame without lists for its grid (none uploaded, or for another grid).
+fn missing_lists(grid: &ClusterGrid) -> GpuError {
+    let d = grid.dims;
+    GpuError::InvalidInput(format!(
+        "clustered shading needs light lists for this grid ({}x{}x{}, {} clusters)",
+        d.x,
+        d.y,
+        d.z,
+        grid.cluster_count()
+    ))
 }
 
 /// Refuses a camera the renderer cannot draw with: [`Camera::problem`] (a non-finite eye, a field
