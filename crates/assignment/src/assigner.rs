@@ -366,12 +366,16 @@ impl Assigner {
             planes: FramePlanes::new(&self.planes, grid),
             view_from_world,
             cluster_spheres: &self.cluster_spheres,
-            side_normals: [
-                self.planes.x_plane_normal(0),
-                self.planes.x_plane_normal(grid.dims.x as usize),
-                self.planes.y_plane_normal(0),
-                self.planes.y_plane_normal(grid.dims.y as usize),
-            ],
+            cull: jobs::FrustumCull {
+                sides: [
+                    self.planes.x_plane_normal(0),
+                    self.planes.x_plane_normal(grid.dims.x as usize),
+                    self.planes.y_plane_normal(0),
+                    self.planes.y_plane_normal(grid.dims.y as usize),
+                ],
+                near: self.planes.z_depths[0],
+                far: self.planes.z_depths[self.planes.z_depths.len() - 1],
+            },
         };
         let parallel = parallel && tasks > 1;
         let gather = |(t, task): (usize, &mut TaskOutput)| {
