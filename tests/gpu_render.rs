@@ -413,3 +413,51 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
     let good = texture(myriad::gpu::HEADLESS_FORMAT, attachment);
     assert_eq!(read_rgba8(&viewer.ctx, &good).unwrap().len(), 64 * 32 * 4);
 }
+
+#[test]
+fn the_upload_copies_are_timed_on_the_gpu_when_anything_is_copied() {
+    use myriad::gpu::{FrameDesc, ShadingMode, ShadingSettings};
+    let Some((scene, mut viewer)) = viewer_after_one_frame(200, 96, 48) else {
+        return;
+    };
+    let Viewer {
+        ctx,
+        renderer,
+        scene: geometry,
+        target,
+        ..
+    } = &mut viewer;
+    // llvmpipe (CI's adapter) writes timestamps between commands: the timed path must run there.
+    if ctx.describe().contains("llvmpipe") {
+        assert!(ctx.has_encoder_timestamps(), "{}", ctx.describe());
+    }
+    ctx.wait_idle().unwrap();
+    let uploaded = renderer.last_pass_times(ctx).unwrap();
+    if ctx.has_encoder_timestamps() {
+        let ms = uploaded.and_then(|t| t.upload_ms);
+        assert!(
+            ms.is_some_and(|ms| ms > 0.0 && ms.is_finite()),
+            "{uploaded:?}"
+        );
+    } else {
+        assert_eq!(uploaded.and_then(|t| t.upload_ms), None);
+    }
+    // A frame that keeps the lights and lists copies nothing: no upload time, passes still timed.
+    let kept = FrameDesc {
+        camera: &scene.camera,
+        grid: &scene.grid,
+        mode: ShadingMode::Lists,
+        heat_map: false,
+        lights: None,
+        lists: None,
+        settings: ShadingSettings::default(),
+    };
+    let report = renderer.render(ctx, geometry, &kept, &target.view).unwrap();
+    assert_eq!(report.upload_bytes, 0);
+    ctx.wait_idle().unwrap();
+    let times = renderer.last_pass_times(ctx).unwrap();
+    if let Some(t) = times {
+        assert_eq!(t.upload_ms, None, "{t:?}");
+        assert!(t.shading_ms.is_some(), "{t:?}");
+    }
+}

@@ -133,7 +133,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     });
     row("encode + submit (CPU)", &|s| format!("{:.3}", s.encode_ms));
     row("wait for GPU", &|s| format!("{:.3}", s.gpu_wait_ms));
-    row("GPU passes (timestamps)", &|s| {
+    row("GPU passes + copies (timestamps)", &|s| {
         s.gpu_passes_ms.map_or("—".into(), |v| format!("{v:.3}"))
     });
     row("sum of the stages", &|s| format!("{:.3}", s.stage_sum_ms));

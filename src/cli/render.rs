@@ -100,6 +100,9 @@ struct StrategyResult {
     upload_bytes: u64,
     upload_ms: f64,
     encode_ms: f64,
+    /// The upload's buffer copies on the GPU (timestamps between commands, where the adapter has
+    /// them).
+    gpu_upload_ms: Option<f64>,
     gpu_gbuffer_ms: Option<f64>,
     gpu_shading_ms: Option<f64>,
     gpu_forward_ms: Option<f64>,
@@ -222,6 +225,7 @@ fn measure(
         upload_bytes: frame.report.upload_bytes,
         upload_ms: median(upload),
         encode_ms: median(encode),
+        gpu_upload_ms: median_opt(passes.iter().map(|p| p.upload_ms).collect()),
         gpu_gbuffer_ms: median_opt(passes.iter().map(|p| p.gbuffer_ms).collect()),
         gpu_shading_ms: median_opt(passes.iter().map(|p| p.shading_ms).collect()),
         gpu_forward_ms: median_opt(passes.iter().map(|p| p.forward_ms).collect()),
@@ -448,6 +452,10 @@ fn print_table(s: &Stats) {
         format!("{:.3}", r.upload_ms)
     });
     row("encode + submit", &|r| format!("{:.3}", r.encode_ms));
+    row("GPU upload (buffer copies)", &|r| {
+        r.gpu_upload_ms
+            .map_or("—".to_string(), |v| format!("{v:.3}"))
+    });
     row("GPU G-buffer pass", &|r| ms(r.gpu_gbuffer_ms));
     row("GPU shading pass", &|r| ms(r.gpu_shading_ms));
     row("GPU forward pass", &|r| ms(r.gpu_forward_ms));

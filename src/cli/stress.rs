@@ -96,6 +96,8 @@ struct Stages {
     encode_ms: f64,
     /// Submit to GPU idle, wall clock (includes encode + submit).
     gpu_wall_ms: f64,
+    /// The upload's buffer copies on the GPU (timestamps between commands).
+    gpu_upload_ms: Option<f64>,
     gpu_gbuffer_ms: Option<f64>,
     gpu_shading_ms: Option<f64>,
     gpu_forward_ms: Option<f64>,
@@ -275,6 +277,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     stages.gpu_wall_ms = (wait_seconds + report.encode_seconds) * 1e3;
     let passes = viewer.renderer.last_pass_times(&viewer.ctx)?;
     if let Some(p) = passes {
+        stages.gpu_upload_ms = p.upload_ms;
         stages.gpu_gbuffer_ms = p.gbuffer_ms;
         stages.gpu_shading_ms = p.shading_ms;
         stages.gpu_forward_ms = p.forward_ms;
@@ -409,6 +412,12 @@ fn print_table(r: &Report) {
         "encode + submit",
         format!("{:.2}", s.encode_ms),
         String::new(),
+    );
+    row(
+        "GPU upload (buffer copies)",
+        s.gpu_upload_ms
+            .map_or("—".to_string(), |v| format!("{v:.3}")),
+        "timestamps between commands".into(),
     );
     row(
         "GPU G-buffer pass",

@@ -17,7 +17,8 @@ pub struct GpuContext {
 impl GpuContext {
     /// Wraps an engine's device and queue (the adapter is asked of the device, so an engine on
     /// llvmpipe gets the same loop-limit guard as the CLI). Timestamp queries are used when the device was
-    /// created with [`wgpu::Features::TIMESTAMP_QUERY`].
+    /// created with [`wgpu::Features::TIMESTAMP_QUERY`] (the passes), and with
+    /// [`wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS`] too (the upload's copies).
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Self {
         Self {
             adapter_info: device.adapter_info(),
@@ -28,7 +29,8 @@ impl GpuContext {
 
     #[cfg(feature = "headless")]
     /// Creates a headless device on the best adapter wgpu finds (a real GPU, else a software
-    /// one such as Mesa's llvmpipe), with timestamp queries when the adapter has them and the
+    /// one such as Mesa's llvmpipe), with timestamp queries (in passes and between commands)
+    /// when the adapter has them and the
     /// adapter's own limits (so large light lists fit).
     pub fn headless() -> Result<Self, GpuError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
@@ -42,7 +44,8 @@ impl GpuContext {
             detail: e.to_string(),
         })?;
         let info = adapter.get_info();
-        let wanted = wgpu::Features::TIMESTAMP_QUERY;
+        let wanted =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("myriad"),
             required_features: adapter.features() & wanted,
@@ -83,6 +86,14 @@ impl GpuContext {
         self.device
             .features()
             .contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Whether timestamps can also be written between commands, which times the upload's
+    /// copies ([`crate::PassTimes::upload_ms`]).
+    pub fn has_encoder_timestamps(&self) -> bool {
+        self.device.features().contains(
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        )
     }
 
     /// A one-line description of the adapter ("NVIDIA H100 (Vulkan, DiscreteGpu)").

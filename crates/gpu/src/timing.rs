@@ -3,6 +3,11 @@
 //! Each pass writes a timestamp at its start and end; the pairs are resolved into a buffer and
 //! copied to a mappable one in the same submission. [`PassTimer::read`] maps it after the GPU
 //! is done. Without `TIMESTAMP_QUERY` the timer does nothing and times are `None`.
+//!
+//! The upload's copies (staging ring → storage buffers) are not a pass: they are timed by
+//! timestamps written into the encoder before and after them, which needs
+//! `TIMESTAMP_QUERY_INSIDE_ENCODERS` too. Without it, or in a frame that copied nothing, the
+//! upload time is `None`; what the CPU spends staging is `FrameReport::upload_seconds` either way.
 
 use crate::readback::map_and_read;
 use crate::{GpuContext, GpuError};
@@ -19,6 +24,9 @@ pub enum TimedPass {
 }
 
 const PASSES: u32 = 3;
+/// Query slots: a pair per pass, then the upload's pair.
+const UPLOAD_QUERY: u32 = PASSES * 2;
+const QUERIES: u32 = UPLOAD_QUERY + 2;
 
 /// GPU milliseconds per pass (`None` for a pass that did not run).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -29,15 +37,23 @@ pub struct PassTimes {
     pub shading_ms: Option<f64>,
     /// Forward pass.
     pub forward_ms: Option<f64>,
+    /// The upload's buffer copies (`None` without `TIMESTAMP_QUERY_INSIDE_ENCODERS`, or when the
+    /// frame copied nothing).
+    pub upload_ms: Option<f64>,
 }
 
 impl PassTimes {
-    /// Sum of the passes that ran.
+    /// Sum of the GPU work that was timed: the passes that ran and the upload's copies.
     pub fn total_ms(&self) -> f64 {
-        [self.gbuffer_ms, self.shading_ms, self.forward_ms]
-            .into_iter()
-            .flatten()
-            .sum()
+        [
+            self.gbuffer_ms,
+            self.shading_ms,
+            self.forward_ms,
+            self.upload_ms,
+        ]
+        .into_iter()
+        .flatten()
+        .sum()
     }
 }
 
@@ -53,17 +69,21 @@ struct Queries {
 pub(crate) struct PassTimer {
     queries: Option<Queries>,
     ran: [bool; PASSES as usize],
+    /// Whether timestamps may be written between commands (the upload's pair).
+    inside_encoders: bool,
+    /// Whether this frame's upload wrote its pair (and copied something).
+    uploaded: bool,
 }
 
 impl PassTimer {
     pub fn new(ctx: &GpuContext) -> Self {
         let queries = ctx.has_timestamps().then(|| {
-            let bytes = PASSES as u64 * 2 * 8;
+            let bytes = QUERIES as u64 * 8;
             Queries {
                 set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("pass timestamps"),
                     ty: wgpu::QueryType::Timestamp,
-                    count: PASSES * 2,
+                    count: QUERIES,
                 }),
                 resolve: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("timestamp resolve"),
@@ -82,12 +102,30 @@ impl PassTimer {
         Self {
             queries,
             ran: [false; PASSES as usize],
+            inside_encoders: ctx.has_encoder_timestamps(),
+            uploaded: false,
         }
     }
 
-    /// Marks a new frame: no pass has run yet.
+    /// Marks a new frame: no pass has run and nothing was uploaded yet.
     pub fn begin_frame(&mut self) {
         self.ran = [false; PASSES as usize];
+        self.uploaded = false;
+    }
+
+    /// Writes the timestamp before the upload's copies (where the device allows it).
+    pub fn upload_start(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let (Some(q), true) = (&self.queries, self.inside_encoders) {
+            encoder.write_timestamp(&q.set, UPLOAD_QUERY);
+        }
+    }
+
+    /// Writes the timestamp after the upload's copies; `copied` says whether there were any.
+    pub fn upload_end(&mut self, encoder: &mut wgpu::CommandEncoder, copied: bool) {
+        if let (Some(q), true) = (&self.queries, self.inside_encoders) {
+            encoder.write_timestamp(&q.set, UPLOAD_QUERY + 1);
+            self.uploaded = copied;
+        }
     }
 
     /// The timestamp writes for `pass` (and records that it ran).
@@ -105,7 +143,7 @@ impl PassTimer {
     /// Resolves this frame's queries into the read-back buffer.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(q) = &self.queries {
-            encoder.resolve_query_set(&q.set, 0..PASSES * 2, &q.resolve, 0);
+            encoder.resolve_query_set(&q.set, 0..QUERIES, &q.resolve, 0);
             encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.readback, 0, q.resolve.size());
         }
     }
@@ -118,15 +156,17 @@ impl PassTimer {
         let bytes = map_and_read(ctx, &q.readback)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let period_ns = ctx.queue.get_timestamp_period() as f64;
+        let between =
+            |first: usize| ticks[first + 1].saturating_sub(ticks[first]) as f64 * period_ns / 1e6;
         let ms = |pass: TimedPass| {
             let i = pass as usize;
-            self.ran[i]
-                .then(|| ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64 * period_ns / 1e6)
+            self.ran[i].then(|| between(2 * i))
         };
         Ok(Some(PassTimes {
             gbuffer_ms: ms(TimedPass::GBuffer),
             shading_ms: ms(TimedPass::Shading),
             forward_ms: ms(TimedPass::Forward),
+            upload_ms: self.uploaded.then(|| between(UPLOAD_QUERY as usize)),
         }))
     }
 }

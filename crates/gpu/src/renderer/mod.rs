@@ -458,6 +458,8 @@ impl Renderer {
             label: Some("frame"),
         });
         let mut rebind_lights = self.lights_group.is_none();
+        self.timer.begin_frame();
+        self.timer.upload_start(&mut encoder);
 
         // Lights.
         if let Some(columns) = &frame.lights {
@@ -514,6 +516,7 @@ impl Renderer {
             self.edges_uploaded = Some(*frame.grid);
         }
 
+        self.timer.upload_end(&mut encoder, report.upload_bytes > 0);
         let uniforms = frame_uniforms(frame, self.light_count as u32, max_count);
         ctx.queue
             .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
@@ -531,7 +534,6 @@ impl Renderer {
             ));
         }
         self.ensure_gbuffer(device, width, height)?;
-        self.timer.begin_frame();
         if draw_gbuffer {
             self.encode_gbuffer(&mut encoder, scene);
         }
