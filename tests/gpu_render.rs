@@ -238,11 +238,28 @@ fn viewer_after_one_frame(lights: usize, width: u32, height: u32) -> Option<(Ren
     Some((scene, viewer))
 }
 
+/// A clustered frame that keeps the lights and lists already uploaded.
+fn kept_uploads<'a>(
+    camera: &'a myriad::scene::Camera,
+    grid: &'a myriad::scene::ClusterGrid,
+) -> myriad::gpu::FrameDesc<'a> {
+    use myriad::gpu::{FrameDesc, ShadingMode, ShadingSettings};
+    FrameDesc {
+        camera,
+        grid,
+        mode: ShadingMode::Lists,
+        heat_map: false,
+        lights: None,
+        lists: None,
+        settings: ShadingSettings::default(),
+    }
+}
+
 #[test]
 fn unusable_cameras_and_lists_of_another_grid_are_errors() {
     use myriad::cluster_math::glam::UVec3;
-    use myriad::gpu::{FrameDesc, GpuError, ShadingMode, ShadingSettings};
-    use myriad::scene::{Camera, ClusterGrid};
+    use myriad::gpu::GpuError;
+    use myriad::scene::ClusterGrid;
     let Some((scene, mut viewer)) = viewer_after_one_frame(200, 192, 96) else {
         return;
     };
@@ -253,17 +270,7 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
         target,
         ..
     } = &mut viewer;
-    fn frame<'a>(camera: &'a Camera, grid: &'a ClusterGrid) -> FrameDesc<'a> {
-        FrameDesc {
-            camera,
-            grid,
-            mode: ShadingMode::Lists,
-            heat_map: false,
-            lights: None,
-            lists: None,
-            settings: ShadingSettings::default(),
-        }
-    }
+    let frame = kept_uploads;
     let invalid = |result: Result<_, GpuError>, want: &str| match result {
         Err(GpuError::InvalidInput(message)) => assert!(message.contains(want), "{message}"),
         other => panic!("want an error with {want:?}, got {:?}", other.map(|_| ())),
@@ -416,7 +423,6 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
 
 #[test]
 fn the_upload_copies_are_timed_on_the_gpu_when_anything_is_copied() {
-    use myriad::gpu::{FrameDesc, ShadingMode, ShadingSettings};
     let Some((scene, mut viewer)) = viewer_after_one_frame(200, 96, 48) else {
         return;
     };
@@ -443,15 +449,7 @@ fn the_upload_copies_are_timed_on_the_gpu_when_anything_is_copied() {
         assert_eq!(uploaded.and_then(|t| t.upload_ms), None);
     }
     // A frame that keeps the lights and lists copies nothing: no upload time, passes still timed.
-    let kept = FrameDesc {
-        camera: &scene.camera,
-        grid: &scene.grid,
-        mode: ShadingMode::Lists,
-        heat_map: false,
-        lights: None,
-        lists: None,
-        settings: ShadingSettings::default(),
-    };
+    let kept = kept_uploads(&scene.camera, &scene.grid);
     let report = renderer.render(ctx, geometry, &kept, &target.view).unwrap();
     assert_eq!(report.upload_bytes, 0);
     ctx.wait_idle().unwrap();
