@@ -294,6 +294,14 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
             "unusable camera",
         );
     }
+    // A near plane below the grids' floor passes the camera check but cannot be sliced: the
+    // prepass's one-cluster grid panicked there.
+    let mut tiny_near = scene.camera;
+    tiny_near.near = 1e-13;
+    invalid(
+        renderer.render_prepass(ctx, geometry, &tiny_near),
+        "ClusterGrid::MIN_NEAR",
+    );
     // The uploaded lists are for the scene's grid; a grid of as many clusters in another shape
     // reused them (only the count was compared).
     let g = scene.grid;

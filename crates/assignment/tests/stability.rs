@@ -33,6 +33,15 @@
 //!   corners and said "touches" ~1e-5 outside the light. Fixed in the oracle by clipping the cell
 //!   to the light's depth range; kept as `spots_in_one_cluster_1e7_deep`.
 //!
+//! * **Ball oracle, deep slices.** An audit found the same for balls: a slice reaching 10⁹–10³⁰
+//!   deep put rounding larger than a small light into `distance_to_cell` (an `exact` miss, and
+//!   `check` calling correct lists wrong). The ball test now clips the cell to the ball's depth
+//!   band as well (`oracle/cell.rs`, with its regression cases).
+//! * **Tiny scales.** Below a near depth of about 1e-21, f32 squares of a light's coordinates
+//!   went subnormal and `binary`/`refined`/`exact` lost lights. Grids now refuse a near below
+//!   `ClusterGrid::MIN_NEAR` (1e-12), and a scene scaled down to it keeps its lists exactly
+//!   (`a_scene_scaled_down_to_the_smallest_near_keeps_its_lists`).
+//!
 //! Any case the suite ever finds to miss is added below as a fixed regression case.
 
 mod common;
@@ -436,5 +445,60 @@ fn spots_in_one_cluster_1e7_deep() {
             spots: true,
         };
         check(&stress_scene(&p), true, &format!("{p:?}"));
+    }
+}
+
+#[test]
+fn a_scene_scaled_down_to_the_smallest_near_keeps_its_lists() {
+    // Scaling every length by a power of two is exact in f32, and the assignment has no absolute
+    // constants, so down to `ClusterGrid::MIN_NEAR` a scene must keep its lists cluster for
+    // cluster (below it, f32 squares went subnormal and lights were lost: near ≈ 1e-21).
+    let scale = 2f32.powi(-36); // near 0.1 → 1.46e-12
+    let near = 0.1f32;
+    assert!(near * scale >= ClusterGrid::MIN_NEAR && near * scale < 2.0 * ClusterGrid::MIN_NEAR);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(21);
+    let eye = Vec3::new(3.0, -1.0, 2.0);
+    let unit_cam = camera_at(eye, Vec3::new(0.2, 0.1, -1.0).normalize(), 70.0, near, 50.0);
+    let mut lights = lights_on_every_plane(
+        &unit_cam,
+        &ClusterGrid::new(UVec3::new(6, 4, 6), DepthSlicing::Log, near, 50.0),
+        0.05,
+    );
+    for _ in 0..600 {
+        let view = Vec3::new(
+            rng.random_range(-40.0..40.0),
+            rng.random_range(-25.0..25.0),
+            -rng.random_range(-1.0..55.0),
+        );
+        lights.push((world_of(&unit_cam, view), log_uniform(&mut rng, 1e-3, 5.0)));
+    }
+    // The eye and every light, scaled: the camera looks the same way at the same scene.
+    let small_cam = Camera::new(
+        unit_cam.position * scale,
+        unit_cam.target * scale,
+        unit_cam.up,
+        unit_cam.fov_y.to_degrees(),
+        unit_cam.width,
+        unit_cam.height,
+        unit_cam.near * scale,
+        unit_cam.far * scale,
+    );
+    let small: Vec<(Vec3, f32)> = lights
+        .iter()
+        .map(|&(p, r)| (p * scale, r * scale))
+        .collect();
+    let dims = UVec3::new(6, 4, 6);
+    let unit = scene_of_points(unit_cam, dims, DepthSlicing::Log, &lights);
+    let tiny = scene_of_points(small_cam, dims, DepthSlicing::Log, &small);
+    assert!(check(&tiny, false, "scaled to MIN_NEAR") > 1000);
+    let mut assigner = Assigner::new();
+    let (mut a, mut b) = (LightLists::new(), LightLists::new());
+    for method in Method::ALL {
+        let (at_unit, at_tiny) = (unit.lights.input(false), tiny.lights.input(false));
+        assigner.assign(method, &at_unit, &unit.camera, &unit.grid, &mut a);
+        assigner.assign(method, &at_tiny, &tiny.camera, &tiny.grid, &mut b);
+        for c in 0..unit.grid.cluster_count() {
+            assert_eq!(a.lights_of(c), b.lights_of(c), "{method:?} cluster {c}");
+        }
     }
 }

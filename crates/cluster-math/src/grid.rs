@@ -58,6 +58,13 @@ pub struct ClusterGrid {
 }
 
 impl ClusterGrid {
+    /// The smallest near depth a grid accepts, in any unit. The assignment works in f32, and
+    /// below it the squared lengths of a light at the near plane (its view-space coordinates and
+    /// padded radius, `4e-6` of its extent) leave f32's normal range: at near ≈ 1e-21 lists lost
+    /// lights that the same scene scaled up kept. At `1e-12` they stay normal, and a scene scaled
+    /// down to it gets the lists of the unscaled one (`tests/stability.rs`).
+    pub const MIN_NEAR: f32 = 1e-12;
+
     /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range
     /// (with [`Self::try_new`]'s message).
     pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
@@ -87,6 +94,13 @@ impl ClusterGrid {
         {
             return Err(InvalidGrid(format!(
                 "first_slice_depth {first_slice_depth} must lie inside ({near}, {far})"
+            )));
+        }
+        if near < Self::MIN_NEAR {
+            return Err(InvalidGrid(format!(
+                "cluster grid near depth must be at least {:e} (ClusterGrid::MIN_NEAR; the f32 \
+                 assignment underflows below it), got {near:e}",
+                Self::MIN_NEAR
             )));
         }
         // Cluster ids are u32 in the output lists.

@@ -37,6 +37,14 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
             "first_slice_depth",
         ),
         (UVec3::new(65536, 65536, 2), log, 0.1, 100.0, "u32 id"),
+        (UVec3::new(24, 12, 16), log, 1e-22, 1e-16, "at least 1e-12"),
+        (
+            UVec3::new(24, 12, 16),
+            log,
+            ClusterGrid::MIN_NEAR.next_down(),
+            1.0,
+            "MIN_NEAR",
+        ),
     ] {
         let e = ClusterGrid::try_new(dims, slicing, near, far).unwrap_err();
         assert!(
@@ -48,6 +56,7 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
         let message = panic.downcast_ref::<String>().expect("a formatted message");
         assert_eq!(message, &e.to_string());
     }
+    assert!(ClusterGrid::try_new(UVec3::new(24, 12, 16), log, ClusterGrid::MIN_NEAR, 1e-6).is_ok());
     let ok = ClusterGrid::try_new(UVec3::new(24, 12, 16), near_slice, 0.1, 100.0).unwrap();
     assert_eq!(
         ok,

@@ -151,13 +151,20 @@ pub(crate) fn check_camera(p: &CameraParts, sink: &mut Sink<'_>) -> CameraCheck 
             sink.report(name, "must be at least 1 pixel, got 0");
         }
     }
-    let near_ok = p.near.filter(|&n| n.is_finite() && n > 0.0);
+    // The grid is sliced over the camera's depth range, so its floor is the grid's.
+    let near_ok = p
+        .near
+        .filter(|&n| n.is_finite() && n >= ClusterGrid::MIN_NEAR);
     if let Some(n) = p.near
         && near_ok.is_none()
     {
         sink.report(
             "near",
-            format!("must be finite and > 0, got {}", show_f32(n)),
+            format!(
+                "must be finite and at least {:e} (below it the f32 assignment underflows), got {}",
+                ClusterGrid::MIN_NEAR,
+                show_f32(n)
+            ),
         );
     }
     let mut depth_range = None;
@@ -457,6 +464,27 @@ mod tests {
         assert_eq!(
             problems[2].message,
             "must be in (0, 180) degrees, got 180.0"
+        );
+    }
+
+    #[test]
+    fn near_below_the_grid_floor_is_a_problem() {
+        let mut p = camera_parts();
+        p.near = Some(1e-22);
+        p.far = Some(1e-16);
+        let (check, problems) = camera_problems(&p);
+        assert!(check.camera.is_none());
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert_eq!(problems[0].path, "camera.near");
+        assert_eq!(
+            problems[0].message,
+            "must be finite and at least 1e-12 (below it the f32 assignment underflows), got 1e-22"
+        );
+        (p.near, p.far) = (Some(ClusterGrid::MIN_NEAR), Some(1e-6));
+        let (check, problems) = camera_problems(&p);
+        assert!(
+            check.camera.is_some() && problems.is_empty(),
+            "{problems:?}"
         );
     }
 

@@ -479,7 +479,7 @@ mod tests {
             let e = Scene::from_json_str(&bad_camera, "my.json", policy).unwrap_err();
             assert!(
                 e.to_string()
-                    .starts_with("my.json: camera.near: must be finite and > 0")
+                    .starts_with("my.json: camera.near: must be finite and at least 1e-12")
             );
         }
     }

@@ -401,9 +401,20 @@ const INVALID_EDITS: &[(&str, &str, &str, &str)] = &[
         r#""near":0.1"#,
         r#""near":0"#,
         "camera.near",
-        "must be finite and > 0, got 0.0",
+        "must be finite and at least 1e-12 (below it the f32 assignment underflows), got 0.0",
     ),
-    (r#""near":0.1"#, r#""near":-1"#, "camera.near", "> 0"),
+    (
+        r#""near":0.1"#,
+        r#""near":-1"#,
+        "camera.near",
+        "at least 1e-12",
+    ),
+    (
+        r#""near":0.1"#,
+        r#""near":1e-22"#,
+        "camera.near",
+        "got 1e-22",
+    ),
     (
         r#""near":0.1"#,
         r#""near":100"#,

@@ -121,8 +121,28 @@ pub fn distance_to_cell(p: DVec3, cell: &Cell) -> f64 {
 }
 
 /// Whether the closed ball (`centre`, `radius`) touches the closed cell.
+///
+/// The ball lies between the depths `d − r` and `d + r` (`d` its centre's depth), so the cell is
+/// first cut to that band, widened by one more radius and a few ulps of `d` (the cut cannot move
+/// the answer; the widening covers the rounding of `d ± 2r`). The cut keeps every length local to
+/// the light: `distance_to_cell` is accurate to a few ulps of the cell's largest corner, and an
+/// uncut slice reaching 10⁹ or 10³⁰ deep made that error larger than the light itself — a ball
+/// 0.07 from a cell was called 0.15 away (a miss of `exact`, unseen by `check`), another 2.3
+/// away was called touching.
 pub fn sphere_intersects_cell(centre: DVec3, radius: f64, cell: &Cell) -> bool {
-    distance_to_cell(centre, cell) <= radius
+    let depth = -centre.z;
+    let reach = 2.0 * radius + 4.0 * f64::EPSILON * depth.abs();
+    let near = cell.depths[0].max(depth - reach);
+    let far = cell.depths[1].min(depth + reach);
+    if near > far {
+        // The ball ends more than a radius before the cell's near wall or beyond its far wall.
+        return false;
+    }
+    let cut = Cell {
+        depths: [near, far],
+        ..*cell
+    };
+    distance_to_cell(centre, &cut) <= radius
 }
 
 fn distance_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
@@ -222,6 +242,85 @@ mod tests {
             assert!(sphere_intersects_cell(outside, gap * (1.0 + 1e-9), &cell));
             assert!(!sphere_intersects_cell(outside, gap * 0.999, &cell));
         }
+    }
+
+    /// The cell of tile `(i, j, k)` under a camera at the origin looking down −z.
+    fn cell_at(
+        fov: f32,
+        dims: [u32; 3],
+        slicing: crate::DepthSlicing,
+        depth: [f32; 2],
+        tile: [u32; 3],
+    ) -> Cell {
+        let cam = Camera::new(
+            glam::Vec3::ZERO,
+            glam::Vec3::NEG_Z,
+            glam::Vec3::Y,
+            fov,
+            1536,
+            768,
+            depth[0],
+            depth[1],
+        );
+        let grid = ClusterGrid::new(glam::UVec3::from_array(dims), slicing, depth[0], depth[1]);
+        Cell::of_cluster(&cam, &grid, tile[0], tile[1], tile[2])
+    }
+
+    #[test]
+    fn slices_reaching_very_deep_do_not_blur_small_lights() {
+        use crate::DepthSlicing::{Linear, Log};
+        // Found by audit (each distance recomputed in exact rational arithmetic); the uncut cell's
+        // far corners put errors larger than the light into the distance.
+        let ball =
+            |x: f32, y: f32, z: f32, r: f32| (DVec3::new(x.into(), y.into(), z.into()), r as f64);
+        // 0.0679 from the cell, radius 0.08: touches (was computed 0.149 away).
+        let (c, r) = ball(-0.05, 0.05, -1.0, 0.08);
+        let cell = cell_at(60.0, [24, 12, 16], Linear, [0.1, 1e30], [12, 4, 0]);
+        assert!(sphere_intersects_cell(c, r, &cell));
+        // 2.31 from the cell, radius 0.3: misses (was computed 0.052 away).
+        let (c, r) = ball(0.01, 0.01, -0.05, 0.3);
+        let cell = cell_at(170.0, [24, 12, 16], Linear, [0.1, 1e30], [0, 0, 0]);
+        assert!(!sphere_intersects_cell(c, r, &cell));
+        // One slice from 1e-6 to 1e9: 9.80e-7 from the cell, radius 1e-6, touches (was 1.0006e-6).
+        let (c, r) = ball(-6.06e-6, 1e-7, -1.6e-6, 1e-6);
+        let cell = cell_at(120.0, [1, 50, 1], Log, [1e-6, 1e9], [0, 15, 0]);
+        assert!(sphere_intersects_cell(c, r, &cell));
+    }
+
+    #[test]
+    fn a_far_wall_beyond_the_ball_does_not_change_the_answer() {
+        // The ball cannot reach past depth d + r, so moving the far wall from just beyond it to
+        // 10⁹…10³⁰ must not change whether they touch.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(13);
+        let mut touching = 0;
+        for n in 0..4000 {
+            let cell = crate::oracle::random_cell(&mut rng, 1.0);
+            let r = 10f64.powf(rng.random_range(-3.0..0.5));
+            // A centre around the near end of the cell, inside or outside it.
+            let p = cell_point(
+                &cell,
+                rng.random_range(-0.3..1.3),
+                rng.random_range(-0.3..1.3),
+                rng.random_range(-0.1..0.05),
+            ) + DVec3::new(0.0, 0.0, rng.random_range(-2.0..2.0) * r);
+            let near_far = (-p.z + 2.0 * r).max(cell.depths[0]) * 1.5;
+            let local = Cell {
+                depths: [cell.depths[0], near_far],
+                ..cell
+            };
+            let deep = Cell {
+                depths: [cell.depths[0], [1e9, 1e20, 1e30][n % 3]],
+                ..cell
+            };
+            let want = distance_to_cell(p, &local) <= r;
+            touching += want as usize;
+            assert_eq!(
+                sphere_intersects_cell(p, r, &deep),
+                want,
+                "{p} r {r} {deep:?}"
+            );
+        }
+        assert!((500..3500).contains(&touching), "{touching} of 4000 touch");
     }
 
     #[test]

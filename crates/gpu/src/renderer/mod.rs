@@ -285,12 +285,14 @@ impl Renderer {
         check_camera(camera)?;
         let (width, height) = (camera.width, camera.height);
         self.ensure_gbuffer(&ctx.device, width, height)?;
-        let grid = ClusterGrid::new(
+        // A camera can pass `check_camera` with a near below the grids' floor.
+        let grid = ClusterGrid::try_new(
             glam::UVec3::ONE,
             myriad_cluster_math::DepthSlicing::Linear,
             camera.near,
             camera.far,
-        );
+        )
+        .map_err(|e| GpuError::InvalidInput(e.to_string()))?;
         let frame = FrameDesc {
             camera,
             grid: &grid,
