@@ -143,7 +143,14 @@ impl PassTimer {
     /// Resolves this frame's queries into the read-back buffer.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(q) = &self.queries {
-            encoder.resolve_query_set(&q.set, 0..QUERIES, &q.resolve, 0);
+            // The upload's pair only where it is written (no device sees an unwritten query
+            // it did not see before this pair existed).
+            let used = if self.inside_encoders {
+                QUERIES
+            } else {
+                UPLOAD_QUERY
+            };
+            encoder.resolve_query_set(&q.set, 0..used, &q.resolve, 0);
             encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.readback, 0, q.resolve.size());
         }
     }
