@@ -834,6 +834,27 @@ fn no_arguments_runs_the_main_job() {
         strategies[2]["pixels"]["mean_lights"].as_f64().unwrap(),
         1000.0
     );
+    // Beside them, clustered shading with every saving but reuse, which must not change the
+    // image and must do less: lights culled, clusters masked, so fewer pairs.
+    let skipping = &stats["with_skips"];
+    assert_eq!(
+        skipping["savings"],
+        serde_json::json!(["cull", "active", "depth", "variants"])
+    );
+    assert!(skipping["max_image_difference"].as_u64().unwrap() <= 1);
+    let lights_assigned = skipping["lights_assigned"].as_u64().unwrap();
+    assert_eq!(
+        lights_assigned,
+        1000 - stats["lights_culled"].as_u64().unwrap()
+    );
+    let active = skipping["active_clusters"].as_u64().unwrap();
+    assert!(active > 0 && active < skipping["clusters"].as_u64().unwrap());
+    let skip_pairs = skipping["result"]["pairs"].as_u64().unwrap();
+    assert!(
+        skip_pairs > 0 && skip_pairs < clustered["pairs"].as_u64().unwrap(),
+        "{skip_pairs} pairs with skips"
+    );
+    assert_mentions(&text, &["clustered+skips", "clusters active"]);
 }
 
 #[test]
@@ -853,6 +874,10 @@ fn render_rejects_bad_options_clearly() {
         (
             &["render", "--gltf", "/nonexistent/model.glb"],
             &["/nonexistent/model.glb"],
+        ),
+        (
+            &["render", "--skips", "cull,shadows"],
+            &["--skips", "\"shadows\"", "variants"],
         ),
     ]);
 }
@@ -966,7 +991,9 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
     }
     let out_dir = work_dir("render_all_or_nothing").join("out");
     let dir = out_dir.to_str().unwrap();
-    let rest = ["--size", "64x32", "--runs", "1", "--out", dir];
+    let rest = [
+        "--size", "64x32", "--runs", "1", "--skips", "none", "--out", dir,
+    ];
     let render = |lights: &str, extra: &[&str]| {
         let args = ["render", "--preset", "uniform", "--lights", lights];
         myriad(&[&args[..], extra, &rest].concat())
@@ -977,6 +1004,10 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
     let old = read_all();
     let stats: Value = serde_json::from_slice(&old[2]).unwrap();
     assert_eq!(stats["strategies"][0]["shading"], "clustered");
+    assert!(
+        stats["with_skips"].is_null(),
+        "--skips none: no such column"
+    );
     // One cluster holding all 100 000 lights passes llvmpipe's shader loop limit: clustered
     // shading is refused, the run fails and must write nothing. A GPU without that limit renders
     // the whole set instead.

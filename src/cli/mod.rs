@@ -11,6 +11,7 @@ mod oracle_check;
 mod paper;
 mod progress;
 mod render;
+mod render_skipping;
 mod report;
 mod scene;
 mod skips;

@@ -4,13 +4,14 @@
 use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::progress::Progress;
+use super::render_skipping::{self, WithSkips};
 use super::source::check_memory;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{GpuContext, GpuError, PassTimes, encode_png};
-use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
+use myriad::render::{PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
 use myriad::scene::{LoadOptions, replace_file};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -59,6 +60,11 @@ pub struct Args {
     /// when frames are slow).
     #[arg(long, value_parser = super::at_least_one, default_value_t = 5)]
     runs: usize,
+    /// Savings for the `clustered+skips` column: "none" (no such column), "all", or a comma
+    /// list of cull, active, depth, reuse, variants (see `myriad skips`) [default: all but
+    /// reuse, which would turn the repeated frames of a still scene into no work at all].
+    #[arg(long)]
+    skips: Option<Skips>,
 }
 
 impl Default for Args {
@@ -76,6 +82,7 @@ impl Default for Args {
             size: None,
             out: "out".into(),
             runs: 5,
+            skips: None,
         }
     }
 }
@@ -93,23 +100,23 @@ pub fn parse_size(text: &str) -> Result<(u32, u32)> {
 
 /// Median stage times of one shading strategy.
 #[derive(Serialize, Debug, Clone)]
-struct StrategyResult {
-    shading: &'static str,
-    frames: usize,
-    assign_ms: f64,
-    upload_bytes: u64,
-    upload_ms: f64,
-    encode_ms: f64,
+pub(super) struct StrategyResult {
+    pub shading: &'static str,
+    pub frames: usize,
+    pub assign_ms: f64,
+    pub upload_bytes: u64,
+    pub upload_ms: f64,
+    pub encode_ms: f64,
     /// The upload's buffer copies on the GPU (timestamps between commands, where the adapter has
     /// them).
-    gpu_upload_ms: Option<f64>,
-    gpu_gbuffer_ms: Option<f64>,
-    gpu_shading_ms: Option<f64>,
-    gpu_forward_ms: Option<f64>,
+    pub gpu_upload_ms: Option<f64>,
+    pub gpu_gbuffer_ms: Option<f64>,
+    pub gpu_shading_ms: Option<f64>,
+    pub gpu_forward_ms: Option<f64>,
     /// Submit to GPU idle, wall clock.
-    gpu_frame_wall_ms: f64,
-    pairs: u64,
-    pixels: PixelStats,
+    pub gpu_frame_wall_ms: f64,
+    pub pairs: u64,
+    pub pixels: PixelStats,
 }
 
 #[derive(Serialize, Debug)]
@@ -132,6 +139,8 @@ struct Stats {
     /// shading is never skipped: its refusal fails the run.
     skipped: Vec<SkippedStrategy>,
     speedup_vs_brute_force: Option<f64>,
+    /// Clustered shading with savings (`--skips`), beside the three strategies.
+    with_skips: Option<WithSkips>,
 }
 
 #[derive(Serialize, Debug)]
@@ -150,12 +159,12 @@ fn is_loop_limit(e: &anyhow::Error) -> bool {
     })
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(super) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
-fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
+pub(super) fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
     let v: Vec<f64> = v.into_iter().flatten().collect();
     (!v.is_empty()).then(|| median(v))
 }
@@ -253,6 +262,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let mut images = Vec::new();
     let progress = Progress::new("render");
     let mut skipped = Vec::new();
+    let skips = args.skips.unwrap_or(Skips::PER_FRAME);
+    let mut with_skips = None;
     for shading in Shading::ALL {
         let started = Instant::now();
         let result = match measure(&mut viewer, &scene, shading, method, args.runs, &progress) {
@@ -285,6 +296,33 @@ pub fn run(args: Args) -> Result<ExitCode> {
             viewer.frame(&scene, shading, method, true)?;
             let (heat, h) = with_heat_legend(&viewer.image()?, width, height, heat_max);
             images.push(("heatmap.png", heat, h));
+            if skips != Skips::NONE {
+                let started = Instant::now();
+                match render_skipping::measure(
+                    &mut viewer,
+                    &scene,
+                    method,
+                    skips,
+                    args.runs,
+                    &images[0].1,
+                    &progress,
+                ) {
+                    Ok(measured) => {
+                        progress.done(render_skipping::SHADING, started.elapsed().as_secs_f64());
+                        with_skips = Some(measured);
+                    }
+                    // Fitted depth slices differently: a cluster may then pass a loop limit
+                    // that the plain grid stayed under. The plain clustered frame stands.
+                    Err(e) if is_loop_limit(&e) => {
+                        eprintln!("note: {} skipped: {e:#}", render_skipping::SHADING);
+                        skipped.push(SkippedStrategy {
+                            shading: render_skipping::SHADING,
+                            reason: format!("{e:#}"),
+                        });
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
         }
         strategies.push(result);
     }
@@ -315,6 +353,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         strategies,
         skipped,
         speedup_vs_brute_force: speedup,
+        with_skips,
     };
     for (name, rgba, h) in &images {
         write_png(&args.out.join(name), rgba, width, *h)?;
@@ -329,6 +368,18 @@ pub fn run(args: Args) -> Result<ExitCode> {
         args.out.join("heatmap.png").display(),
         json_path.display()
     );
+    if let Some(w) = stats
+        .with_skips
+        .as_ref()
+        .filter(|w| w.max_image_difference > 1)
+    {
+        eprintln!(
+            "error: the savings {} changed the clustered image by {}/255 (at most 1 allowed)",
+            w.savings.join(","),
+            w.max_image_difference
+        );
+        return Ok(ExitCode::FAILURE);
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -435,16 +486,34 @@ fn print_table(s: &Stats) {
         }
     );
     let ms = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.2}"));
+    // The columns: the strategies, with clustered+skips right after clustered.
+    let mut columns: Vec<&StrategyResult> = s.strategies.iter().collect();
+    if let Some(w) = &s.with_skips {
+        columns.insert(1.min(columns.len()), &w.result);
+    }
+    let is_skipping = |r: &StrategyResult| r.shading == render_skipping::SHADING;
     let row = |name: &str, f: &dyn Fn(&StrategyResult) -> String| {
-        let cells: String = s
-            .strategies
-            .iter()
-            .map(|r| format!(" {:>12}", f(r)))
-            .collect();
+        let cells: String = columns.iter().map(|r| format!(" {:>15}", f(r))).collect();
         println!("{name:<34}{cells}");
     };
     row("stage (median ms)", &|r| r.shading.to_string());
     row("CPU light assignment", &|r| format!("{:.3}", r.assign_ms));
+    if let Some(w) = &s.with_skips {
+        row("depth prepass + read-back (wall)", &|r| {
+            if is_skipping(r) && w.prepass_ms > 0.0 {
+                format!("{:.2}", w.prepass_ms)
+            } else {
+                "—".to_string()
+            }
+        });
+        row("depth → fitted range + mask", &|r| {
+            if is_skipping(r) && w.mask_ms > 0.0 {
+                format!("{:.3}", w.mask_ms)
+            } else {
+                "—".to_string()
+            }
+        });
+    }
     row("upload (KiB)", &|r| {
         format!("{:.1}", r.upload_bytes as f64 / 1024.0)
     });
@@ -473,21 +542,51 @@ fn print_table(s: &Stats) {
         format!("{:.1}%", r.pixels.skipped_fraction * 100.0)
     });
     println!(
-        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, dropped by the assignment's first test; all uploaded — `myriad skips` measures culling them)",
+        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, dropped by the assignment's first test; the strategies upload them all, {} culls them first)",
         s.lights,
         match s.lights_skipped_in_file {
             0 => String::new(),
             n => format!(" and {n} invalid in the scene file, skipped"),
         },
         s.lights_rejected,
-        s.lights_culled
+        s.lights_culled,
+        render_skipping::SHADING
     );
+    if let Some(w) = &s.with_skips {
+        let mut notes = vec![format!("savings {}", w.savings.join(", "))];
+        if w.lights_assigned != s.lights {
+            notes.push(format!("{} lights assigned", w.lights_assigned));
+        }
+        if let Some(active) = w.active_clusters {
+            notes.push(format!("{active} of {} clusters active", w.clusters));
+        }
+        if let Some([n, f]) = w.fitted_depth_range {
+            notes.push(format!("depth range fitted to [{n:.3}, {f:.3}]"));
+        }
+        notes.push(format!(
+            "largest difference from the clustered image {}/255",
+            w.max_image_difference
+        ));
+        println!("{}: {}", render_skipping::SHADING, notes.join("; "));
+    }
     for skip in &s.skipped {
         println!("{} skipped: {}", skip.shading, skip.reason);
     }
     if let Some(x) = s.speedup_vs_brute_force {
+        let with_skips = s
+            .with_skips
+            .as_ref()
+            .zip(
+                s.strategies
+                    .iter()
+                    .find(|r| r.shading == Shading::BruteForce.name()),
+            )
+            .and_then(|(w, brute)| Some(brute.gpu_shading_ms? / w.result.gpu_shading_ms?))
+            .map_or(String::new(), |y| {
+                format!("; {y:.1}x with {}", render_skipping::SHADING)
+            });
         println!(
-            "clustered deferred shading is {x:.1}x faster than brute-force deferred (shading pass)"
+            "clustered deferred shading is {x:.1}x faster than brute-force deferred (shading pass){with_skips}"
         );
     }
 }

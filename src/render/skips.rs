@@ -66,8 +66,69 @@ impl Skips {
         feature_variants: true,
     };
 
+    /// The savings that leave a frame's work the same when nothing moved: every one but
+    /// [`reuse_unchanged`](Self::reuse_unchanged). What `myriad render` applies by default,
+    /// since it times the same static frame again and again, which reuse would turn into no
+    /// work at all.
+    pub const PER_FRAME: Skips = Skips {
+        reuse_unchanged: false,
+        ..Skips::ALL
+    };
+
+    /// The name of each saving in [`Skips::from_str`](std::str::FromStr), with its switch.
+    pub const NAMES: [&'static str; 5] = ["cull", "active", "depth", "reuse", "variants"];
+
+    fn switch(&mut self, name: &str) -> Option<&mut bool> {
+        Some(match name {
+            "cull" => &mut self.cull,
+            "active" => &mut self.active_clusters,
+            "depth" => &mut self.fitted_depth,
+            "reuse" => &mut self.reuse_unchanged,
+            "variants" => &mut self.feature_variants,
+            _ => return None,
+        })
+    }
+
+    /// The names of the savings switched on, in [`Skips::NAMES`] order.
+    pub fn names(self) -> Vec<&'static str> {
+        let mut copy = self;
+        Skips::NAMES
+            .into_iter()
+            .filter(|name| copy.switch(name).is_some_and(|on| *on))
+            .collect()
+    }
+
     fn needs_prepass(self) -> bool {
         self.active_clusters || self.fitted_depth
+    }
+}
+
+/// `"cull,active,depth"`, `"all"` or `"none"`: the savings named in [`Skips::NAMES`], comma
+/// separated, each at most once.
+impl std::str::FromStr for Skips {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Skips, String> {
+        match text.trim() {
+            "all" => return Ok(Skips::ALL),
+            "none" => return Ok(Skips::NONE),
+            _ => {}
+        }
+        let mut skips = Skips::NONE;
+        for name in text.split(',').map(str::trim) {
+            match skips.switch(name) {
+                Some(on) if !*on => *on = true,
+                Some(_) => return Err(format!("saving {name:?} named twice in {text:?}")),
+                None => {
+                    return Err(format!(
+                        "unknown saving {name:?} in {text:?}: expected \"all\", \"none\" or a \
+                         comma-separated list of {}",
+                        Skips::NAMES.join(", ")
+                    ));
+                }
+            }
+        }
+        Ok(skips)
     }
 }
 
@@ -345,4 +406,40 @@ fn gather(lights: &Lights, indices: &[u32], out: &mut Lights) {
     out.source_index.clear();
     out.source_index
         .extend(indices.iter().map(|&i| lights.source_index[i as usize]));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Skips;
+
+    #[test]
+    fn savings_parse_by_name_and_print_back() {
+        assert_eq!("all".parse::<Skips>(), Ok(Skips::ALL));
+        assert_eq!("none".parse::<Skips>(), Ok(Skips::NONE));
+        let per_frame: Skips = "cull, active,depth,variants".parse().unwrap();
+        assert_eq!(per_frame, Skips::PER_FRAME);
+        assert_eq!(per_frame.names(), ["cull", "active", "depth", "variants"]);
+        assert_eq!(Skips::ALL.names(), Skips::NAMES);
+        assert!(Skips::NONE.names().is_empty());
+        let reuse: Skips = "reuse".parse().unwrap();
+        assert_eq!(
+            reuse,
+            Skips {
+                reuse_unchanged: true,
+                ..Skips::NONE
+            }
+        );
+    }
+
+    #[test]
+    fn unknown_or_repeated_savings_are_refused_by_name() {
+        let unknown = "cull,shadows".parse::<Skips>().unwrap_err();
+        assert!(
+            unknown.contains("\"shadows\"") && unknown.contains("variants"),
+            "{unknown}"
+        );
+        let twice = "depth,depth".parse::<Skips>().unwrap_err();
+        assert!(twice.contains("twice"), "{twice}");
+        assert!("".parse::<Skips>().is_err());
+    }
 }

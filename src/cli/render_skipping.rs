@@ -1,0 +1,135 @@
+//! The main job's fourth column: clustered shading with [`Skips`] applied (by default every
+//! saving but reuse), timed like the other strategies and checked against the plain clustered
+//! image, so `myriad render` shows what skipping what the scene does not need buys on the scene
+//! it renders, and proves it changes nothing.
+
+use super::progress::Progress;
+use super::render::{StrategyResult, median, median_opt};
+use anyhow::{Context, Result};
+use myriad::assignment::Method;
+use myriad::gpu::PassTimes;
+use myriad::render::{RenderScene, SkipFrame, Skips, Viewer, pixel_stats};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Name of the column in the table and of the strategy in `stats.json`.
+pub const SHADING: &str = "clustered+skips";
+
+/// The clustered frame with savings, next to the plain one.
+#[derive(Serialize, Debug)]
+pub struct WithSkips {
+    /// The savings applied ([`Skips::NAMES`]).
+    pub savings: Vec<&'static str>,
+    /// Medians as for the other strategies; `assign_ms` holds cull + assignment.
+    pub result: StrategyResult,
+    /// Lights that reached the assignment and the GPU (after the cull).
+    pub lights_assigned: usize,
+    /// Clusters that got lists (with `active`), of `clusters`.
+    pub active_clusters: Option<usize>,
+    pub clusters: usize,
+    /// The grid's near and far after fitting (with `depth`).
+    pub fitted_depth_range: Option<[f32; 2]>,
+    /// Depth prepass on the GPU and its read-back, wall clock (with `active` or `depth`).
+    pub prepass_ms: f64,
+    /// Depth buffer → fitted range and active clusters, on the CPU.
+    pub mask_ms: f64,
+    /// Largest channel difference (of 255) from the plain clustered image.
+    pub max_image_difference: u8,
+}
+
+/// Times `runs` frames with `skips` (after one untimed frame, which also builds the pipeline
+/// variants) and compares the last image with `clustered_image`.
+pub fn measure(
+    viewer: &mut Viewer,
+    scene: &RenderScene,
+    method: Method,
+    skips: Skips,
+    runs: usize,
+    clustered_image: &[u8],
+    progress: &Progress,
+) -> Result<WithSkips> {
+    let (mut cpu, mut upload, mut encode, mut wall) = (vec![], vec![], vec![], vec![]);
+    let (mut prepass, mut mask) = (vec![], vec![]);
+    let mut passes: Vec<PassTimes> = vec![];
+    let mut assigned: Option<SkipFrame> = None;
+    let mut last: Option<SkipFrame> = None;
+    let started = Instant::now();
+    let mut run = 0;
+    while run <= runs && !(run >= 2 && started.elapsed().as_secs_f64() > 20.0) {
+        progress.start(&format!(
+            "{SHADING}: {}",
+            if run == 0 {
+                "warm-up frame".to_string()
+            } else {
+                format!("frame {run} of {runs}")
+            }
+        ));
+        let frame = viewer.frame_with_skips(scene, method, skips)?;
+        let t = Instant::now();
+        viewer.ctx.wait_idle()?;
+        if run > 0 {
+            cpu.push((frame.cull_seconds + frame.assign_seconds) * 1e3);
+            upload.push(frame.report.upload_seconds * 1e3);
+            encode.push(frame.report.encode_seconds * 1e3);
+            wall.push((t.elapsed().as_secs_f64() + frame.report.encode_seconds) * 1e3);
+            prepass.push(frame.prepass_seconds * 1e3);
+            mask.push(frame.mask_seconds * 1e3);
+            if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
+                passes.push(p);
+            }
+        }
+        // With `reuse`, frames after the first assign nothing: the lists are the first one's.
+        if frame.stats.is_some() {
+            assigned = Some(frame);
+        }
+        last = Some(frame);
+        run += 1;
+    }
+    let frame = last.context("at least one frame")?;
+    let assigned = assigned.context("the first frame assigns")?;
+    let image = viewer.image()?;
+    let max_image_difference = clustered_image
+        .iter()
+        .zip(&image)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap_or(0);
+    let depth = viewer
+        .renderer
+        .read_depth(&viewer.ctx)?
+        .context("a frame was rendered")?;
+    let pixels = pixel_stats(
+        &depth,
+        &scene.camera,
+        &frame.grid,
+        &viewer.lists().counts,
+        scene.lights.len(),
+    );
+    Ok(WithSkips {
+        savings: skips.names(),
+        result: StrategyResult {
+            shading: SHADING,
+            frames: wall.len(),
+            assign_ms: median(cpu),
+            upload_bytes: assigned.report.upload_bytes,
+            upload_ms: median(upload),
+            encode_ms: median(encode),
+            gpu_upload_ms: median_opt(passes.iter().map(|p| p.upload_ms).collect()),
+            gpu_gbuffer_ms: median_opt(passes.iter().map(|p| p.gbuffer_ms).collect()),
+            gpu_shading_ms: median_opt(passes.iter().map(|p| p.shading_ms).collect()),
+            gpu_forward_ms: median_opt(passes.iter().map(|p| p.forward_ms).collect()),
+            gpu_frame_wall_ms: median(wall),
+            pairs: assigned.stats.map_or(0, |s| s.pairs),
+            pixels,
+        },
+        lights_assigned: assigned.lights_assigned,
+        active_clusters: assigned.active_clusters,
+        clusters: frame.grid.cluster_count(),
+        fitted_depth_range: skips
+            .fitted_depth
+            .then(|| [frame.grid.near(), frame.grid.far()]),
+        prepass_ms: median(prepass),
+        mask_ms: median(mask),
+        max_image_difference,
+    })
+}
