@@ -10,7 +10,7 @@ use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
-use myriad::gpu::{GpuContext, GpuError, PassTimes, encode_png};
+use myriad::gpu::{FrameReport, GpuContext, GpuError, PassTimes, encode_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
 use myriad::scene::{LoadOptions, replace_file};
 use serde::Serialize;
@@ -159,14 +159,99 @@ fn is_loop_limit(e: &anyhow::Error) -> bool {
     })
 }
 
-pub(super) fn median(mut v: Vec<f64>) -> f64 {
+fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
-pub(super) fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
+fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
     let v: Vec<f64> = v.into_iter().flatten().collect();
     (!v.is_empty()).then(|| median(v))
+}
+
+/// The frames of one strategy: one untimed frame builds the pipelines, then `runs` timed
+/// frames, fewer once 20 s have passed (at least two). `frame(timed)` renders one.
+pub(super) fn timed_frames(
+    name: &str,
+    runs: usize,
+    progress: &Progress,
+    mut frame: impl FnMut(bool) -> Result<()>,
+) -> Result<()> {
+    let started = Instant::now();
+    let mut run = 0;
+    while run <= runs && !(run >= 2 && started.elapsed().as_secs_f64() > 20.0) {
+        progress.start(&format!(
+            "{name}: {}",
+            if run == 0 {
+                "warm-up frame".to_string()
+            } else {
+                format!("frame {run} of {runs}")
+            }
+        ));
+        frame(run > 0)?;
+        run += 1;
+    }
+    Ok(())
+}
+
+/// Per-frame samples of one strategy, to medians.
+#[derive(Default)]
+pub(super) struct FrameSamples {
+    assign: Vec<f64>,
+    upload: Vec<f64>,
+    encode: Vec<f64>,
+    wall: Vec<f64>,
+    passes: Vec<PassTimes>,
+}
+
+impl FrameSamples {
+    /// Waits for the frame just submitted and records it: `cpu_seconds` of light assignment, its
+    /// upload report, submit to idle (wall clock) and the GPU's pass times.
+    pub fn wait_and_record(
+        &mut self,
+        viewer: &Viewer,
+        cpu_seconds: f64,
+        report: &FrameReport,
+    ) -> Result<()> {
+        let t = Instant::now();
+        viewer.ctx.wait_idle()?;
+        self.assign.push(cpu_seconds * 1e3);
+        self.upload.push(report.upload_seconds * 1e3);
+        self.encode.push(report.encode_seconds * 1e3);
+        self.wall
+            .push((t.elapsed().as_secs_f64() + report.encode_seconds) * 1e3);
+        if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
+            self.passes.push(p);
+        }
+        Ok(())
+    }
+
+    /// The medians, with what the last frame uploaded and assigned.
+    pub fn result(
+        self,
+        shading: &'static str,
+        upload_bytes: u64,
+        pairs: u64,
+        pixels: PixelStats,
+    ) -> StrategyResult {
+        let passes =
+            |f: fn(&PassTimes) -> Option<f64>| median_opt(self.passes.iter().map(f).collect());
+        StrategyResult {
+            shading,
+            frames: self.wall.len(),
+            assign_ms: median(self.assign.clone()),
+            upload_bytes,
+            upload_ms: median(self.upload.clone()),
+            encode_ms: median(self.encode.clone()),
+            gpu_upload_ms: passes(|p| p.upload_ms),
+            gpu_gbuffer_ms: passes(|p| p.gbuffer_ms),
+            gpu_shading_ms: passes(|p| p.shading_ms),
+            gpu_forward_ms: passes(|p| p.forward_ms),
+            gpu_frame_wall_ms: median(self.wall.clone()),
+            pairs,
+            pixels,
+        }
+    }
 }
 
 fn measure(
@@ -177,38 +262,19 @@ fn measure(
     runs: usize,
     progress: &Progress,
 ) -> Result<StrategyResult> {
-    let (mut assign, mut upload, mut encode, mut wall) = (vec![], vec![], vec![], vec![]);
-    let mut passes: Vec<PassTimes> = vec![];
+    let mut samples = FrameSamples::default();
     let mut last = None;
-    let mut run = 0;
-    let started = Instant::now();
-    // One untimed frame builds the pipelines; then `runs` frames, fewer if they are slow.
-    while run <= runs && !(run >= 2 && started.elapsed().as_secs_f64() > 20.0) {
-        progress.start(&format!(
-            "{}: {}",
-            shading.name(),
-            if run == 0 {
-                "warm-up frame".to_string()
-            } else {
-                format!("frame {run} of {runs}")
-            }
-        ));
+    timed_frames(shading.name(), runs, progress, |timed| {
         let frame = viewer.frame(scene, shading, method, false)?;
-        let t = Instant::now();
-        viewer.ctx.wait_idle()?;
-        if run > 0 {
-            assign.push(frame.assign_seconds * 1e3);
-            upload.push(frame.report.upload_seconds * 1e3);
-            encode.push(frame.report.encode_seconds * 1e3);
-            wall.push(t.elapsed().as_secs_f64() * 1e3 + frame.report.encode_seconds * 1e3);
-            if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
-                passes.push(p);
-            }
+        if timed {
+            samples.wait_and_record(viewer, frame.assign_seconds, &frame.report)?;
+        } else {
+            viewer.ctx.wait_idle()?;
         }
         last = Some(frame);
-        run += 1;
-    }
-    let frame = last.expect("at least one frame");
+        Ok(())
+    })?;
+    let frame = last.context("at least one frame")?;
     let depth = viewer
         .renderer
         .read_depth(&viewer.ctx)?
@@ -227,21 +293,12 @@ fn measure(
             lights,
         ),
     };
-    Ok(StrategyResult {
-        shading: shading.name(),
-        frames: wall.len(),
-        assign_ms: median(assign),
-        upload_bytes: frame.report.upload_bytes,
-        upload_ms: median(upload),
-        encode_ms: median(encode),
-        gpu_upload_ms: median_opt(passes.iter().map(|p| p.upload_ms).collect()),
-        gpu_gbuffer_ms: median_opt(passes.iter().map(|p| p.gbuffer_ms).collect()),
-        gpu_shading_ms: median_opt(passes.iter().map(|p| p.shading_ms).collect()),
-        gpu_forward_ms: median_opt(passes.iter().map(|p| p.forward_ms).collect()),
-        gpu_frame_wall_ms: median(wall),
-        pairs: frame.stats.map_or(0, |s| s.pairs),
+    Ok(samples.result(
+        shading.name(),
+        frame.report.upload_bytes,
+        frame.stats.map_or(0, |s| s.pairs),
         pixels,
-    })
+    ))
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {

@@ -4,13 +4,11 @@
 //! it renders, and proves it changes nothing.
 
 use super::progress::Progress;
-use super::render::{StrategyResult, median, median_opt};
+use super::render::{FrameSamples, StrategyResult, timed_frames};
 use anyhow::{Context, Result};
 use myriad::assignment::Method;
-use myriad::gpu::PassTimes;
 use myriad::render::{RenderScene, SkipFrame, Skips, Viewer, pixel_stats};
 use serde::Serialize;
-use std::time::Instant;
 
 /// Name of the column in the table and of the strategy in `stats.json`.
 pub const SHADING: &str = "clustered+skips";
@@ -48,43 +46,27 @@ pub fn measure(
     clustered_image: &[u8],
     progress: &Progress,
 ) -> Result<WithSkips> {
-    let (mut cpu, mut upload, mut encode, mut wall) = (vec![], vec![], vec![], vec![]);
+    let mut samples = FrameSamples::default();
     let (mut prepass, mut mask) = (vec![], vec![]);
-    let mut passes: Vec<PassTimes> = vec![];
     let mut assigned: Option<SkipFrame> = None;
     let mut last: Option<SkipFrame> = None;
-    let started = Instant::now();
-    let mut run = 0;
-    while run <= runs && !(run >= 2 && started.elapsed().as_secs_f64() > 20.0) {
-        progress.start(&format!(
-            "{SHADING}: {}",
-            if run == 0 {
-                "warm-up frame".to_string()
-            } else {
-                format!("frame {run} of {runs}")
-            }
-        ));
+    timed_frames(SHADING, runs, progress, |timed| {
         let frame = viewer.frame_with_skips(scene, method, skips)?;
-        let t = Instant::now();
-        viewer.ctx.wait_idle()?;
-        if run > 0 {
-            cpu.push((frame.cull_seconds + frame.assign_seconds) * 1e3);
-            upload.push(frame.report.upload_seconds * 1e3);
-            encode.push(frame.report.encode_seconds * 1e3);
-            wall.push((t.elapsed().as_secs_f64() + frame.report.encode_seconds) * 1e3);
+        if timed {
+            let cpu_seconds = frame.cull_seconds + frame.assign_seconds;
+            samples.wait_and_record(viewer, cpu_seconds, &frame.report)?;
             prepass.push(frame.prepass_seconds * 1e3);
             mask.push(frame.mask_seconds * 1e3);
-            if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
-                passes.push(p);
-            }
+        } else {
+            viewer.ctx.wait_idle()?;
         }
         // With `reuse`, frames after the first assign nothing: the lists are the first one's.
         if frame.stats.is_some() {
             assigned = Some(frame);
         }
         last = Some(frame);
-        run += 1;
-    }
+        Ok(())
+    })?;
     let frame = last.context("at least one frame")?;
     let assigned = assigned.context("the first frame assigns")?;
     let image = viewer.image()?;
@@ -105,23 +87,18 @@ pub fn measure(
         &viewer.lists().counts,
         scene.lights.len(),
     );
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
     Ok(WithSkips {
         savings: skips.names(),
-        result: StrategyResult {
-            shading: SHADING,
-            frames: wall.len(),
-            assign_ms: median(cpu),
-            upload_bytes: assigned.report.upload_bytes,
-            upload_ms: median(upload),
-            encode_ms: median(encode),
-            gpu_upload_ms: median_opt(passes.iter().map(|p| p.upload_ms).collect()),
-            gpu_gbuffer_ms: median_opt(passes.iter().map(|p| p.gbuffer_ms).collect()),
-            gpu_shading_ms: median_opt(passes.iter().map(|p| p.shading_ms).collect()),
-            gpu_forward_ms: median_opt(passes.iter().map(|p| p.forward_ms).collect()),
-            gpu_frame_wall_ms: median(wall),
-            pairs: assigned.stats.map_or(0, |s| s.pairs),
+        result: samples.result(
+            SHADING,
+            assigned.report.upload_bytes,
+            assigned.stats.map_or(0, |s| s.pairs),
             pixels,
-        },
+        ),
         lights_assigned: assigned.lights_assigned,
         active_clusters: assigned.active_clusters,
         clusters: frame.grid.cluster_count(),
