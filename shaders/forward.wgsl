@@ -54,7 +54,10 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @locatio
         }
     } else {
         let pixel = vec2<u32>(in.clip.xy);
-        let view_depth = view_depth_from_ndc_depth(in.clip.z, frame.camera_near, frame.camera_far);
+        // The cluster of the shaded position's own view depth (clip w = distance along the view
+        // axis), not of the fragment's stored depth, which in f32 can sit percents away from it
+        // when the near plane is small.
+        let view_depth = (frame.clip_from_world_rel * vec4<f32>(in.rel_position, 1.0)).w;
         let cluster = cluster_of_pixel(pixel, view_depth, frame.target_size, frame.grid_dims.xyz);
         let start = cluster_offsets[cluster];
         let count = cluster_counts[cluster];

@@ -1,6 +1,7 @@
 //! The active-cluster skip reads the depth prepass back and marks, on the CPU, the clusters the
 //! GPU's shading will look up. The GPU turns each stored depth into view depth with its own f32
-//! rounding (`view_depth_from_ndc_depth`, free to fuse or reorder), so a pixel right at a slice
+//! rounding (`view_depth_from_ndc_depth`, free to fuse or reorder; within 1e-6 of the exact
+//! depth either way), so a pixel right at a slice
 //! edge may land in the other slice there: `mark_active` marks both sides within a band
 //! (`EDGE_TOLERANCE`, `src/render/depth_buffer.rs`). This test runs the GPU's own conversion and
 //! cluster lookup (the check compute pass, stored-depth mode) over stored depths at and around

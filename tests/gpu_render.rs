@@ -2,8 +2,10 @@
 //! 1/255 per channel, tiled too; every heat-map pixel is the colour of its cluster's list length.
 
 use myriad::assignment::Method;
+use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::GpuContext;
 use myriad::render::{RenderScene, Shading, Viewer};
+use myriad::scene::{ClusterGrid, DepthSlicing};
 
 fn max_channel_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
     assert_eq!(a.len(), b.len());
@@ -114,6 +116,48 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
         worst <= 1,
         "tiled vs brute force: max difference {worst}, {differing} channels differ"
     );
+}
+
+/// The default scene with its near plane pulled in to `near`, on a fine linear grid.
+fn scene_with_near(near: f32, width: u32, height: u32) -> RenderScene {
+    let mut scene = RenderScene::default_scene(1000, width, height).unwrap();
+    scene.camera.near = near;
+    scene.grid = ClusterGrid::new(scene.grid.dims, scene.grid.slicing, near, scene.grid.far());
+    scene.with_grid(UVec3::new(24, 12, 64), DepthSlicing::Linear)
+}
+
+/// With the scene 10⁴–10⁶ near planes deep, the stored depth's f32 value is a coarse measure of
+/// the distance; the pixel's cluster and the point it shades must still be worked out from the
+/// same view depth, or a light in the list of the neighbouring slice is missed (the textbook
+/// depth formula and the inverse matrix disagreed by percents there: 197/255 at near 1e-5).
+#[test]
+fn a_near_plane_far_below_the_scene_keeps_clustered_equal_to_brute_force() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut viewer: Option<Viewer> = None;
+    for near in [1e-4, 1e-5, 1e-6] {
+        let scene = scene_with_near(near, 256, 128);
+        let v = match viewer.as_mut() {
+            Some(v) => v,
+            None => viewer.insert(Viewer::new(ctx.clone(), &scene).unwrap()),
+        };
+        let mut images = Vec::new();
+        for shading in [Shading::Clustered, Shading::BruteForce] {
+            v.frame(&scene, shading, Method::Refined, false).unwrap();
+            images.push(v.image().unwrap());
+        }
+        let lit = images[1]
+            .chunks(4)
+            .filter(|p| p[..3].iter().any(|&c| c > 40))
+            .count();
+        assert!(lit > 256 * 128 / 4, "near {near}: only {lit} lit pixels");
+        let (worst, differing) = max_channel_difference(&images[0], &images[1]);
+        assert!(
+            worst <= 1,
+            "near {near}: clustered vs brute force differ by {worst}/255 in {differing} channels"
+        );
+    }
 }
 
 #[test]

@@ -5,7 +5,8 @@
 struct Frame {
     // Clip space from camera-relative world space (world position minus camera position).
     clip_from_world_rel: mat4x4<f32>,
-    // Inverse of `clip_from_world_rel`: reconstructs positions from pixel and depth.
+    // Inverse of `clip_from_world_rel`: the deferred pass unprojects near-plane points with it
+    // (pixel rays; see deferred.wgsl for why not the stored depth).
     world_rel_from_clip: mat4x4<f32>,
     // Camera position in world space (xyz); w unused.
     camera_position: vec4<f32>,

@@ -5,7 +5,10 @@
 //!
 //! Exactness: pixel → cluster on the GPU uses its own f32 rounding of the view depth, so a pixel
 //! whose depth lies within 1e-5 (relative) of a slice edge marks the clusters on both sides, and
-//! the fitted range is widened by 1e-4.
+//! the fitted range is widened by 1e-4. The conversion (`Camera::view_depth_from_ndc_depth`, the
+//! same formula in WGSL) is within 1e-6 of the exact depth of the stored value, fused or not, for
+//! any near plane (tested in `myriad-cluster-math`), so the band has ten times the room it needs.
+//! (The textbook formula it replaced was 5e-5 off at near 0.1, far 100: over the band.)
 
 use myriad_assignment::ActiveClusters;
 use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing};

@@ -179,10 +179,18 @@ impl Camera {
     }
 
     /// View depth (positive distance along the view direction) of a wgpu depth-buffer value
-    /// produced by [`Self::clip_from_view`]: `depth = f·n / (f − ndc·(f − n))`.
+    /// produced by [`Self::clip_from_view`]: `depth = f·n / (n + (1 − ndc)·(f − n))`.
+    ///
+    /// Written so that f32 keeps it to a few ulps however small the near plane: the textbook
+    /// `f·n / (f − ndc·(f − n))` subtracts two numbers that agree to 1 − n/depth, so at
+    /// depth/near ≈ 10⁵ it was off by percents, and differently on the GPU (which may fuse the
+    /// multiply-add) than here. Here `1 − ndc` is exact for ndc ≥ ½ (Sterbenz) and the rest adds
+    /// and multiplies positive numbers. The shading passes (`shaders/common/cluster.wgsl`) use
+    /// this same formula, and shade the point at this depth on the pixel's ray, so the cluster a
+    /// pixel reads is the cluster of the position it lights.
     pub fn view_depth_from_ndc_depth(&self, ndc_depth: f32) -> f32 {
         let (n, f) = (self.near, self.far);
-        f * n / (f - ndc_depth * (f - n))
+        f * n / (n + (1.0 - ndc_depth) * (f - n))
     }
 }
 
@@ -249,6 +257,30 @@ mod tests {
                 (back - depth).abs() <= 1e-3 * depth,
                 "{depth} -> {ndc} -> {back}"
             );
+        }
+    }
+
+    /// The stored depth → view depth conversion stays within a few f32 ulps of the exact value of
+    /// the same stored depth, for any near plane, also when a GPU fuses the multiply-add: the
+    /// shaders use this formula, and the active-cluster mask allows the GPU only 1e-5 (relative)
+    /// of difference from the CPU. The textbook `f·n / (f − ndc·(f − n))` was 2e-2 off here.
+    #[test]
+    fn view_depth_from_stored_depth_is_accurate_for_any_near_plane() {
+        for (near, far) in [(0.1f32, 100.0f32), (1e-5, 50.0), (1e-12, 1e6), (1.0, 1e30)] {
+            let c = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64, near, far);
+            let (n, f) = (near as f64, far as f64);
+            let mut worst = 0.0f64;
+            let mut d = 0.0f32;
+            while d < 1.0 {
+                let exact = f * n / (f - d as f64 * (f - n));
+                let fused = f32::mul_add(1.0 - d, far - near, near);
+                for got in [c.view_depth_from_ndc_depth(d), far * near / fused] {
+                    worst = worst.max(((got as f64 - exact) / exact).abs());
+                }
+                // Dense near 1, where the depth of most of the scene is stored.
+                d = if d < 0.999 { d + 1e-3 } else { d.next_up() };
+            }
+            assert!(worst < 1e-6, "near {near} far {far}: off by {worst:e}");
         }
     }
 

@@ -164,8 +164,12 @@ pub fn fill_gpu_lights(
             // Normalised here, as `myriad-assignment` does (its axis "need not be normalised"):
             // the shader compares the cosine against a dot product with this axis, so a longer
             // one would cut the cone off at cluster edges. A zero axis bounds nothing: the light
-            // shines all round, as the assignment treats it.
-            let axis = glam::Vec3::from_array(dir).normalize_or_zero();
+            // shines all round, as the assignment treats it. In f64, as there: an f32 axis
+            // shorter than ~1e-19 has a squared length that underflows to zero, and the light
+            // would shine all round here while the lists hold only its cone's clusters.
+            let axis = glam::DVec3::from_array(dir.map(f64::from))
+                .normalize_or_zero()
+                .as_vec3();
             if angle < std::f32::consts::PI && axis != glam::Vec3::ZERO {
                 light.spot_cos_outer = angle.cos();
                 light.spot_cos_inner = (angle * SPOT_INNER_FRACTION).cos();
@@ -187,28 +191,32 @@ mod tests {
 
     #[test]
     fn spot_axes_are_normalised_and_a_zero_axis_is_a_point_light() {
-        let one = [1.0f32; 3];
+        let one = [1.0f32; 4];
         let columns = LightColumns {
-            x: &[0.0; 3],
-            y: &[0.0; 3],
-            z: &[0.0; 3],
-            radius: &[2.0; 3],
+            x: &[0.0; 4],
+            y: &[0.0; 4],
+            z: &[0.0; 4],
+            radius: &[2.0; 4],
             r: &one,
             g: &one,
             b: &one,
             intensity: &one,
             spot: Some(SpotColumns {
-                dir_x: &[0.0, 0.0, 0.0],
-                dir_y: &[-3.0, 0.0, 1.0],
-                dir_z: &[0.0, 0.0, 0.0],
-                angle: &[0.5, 0.5, std::f32::consts::PI],
+                dir_x: &[0.0, 0.0, 0.0, 3e-30],
+                dir_y: &[-3.0, 0.0, 1.0, 0.0],
+                dir_z: &[0.0, 0.0, 0.0, 0.0],
+                angle: &[0.5, 0.5, std::f32::consts::PI, 0.5],
             }),
         };
         let mut out = Vec::new();
         assert_eq!(fill_gpu_lights(&columns, DVec3::ZERO, &mut out), 0);
         assert_eq!(out[0].spot_dir, [0.0, -1.0, 0.0]);
         assert_eq!(out[0].spot_cos_outer, 0.5f32.cos());
-        for point in &out[1..] {
+        // An axis whose f32 squared length underflows is still a direction (the assignment
+        // normalises in f64 and cuts the lists to the cone).
+        assert_eq!(out[3].spot_dir, [1.0, 0.0, 0.0]);
+        assert_eq!(out[3].spot_cos_outer, 0.5f32.cos());
+        for point in &out[1..3] {
             assert_eq!(point.spot_cos_outer, GpuLight::POINT_COS_OUTER);
         }
     }
