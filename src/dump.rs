@@ -30,7 +30,7 @@ pub struct AssignmentDump {
 impl AssignmentDump {
     /// Builds a dump; `source_index[l]` maps the assignment's light `l` to its scene-file index.
     pub fn new(grid: &ClusterGrid, lists: &LightLists, source_index: &[u32]) -> Self {
-        let d = grid.dims;
+        let d = grid.dims();
         let mut z_planes = Vec::new();
         grid.fill_slice_edges(&mut z_planes);
         Self {
@@ -81,17 +81,17 @@ impl AssignmentDump {
         ensure!(
             self.x_edges.len() as u64 == x as u64 + 1,
             "x_edges needs {} values",
-            x + 1
+            x as u64 + 1
         );
         ensure!(
             self.y_edges.len() as u64 == y as u64 + 1,
             "y_edges needs {} values",
-            y + 1
+            y as u64 + 1
         );
         ensure!(
             self.z_planes.len() as u64 == z as u64 + 1,
             "z_planes needs {} values",
-            z + 1
+            z as u64 + 1
         );
         ensure!(
             self.offsets.len() as u64 == clusters,
@@ -149,9 +149,12 @@ impl AssignmentDump {
     /// Checks that the dump belongs to a scene with `grid` and `lights` lights: the same grid,
     /// the same edges and planes (exactly: `myriad assign` writes them from the same grid, and
     /// JSON round-trips f32), every index a light of the scene, and no light twice in a cluster
-    /// (a renderer would shade it twice). The first difference is the error.
+    /// (a renderer would shade it twice). The first difference is the error; an inconsistent
+    /// dump (see [`Self::validate`]) is one too.
     pub fn check_against(&self, grid: &ClusterGrid, lights: usize) -> Result<()> {
-        let d = grid.dims;
+        // `load` validated it; a dump deserialized or built another way may not be.
+        self.validate()?;
+        let d = grid.dims();
         ensure!(
             self.grid == [d.x, d.y, d.z],
             "grid {:?} does not match the scene's {}x{}x{}",
@@ -198,6 +201,52 @@ impl AssignmentDump {
             offsets: self.offsets.clone(),
             counts: self.counts.clone(),
             indices: self.indices.clone(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use myriad_cluster_math::DepthSlicing;
+    use myriad_cluster_math::glam::UVec3;
+
+    fn grid() -> ClusterGrid {
+        ClusterGrid::new(UVec3::new(4, 3, 2), DepthSlicing::Log, 0.1, 100.0)
+    }
+
+    /// A dump of `grid()` with one light in cluster 5.
+    fn one_pair() -> AssignmentDump {
+        let mut lists = LightLists::new();
+        lists.counts = vec![0; 24];
+        lists.counts[5] = 1;
+        lists.offsets = vec![0; 24];
+        lists.offsets[6..].fill(1);
+        lists.indices = vec![0];
+        AssignmentDump::new(&grid(), &lists, &[0])
+    }
+
+    #[test]
+    fn the_largest_grid_a_file_can_name_is_an_error_that_counts_right() {
+        let mut dump = one_pair();
+        dump.grid = [u32::MAX, 1, 1];
+        let e = dump.validate().unwrap_err().to_string();
+        assert_eq!(e, "x_edges needs 4294967296 values");
+    }
+
+    #[test]
+    fn checking_an_inconsistent_dump_is_an_error_not_a_panic() {
+        one_pair().check_against(&grid(), 1).unwrap();
+        let mut short_edges = one_pair();
+        short_edges.x_edges.pop();
+        let mut list_past_the_end = one_pair();
+        list_past_the_end.offsets[5] = 7;
+        for (dump, fragment) in [
+            (short_edges, "x_edges needs 5 values"),
+            (list_past_the_end, "exceeds the 1 indices"),
+        ] {
+            let e = dump.check_against(&grid(), 1).unwrap_err().to_string();
+            assert!(e.contains(fragment), "{e}");
         }
     }
 }

@@ -168,9 +168,9 @@ pub fn measure(
         stats.coarsened == 0,
         "{method} needs more than 2^32 - 1 pairs (u32 offsets) on the {}x{}x{} grid (it fell back to a coarser one): \
          too many to compare; use a coarser grid or fewer lights",
-        grid.dims.x,
-        grid.dims.y,
-        grid.dims.z
+        grid.dims().x,
+        grid.dims().y,
+        grid.dims().z
     );
     anyhow::ensure!(
         exact.cluster_count() == grid.cluster_count(),

@@ -26,7 +26,7 @@ fn stored(camera: &Camera, d: f64) -> f32 {
 /// Stored depths at every slice edge and the 64 f32 values either side, then `random` more.
 fn samples(camera: &Camera, grid: &ClusterGrid, random: usize) -> Vec<f32> {
     let mut depths = Vec::new();
-    for k in 0..=grid.dims.z {
+    for k in 0..=grid.dims().z {
         let edge = stored(camera, grid.slice_start_depth(k) as f64);
         let (mut up, mut down) = (edge, edge);
         depths.push(edge);

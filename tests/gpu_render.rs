@@ -122,7 +122,12 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
 fn scene_with_near(near: f32, width: u32, height: u32) -> RenderScene {
     let mut scene = RenderScene::default_scene(1000, width, height).unwrap();
     scene.camera.near = near;
-    scene.grid = ClusterGrid::new(scene.grid.dims, scene.grid.slicing, near, scene.grid.far());
+    scene.grid = ClusterGrid::new(
+        scene.grid.dims(),
+        scene.grid.slicing(),
+        near,
+        scene.grid.far(),
+    );
     scene.with_grid(UVec3::new(24, 12, 64), DepthSlicing::Linear)
 }
 
@@ -350,8 +355,8 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
     // reused them (only the count was compared).
     let g = scene.grid;
     let turned = ClusterGrid::new(
-        UVec3::new(g.dims.z, g.dims.y, g.dims.x),
-        g.slicing,
+        UVec3::new(g.dims().z, g.dims().y, g.dims().x),
+        g.slicing(),
         g.near(),
         g.far(),
     );

@@ -93,7 +93,7 @@ fn each_saving_leaves_the_image_unchanged() {
             if near > 0.0 {
                 scene.camera.near = near;
                 let grid = &scene.grid;
-                scene.grid = ClusterGrid::new(grid.dims, grid.slicing, near, grid.far());
+                scene.grid = ClusterGrid::new(grid.dims(), grid.slicing(), near, grid.far());
             }
             if !spots {
                 scene.lights = without_spots(&scene.lights);

@@ -77,7 +77,7 @@ fn every_field_writes_a_reproducible_valid_scene() {
         assert_eq!(scene.lights.len(), 500);
         // The camera is the model's first camera, `Main`, and the grid the default.
         assert_eq!(scene.camera, main, "{field}");
-        assert_eq!(scene.grid.dims.to_array(), [24, 12, 16]);
+        assert_eq!(scene.grid.dims().to_array(), [24, 12, 16]);
         if field == "surfaces" || field == "box" {
             let grown = myriad::scene::Aabb::new(bounds.min - 0.2001, bounds.max + 0.2001);
             for l in scene.lights.iter() {
@@ -120,7 +120,7 @@ fn options_choose_camera_grid_radii_and_spots() {
         .camera(model.camera_index("Overview").unwrap(), 800, 600)
         .unwrap();
     assert_eq!(scene.camera, overview);
-    assert_eq!(scene.grid.dims.to_array(), [16, 9, 24]);
+    assert_eq!(scene.grid.dims().to_array(), [16, 9, 24]);
     for l in scene.lights.iter() {
         assert!((1.0..9.0).contains(&l.intensity));
         let expected = (l.intensity * l.color.max_element() / 0.5).sqrt();

@@ -59,7 +59,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // The dump describes the grid the lists belong to, which the budget may have coarsened.
     let grid = stats.grid_built(&scene.grid);
     if stats.coarsened > 0 {
-        let (want, got) = (scene.grid.dims, grid.dims);
+        let (want, got) = (scene.grid.dims(), grid.dims());
         eprintln!(
             "warning: {name}: the pairs exceed the budget on the {}x{}x{} grid; the lists were built on the coarser {}x{}x{} grid, which the dump records{}",
             want.x,

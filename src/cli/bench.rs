@@ -127,7 +127,7 @@ fn bench(
         let core_link = before
             .zip(core_link::measure())
             .map(|(before, after)| LinkBeforeAfter { before, after });
-        let d = scene.grid.dims;
+        let d = scene.grid.dims();
         Ok(Report {
             scene: name,
             lights: scene.lights.len(),

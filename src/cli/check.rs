@@ -83,7 +83,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     };
     let out = CheckOutput {
         reference: args.reference,
-        grid: grid.dims.to_array(),
+        grid: grid.dims().to_array(),
         exact_pairs: report.exact_pairs,
         reported_pairs: report.reported_pairs,
         misses: report.misses,
@@ -106,7 +106,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             Reference::ExactMethod => "the exact method's lists",
         };
         println!("{name} vs {} (against {reference}):", args.dump.display());
-        if grid.dims != scene.grid.dims {
+        if grid.dims() != scene.grid.dims() {
             let [x, y, z] = out.grid;
             println!(
                 "  grid                  {x}x{y}x{z} (coarsened from the scene's by a pair budget)"
@@ -137,9 +137,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
 /// own check then rejects with the mismatch.
 fn grid_of_dump(scene: &ClusterGrid, dims: [u32; 3]) -> ClusterGrid {
     let mut grid = *scene;
-    while grid.dims.to_array() != dims {
+    while grid.dims().to_array() != dims {
         let coarser = coarser_grid(&grid);
-        if coarser.dims == grid.dims {
+        if coarser.dims() == grid.dims() {
             return *scene;
         }
         grid = coarser;

@@ -252,9 +252,9 @@ fn independent_lists_up_to(
             "the oracle finds more than {max_pairs} pairs on the {}x{}x{} grid (the first {} of \
              its {clusters} clusters hold {pairs}), more than CSR lists with u32 offsets hold; use \
              a coarser grid or fewer lights",
-            grid.dims.x,
-            grid.dims.y,
-            grid.dims.z,
+            grid.dims().x,
+            grid.dims().y,
+            grid.dims().z,
             chunk_end,
         );
         for list in chunk {
@@ -435,7 +435,7 @@ mod tests {
             independent_lists_up_to(&scene.lights, &scene.camera, &scene.grid, max_pairs, chunk)
         };
         // Chunks of 1000 clusters: the limit is checked part-way, and a chunk ends mid-slice.
-        assert!(scene.grid.cluster_count() > 3000, "{:?}", scene.grid.dims);
+        assert!(scene.grid.cluster_count() > 3000, "{:?}", scene.grid.dims());
         assert_eq!(build(pairs, 1000).unwrap(), lists);
         assert_eq!(build(pairs, 1).unwrap(), lists);
         let error = build(pairs - 1, 1000).unwrap_err().to_string();

@@ -403,7 +403,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 table,
                 lights,
                 config: name,
-                grid: clustered.then(|| scene.grid.dims.to_array()),
+                grid: clustered.then(|| scene.grid.dims().to_array()),
                 frames: t.frames,
                 shading_ms: t.shading_ms,
                 shading_source: t.shading_source,
@@ -496,7 +496,7 @@ fn write_heat_map(
     Ok(HeatMap {
         path: path.display().to_string(),
         lights: scene.lights.len(),
-        grid: scene.grid.dims.to_array(),
+        grid: scene.grid.dims().to_array(),
         scale_max,
         max_lights_per_pixel: pixels.max_lights,
         mean_lights_per_pixel: pixels.mean_lights,

@@ -305,7 +305,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
-    let dims = scene.grid.dims;
+    let dims = scene.grid.dims();
 
     let ctx = GpuContext::headless()?;
     let adapter = ctx.describe();
@@ -503,11 +503,11 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     if args.grid.is_some() || args.depth.is_some() {
         let dims: UVec3 = match &args.grid {
             Some(g) => parse_grid("--grid", g)?,
-            None => scene.grid.dims,
+            None => scene.grid.dims(),
         };
         let slicing = match &args.depth {
             Some(d) => parse_slicing(d)?,
-            None => scene.grid.slicing,
+            None => scene.grid.slicing(),
         };
         check_slicing(slicing, dims.z, scene.grid.near(), scene.grid.far())?;
         scene = scene.with_grid(dims, slicing);

@@ -162,7 +162,7 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Result<Report> {
         for &dims in grids {
             let grid = ClusterGrid::new(
                 dims,
-                scene.grid.slicing,
+                scene.grid.slicing(),
                 scene.grid.near(),
                 scene.grid.far(),
             );

@@ -122,7 +122,7 @@ pub fn minimum_frame_bytes(grid: &ClusterGrid, lights: usize) -> u64 {
 pub fn check_memory(grid: &ClusterGrid, lights: usize) -> Result<()> {
     let needed = minimum_frame_bytes(grid, lights);
     if let Some(available) = available_memory_bytes() {
-        let d = grid.dims;
+        let d = grid.dims();
         ensure!(
             needed <= available,
             "a {}x{}x{} grid with {lights} lights needs at least {:.1} GiB, but only {:.1} GiB of \

@@ -233,7 +233,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let shader_loop_limit = viewer.ctx.shader_loop_limit();
     let max_lights_per_pixel = viewer
         .ctx
-        .max_lights_per_pixel(myriad::gpu::ShadingMode::Lists, scene.grid.dims.z);
+        .max_lights_per_pixel(myriad::gpu::ShadingMode::Lists, scene.grid.dims().z);
 
     // 4. Upload (+ encode and submit) of the measured frame.
     progress.start("upload + encode + submit");
@@ -304,7 +304,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     stages.check_ms = seconds * 1e3;
     progress.finish();
 
-    let d = grid.dims;
+    let d = grid.dims();
     let out = Report {
         scene: scene.name.clone(),
         lights: scene.lights.len(),

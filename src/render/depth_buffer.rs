@@ -92,7 +92,7 @@ pub fn fitted_grid(
     if !(far > near) {
         far = (near * (1.0 + DEPTH_TOLERANCE)).max(near.next_up());
     }
-    let slicing = match grid.slicing {
+    let slicing = match grid.slicing() {
         DepthSlicing::LogWithNearSlice { first_slice_depth }
             if !(first_slice_depth > near && first_slice_depth < far) =>
         {
@@ -100,7 +100,7 @@ pub fn fitted_grid(
         }
         s => s,
     };
-    ClusterGrid::new(grid.dims, slicing, near, far)
+    ClusterGrid::new(grid.dims(), slicing, near, far)
 }
 
 /// The grid's slice edges as stored depth-buffer values (the projection maps view depth to stored
@@ -117,7 +117,7 @@ impl SliceEdgesNdc {
     fn new(grid: &ClusterGrid, camera: &Camera) -> Self {
         let (n, f) = (camera.near as f64, camera.far as f64);
         let stored = |d: f64| (f * (d - n) / (d * (f - n))) as f32;
-        let z = grid.dims.z;
+        let z = grid.dims().z;
         let edge = |k: u32| grid.slice_start_depth(k) as f64;
         let tol = EDGE_TOLERANCE as f64;
         // Rounded outwards to f32 (near the far plane one f32 step of stored depth is several
@@ -191,7 +191,7 @@ pub fn mark_active(
             for (r, row) in pixels.chunks(w).enumerate() {
                 let py = (band * rows_per_band + r) as u32;
                 let j = grid.tile_y_of_pixel(py, h as u32);
-                let row_base = grid.dims.x * j;
+                let row_base = grid.dims().x * j;
                 // The slice range of the previous pixel, valid while the depth stays in `run`.
                 let mut run = (f32::NAN, f32::NAN);
                 let mut slices = (0, 0);
@@ -203,7 +203,7 @@ pub fn mark_active(
                         (slices, run) = edges.slices_of(d);
                     }
                     for k in slices.0..=slices.1 {
-                        let layer = grid.dims.x * grid.dims.y * k;
+                        let layer = grid.dims().x * grid.dims().y * k;
                         flags[(tile_x[px] + row_base + layer) as usize] = true;
                     }
                 }
@@ -222,7 +222,7 @@ pub fn mark_active(
             mask.mark(c as u32);
         }
     }
-    let dims = grid.dims;
+    let dims = grid.dims();
     for b in blended {
         let Some((dmin, dmax, ndc)) = box_depths(camera, b) else {
             continue;

@@ -40,7 +40,7 @@ impl Shading {
     pub fn grid(self, scene_grid: &ClusterGrid) -> ClusterGrid {
         match self {
             Shading::Tiled => ClusterGrid::new(
-                scene_grid.dims.with_z(1),
+                scene_grid.dims().with_z(1),
                 DepthSlicing::Linear,
                 scene_grid.near(),
                 scene_grid.far(),

@@ -31,7 +31,7 @@ impl ActiveClusters {
 
     /// Clears the mask for `grid`'s dimensions, keeping the storage.
     pub fn reset(&mut self, grid: &ClusterGrid) {
-        self.dims = grid.dims;
+        self.dims = grid.dims();
         self.cluster.clear();
         self.cluster.resize(grid.cluster_count(), false);
         self.active = 0;

@@ -229,7 +229,7 @@ impl Assigner {
         if let Some(a) = active {
             assert_eq!(
                 a.dims(),
-                grid.dims,
+                grid.dims(),
                 "active-cluster mask is for another grid"
             );
         }
@@ -284,10 +284,10 @@ impl Assigner {
         let mut coarsened = 0;
         loop {
             // One cluster holds at most every light (< 2³² by `assert_consistent`): always fits.
-            let last_resort = attempt_frame.grid.dims == glam::UVec3::ONE;
+            let last_resort = attempt_frame.grid.dims() == glam::UVec3::ONE;
             let limit = if last_resort { u32::MAX as u64 } else { budget };
             if let Ok(mut stats) = self.assign_once(&attempt_frame, parallel, limit, out) {
-                stats.grid_dims = attempt_frame.grid.dims.to_array();
+                stats.grid_dims = attempt_frame.grid.dims().to_array();
                 stats.coarsened = coarsened;
                 stats.over_budget = stats.pairs > budget;
                 return stats;
@@ -369,9 +369,9 @@ impl Assigner {
             cull: jobs::FrustumCull {
                 sides: [
                     self.planes.x_plane_normal(0),
-                    self.planes.x_plane_normal(grid.dims.x as usize),
+                    self.planes.x_plane_normal(grid.dims().x as usize),
                     self.planes.y_plane_normal(0),
-                    self.planes.y_plane_normal(grid.dims.y as usize),
+                    self.planes.y_plane_normal(grid.dims().y as usize),
                 ],
                 near: self.planes.z_depths[0],
                 far: self.planes.z_depths[self.planes.z_depths.len() - 1],
@@ -432,8 +432,8 @@ struct Frame<'a> {
 /// The grid a pair budget falls back to: every dimension halved (rounding down, at least 1),
 /// same depth range and slicing. Repeating it reaches 1×1×1.
 pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
-    let dims = (grid.dims / 2).max(glam::UVec3::ONE);
-    ClusterGrid::new(dims, grid.slicing, grid.near(), grid.far())
+    let dims = (grid.dims() / 2).max(glam::UVec3::ONE);
+    ClusterGrid::new(dims, grid.slicing(), grid.near(), grid.far())
 }
 
 /// Splits the clusters into parts of whole depth slices: one part when serial; else one per slice,
@@ -441,13 +441,13 @@ pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
 /// A part holds a power of two of slices, so a slice's part is a shift, not a division, in the
 /// emit's innermost loop.
 fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
-    let slices = grid.dims.z as usize;
+    let slices = grid.dims().z as usize;
     let slices_per_part = if tasks > 1 {
         1
     } else {
         slices.next_power_of_two()
     };
-    let per_slice = grid.dims.x as usize * grid.dims.y as usize;
+    let per_slice = grid.dims().x as usize * grid.dims().y as usize;
     Parts {
         count: slices.div_ceil(slices_per_part),
         clusters: slices_per_part * per_slice,

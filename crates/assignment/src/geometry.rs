@@ -412,7 +412,7 @@ mod tests {
         let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 60.0);
         let sets = PlaneSets::new(&cam, &grid);
         let planes = FramePlanes::new(&sets, &grid);
-        let mut gaps = vec![0.0; 2 * grid.dims.x as usize];
+        let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
         let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
         let (mut kept, mut cut, mut whole_slices) = (0usize, 0usize, 0usize);
         for _ in 0..3000 {

@@ -74,7 +74,7 @@ impl FrustumCull {
 impl FrameContext<'_> {
     /// The whole grid as one box: what an overflowed light is given (see `run_task`).
     fn whole_grid_box(&self) -> ClusterBox {
-        let d = self.grid.dims;
+        let d = self.grid.dims();
         let z = &self.planes.sets.z_depths;
         ClusterBox {
             z: ZRange {
@@ -144,7 +144,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     }
     out.rejected = 0;
     out.culled = 0;
-    out.gaps.resize(2 * ctx.grid.dims.x as usize, 0.0);
+    out.gaps.resize(2 * ctx.grid.dims().x as usize, 0.0);
     let eye = ctx.camera.position;
     let mut block = Block::new();
     // Pre-cull columns of the current block, indexed by position in the block.
@@ -353,7 +353,7 @@ fn emit(
     // (`uniform` 100k: false positives 2.6% → 3.3%; `paper` 1000: 7.5% → 8.3%) for 14% less time
     // (`myriad bench`, 1 thread).
     let refine = ctx.method == Method::Refined && bx.i1 > bx.i0 && bx.j1 > bx.j0 && r.is_finite();
-    let width = grid.dims.x;
+    let width = grid.dims().x;
     match ctx.method {
         Method::Binary | Method::Refined if !refine => {
             let (len, rows) = (bx.i1 - bx.i0 + 1, bx.j1 - bx.j0 + 1);
@@ -483,7 +483,7 @@ fn emit_exact(
             let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
             push_filtered(ctx, bucket, light, first, bx.i1 - bx.i0 + 1, |c| {
                 let i = bx.i0 + (c - first);
-                let (x, y) = (grid.dims.x, grid.dims.y);
+                let (x, y) = (grid.dims().x, grid.dims().y);
                 let cell = Cell::of_tile(exact.tan_half_fov, x, y, i, j, depths);
                 volume.intersects_cell(&cell)
             });
@@ -494,7 +494,7 @@ fn emit_exact(
 /// View-space bounding spheres of every cluster (centre, radius), padded like light radii.
 pub(crate) fn cluster_bounding_spheres(camera: &Camera, grid: &ClusterGrid, out: &mut Vec<Vec4>) {
     out.clear();
-    let d = grid.dims;
+    let d = grid.dims();
     for k in 0..d.z {
         for j in 0..d.y {
             for i in 0..d.x {

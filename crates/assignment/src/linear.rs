@@ -40,7 +40,12 @@ pub(crate) fn assign_linear(
 ) -> Result<(u32, u32), u64> {
     let clusters = grid.cluster_count();
     let view_from_world = camera.view_rotation();
-    scratch.lists.resize_with(clusters, Vec::new);
+    // Only ever grown: shrinking to a smaller grid would drop the per-cluster lists' buffers,
+    // and the next larger grid (or the first try of a frame under a pair budget) would
+    // allocate them all again.
+    if scratch.lists.len() < clusters {
+        scratch.lists.resize_with(clusters, Vec::new);
+    }
     for list in &mut scratch.lists[..clusters] {
         list.clear();
     }
@@ -53,7 +58,7 @@ pub(crate) fn assign_linear(
         .y_normals
         .extend((0..planes.y_slopes.len()).map(|j| planes.y_plane_normal(j)));
     let (xn, yn) = (&scratch.x_normals, &scratch.y_normals);
-    let (nx, ny) = (grid.dims.x, grid.dims.y);
+    let (nx, ny) = (grid.dims().x, grid.dims().y);
     let (mut rejected, mut culled) = (0, 0);
     for g in 0..lights.len() {
         let p = Vec3::new(lights.x[g], lights.y[g], lights.z[g]);

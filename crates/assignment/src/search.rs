@@ -88,11 +88,11 @@ pub(crate) struct FramePlanes<'a> {
 impl<'a> FramePlanes<'a> {
     /// Guessing parameters for `sets`, built from `grid` and the slopes of its outer planes.
     pub fn new(sets: &'a PlaneSets, grid: &ClusterGrid) -> Self {
-        let d = grid.dims;
+        let d = grid.dims();
         let tx = sets.x_slopes[d.x as usize];
         let ty = sets.y_slopes[0];
         let (n, f, z) = (grid.near(), grid.far(), d.z as f32);
-        let slice = match grid.slicing {
+        let slice = match grid.slicing() {
             DepthSlicing::Linear => SliceGuess::Linear {
                 near: n,
                 scale: z / (f - n),

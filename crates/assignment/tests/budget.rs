@@ -40,7 +40,7 @@ fn over_budget_frames_coarsen_the_grid_and_stay_conservative() {
         let mut full = LightLists::new();
         let free = Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut full);
         assert_eq!(free.coarsened, 0);
-        assert_eq!(free.grid_dims, scene.grid.dims.to_array());
+        assert_eq!(free.grid_dims, scene.grid.dims().to_array());
         assert!(!free.over_budget);
 
         let budget = free.pairs / 3;
@@ -57,7 +57,7 @@ fn over_budget_frames_coarsen_the_grid_and_stay_conservative() {
             "{method}: {stats:?}"
         );
         let grid = coarsened(&scene.grid, stats.coarsened);
-        assert_eq!(stats.grid_dims, grid.dims.to_array());
+        assert_eq!(stats.grid_dims, grid.dims().to_array());
         assert_eq!(lists.cluster_count(), grid.cluster_count());
         // Never a missed light on the grid actually used, and the same as assigning on it directly.
         let truth = brute_force(&scene.lights, true, &scene.camera, &grid);

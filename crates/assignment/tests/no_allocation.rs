@@ -8,6 +8,7 @@ mod common;
 use common::*;
 use myriad_assignment::{Assigner, LightLists, Method};
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 struct Counting;
@@ -40,8 +41,12 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// The count is process-wide: the tests take turns, so one's allocations are not the other's.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
 #[test]
 fn steady_state_frames_do_not_allocate() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let scene = make_scene(&SceneParams {
         seed: 3,
         lights: 10_000,
@@ -75,6 +80,49 @@ fn steady_state_frames_do_not_allocate() {
                 ALLOCATIONS.load(Ordering::SeqCst),
                 0,
                 "{method} (spots: {spots}, in a pool: {in_pool}) allocated in a steady-state frame"
+            );
+        }
+    }
+}
+
+/// Steady state also holds when the grid changes from frame to frame: one assigner alternating
+/// between two views' grids, and a pair budget that coarsens the grid within every frame. Each
+/// method's scratch grows to the largest grid and stays (a `linear` that shrank its per-cluster
+/// lists with the grid dropped their buffers and rebuilt them: 18 833 allocations per pair of
+/// frames, audit f2).
+#[test]
+fn frames_on_changing_grids_do_not_allocate_once_warm() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let scene = make_scene(&SceneParams {
+        seed: 5,
+        lights: 10_000,
+        ..SceneParams::HD
+    });
+    let small = myriad_assignment::coarser_grid(&myriad_assignment::coarser_grid(&scene.grid));
+    let input = scene.lights.input(false);
+    for method in [Method::Linear, Method::Binary, Method::Refined] {
+        for budget in [None, Some(20_000)] {
+            let mut assigner = Assigner::new();
+            if let Some(pairs) = budget {
+                assigner = assigner.with_pair_budget(pairs);
+            }
+            let mut lists = LightLists::new();
+            let two_frames = |a: &mut Assigner, l: &mut LightLists| {
+                let big = a.assign(method, &input, &scene.camera, &scene.grid, l);
+                let coarse = a.assign(method, &input, &scene.camera, &small, l);
+                (big, coarse)
+            };
+            two_frames(&mut assigner, &mut lists);
+            two_frames(&mut assigner, &mut lists);
+            ALLOCATIONS.store(0, Ordering::SeqCst);
+            COUNTING.store(true, Ordering::SeqCst);
+            let (big, _) = two_frames(&mut assigner, &mut lists);
+            COUNTING.store(false, Ordering::SeqCst);
+            assert_eq!(big.coarsened > 0, budget.is_some(), "{method} {budget:?}");
+            assert_eq!(
+                ALLOCATIONS.load(Ordering::SeqCst),
+                0,
+                "{method} (pair budget {budget:?}) allocated on alternating grids"
             );
         }
     }

@@ -248,12 +248,12 @@ fn world_of(camera: &Camera, view: Vec3) -> Vec3 {
 fn lights_on_every_plane(camera: &Camera, grid: &ClusterGrid, r: f32) -> Vec<(Vec3, f32)> {
     let t = camera.tan_half_fov();
     let mut out = Vec::new();
-    for k in 0..=grid.dims.z {
+    for k in 0..=grid.dims().z {
         let d = grid.slice_start_depth(k);
-        for i in 0..=grid.dims.x {
-            let sx = (-1.0 + 2.0 * i as f32 / grid.dims.x as f32) * t.x;
-            for j in 0..=grid.dims.y {
-                let sy = (1.0 - 2.0 * j as f32 / grid.dims.y as f32) * t.y;
+        for i in 0..=grid.dims().x {
+            let sx = (-1.0 + 2.0 * i as f32 / grid.dims().x as f32) * t.x;
+            for j in 0..=grid.dims().y {
+                let sy = (1.0 - 2.0 * j as f32 / grid.dims().y as f32) * t.y;
                 out.push((world_of(camera, Vec3::new(sx * d, sy * d, -d)), r));
             }
         }

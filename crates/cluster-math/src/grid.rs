@@ -47,12 +47,16 @@ impl std::fmt::Display for InvalidGrid {
 impl std::error::Error for InvalidGrid {}
 
 /// A cluster grid of `dims.x × dims.y × dims.z` cells over the view depth range `[near, far]`.
+///
+/// Every field is private and read through a getter: [`Self::try_new`] checks them together
+/// (dimensions ≥ 1 whose product fits a u32 cluster id, a first slice inside the range), and a
+/// grid edited field by field (`grid.dims.x = width / 64` on a narrow window) would skip those
+/// checks into empty lists, panics or a 100 GB allocation. A different grid is a new one:
+/// `ClusterGrid::try_new(dims, grid.slicing(), grid.near(), grid.far())`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterGrid {
-    /// Tiles across (X), tiles down (Y), depth slices (Z); each ≥ 1.
-    pub dims: UVec3,
-    /// How depth is sliced.
-    pub slicing: DepthSlicing,
+    dims: UVec3,
+    slicing: DepthSlicing,
     near: f32,
     far: f32,
 }
@@ -117,9 +121,28 @@ impl ClusterGrid {
         })
     }
 
-    /// The same grid over a different depth range (a fitted, dynamic near/far).
+    /// The same grid over a different depth range (a fitted, dynamic near/far). Panics where
+    /// [`Self::try_with_depth_range`] returns an error.
     pub fn with_depth_range(self, near: f32, far: f32) -> Self {
         Self::new(self.dims, self.slicing, near, far)
+    }
+
+    /// [`Self::with_depth_range`] for ranges measured at run time: an error instead of a panic
+    /// when `near`/`far` are no range (equal, reversed, non-finite, below [`Self::MIN_NEAR`]) or
+    /// no longer hold a `LogWithNearSlice` grid's first slice edge (a depth prepass of a scene
+    /// wholly nearer than it; `myriad::render::fitted_grid` then falls back to `Log`).
+    pub fn try_with_depth_range(self, near: f32, far: f32) -> Result<Self, InvalidGrid> {
+        Self::try_new(self.dims, self.slicing, near, far)
+    }
+
+    /// Tiles across (X), tiles down (Y), depth slices (Z); each ≥ 1, their product ≤ `u32::MAX`.
+    pub fn dims(&self) -> UVec3 {
+        self.dims
+    }
+
+    /// How depth is sliced.
+    pub fn slicing(&self) -> DepthSlicing {
+        self.slicing
     }
 
     /// Near edge of slice 0.

@@ -36,10 +36,10 @@ impl PlaneSets {
         let t = camera.tan_half_fov();
         self.x_slopes.clear();
         self.x_slopes
-            .extend((0..=grid.dims.x).map(|i| grid.x_edge_ndc(i) * t.x));
+            .extend((0..=grid.dims().x).map(|i| grid.x_edge_ndc(i) * t.x));
         self.y_slopes.clear();
         self.y_slopes
-            .extend((0..=grid.dims.y).map(|j| grid.y_edge_ndc(j) * t.y));
+            .extend((0..=grid.dims().y).map(|j| grid.y_edge_ndc(j) * t.y));
         grid.fill_slice_edges(&mut self.z_depths);
     }
 

@@ -32,7 +32,7 @@ fn grids() -> Vec<ClusterGrid> {
 /// Checks `edge(s) <= d < edge(s + 1)` for depths inside the range, and the clamping outside it.
 fn check_depth(grid: &ClusterGrid, d: f32) {
     let s = grid.slice_of_depth(d);
-    let z = grid.dims.z;
+    let z = grid.dims().z;
     assert!(s < z);
     if d >= grid.near() && d < grid.far() {
         let (lo, hi) = grid.slice_depth_range(s);
@@ -59,7 +59,7 @@ fn check_depth(grid: &ClusterGrid, d: f32) {
 #[test]
 fn every_slice_edge_and_its_neighbours_map_consistently() {
     for grid in grids() {
-        let z = grid.dims.z;
+        let z = grid.dims().z;
         let mut edges = Vec::new();
         grid.fill_slice_edges(&mut edges);
         assert_eq!(edges.len() as u32, z + 1);

@@ -62,6 +62,15 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
         ok,
         ClusterGrid::new(UVec3::new(24, 12, 16), near_slice, 0.1, 100.0)
     );
+    // A measured depth range: a scene wholly nearer than the first slice edge, or all at one
+    // depth, is an error from `try_with_depth_range` (`with_depth_range` panics with it).
+    for (near, far, fragment) in [(0.2, 4.0, "first_slice_depth"), (3.0, 3.0, "near < far")] {
+        let e = ok.try_with_depth_range(near, far).unwrap_err().to_string();
+        assert!(e.contains(fragment), "[{near}, {far}]: {e}");
+    }
+    let fitted = ok.try_with_depth_range(0.5, 80.0).unwrap();
+    assert_eq!((fitted.dims(), fitted.slicing()), (ok.dims(), ok.slicing()));
+    assert_eq!((fitted.near(), fitted.far()), (0.5, 80.0));
 }
 
 #[test]

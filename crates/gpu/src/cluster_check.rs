@@ -75,7 +75,7 @@ pub fn gpu_cluster_ids_of(
         target_size: [width, height],
         sample_count: pixels.len() as u32,
         from_stored_depth,
-        grid_dims: [grid.dims.x, grid.dims.y, grid.dims.z, 0],
+        grid_dims: [grid.dims().x, grid.dims().y, grid.dims().z, 0],
         near_far,
     };
     let init = |label, contents: &[u8], usage| {

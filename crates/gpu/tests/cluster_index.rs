@@ -21,7 +21,7 @@ fn next_up(x: f32, steps: i32) -> f32 {
 
 fn samples(grid: &ClusterGrid, width: u32, height: u32, seed: u64) -> (Vec<[u32; 2]>, Vec<f32>) {
     let mut depths: Vec<f32> = Vec::new();
-    for k in 0..=grid.dims.z {
+    for k in 0..=grid.dims().z {
         let e = grid.slice_start_depth(k);
         depths.extend((-3..=3).map(|s| next_up(e, s)));
     }
@@ -35,14 +35,14 @@ fn samples(grid: &ClusterGrid, width: u32, height: u32, seed: u64) -> (Vec<[u32;
         f32::MAX,
     ]);
     let mut xs: Vec<u32> = Vec::new();
-    for i in 0..grid.dims.x {
+    for i in 0..grid.dims().x {
         let r = grid.tile_pixel_columns(i, width);
         if !r.is_empty() {
             xs.extend([r.start, r.end - 1]);
         }
     }
     let mut ys: Vec<u32> = Vec::new();
-    for j in 0..grid.dims.y {
+    for j in 0..grid.dims().y {
         let r = grid.tile_pixel_rows(j, height);
         if !r.is_empty() {
             ys.extend([r.start, r.end - 1]);

@@ -539,7 +539,7 @@ mod tests {
         };
         let (g, problems) = grid_problems(&ok, Some((0.1, 100.0)));
         assert!(problems.is_empty());
-        assert_eq!(g.unwrap().dims, UVec3::new(24, 12, 16));
+        assert_eq!(g.unwrap().dims(), UVec3::new(24, 12, 16));
         // Without a valid camera range there is no grid, but no extra problem either.
         assert_eq!(grid_problems(&ok, None), (None, vec![]));
 

@@ -424,7 +424,7 @@ mod tests {
         assert_eq!(c.up, Vec3::Y);
         assert_eq!((c.width, c.height, c.near, c.far), (1536, 768, 0.1, 100.0));
         let g = p.grid.unwrap();
-        assert_eq!(g.slicing, DepthSlicing::Log);
+        assert_eq!(g.slicing(), DepthSlicing::Log);
         assert_eq!((g.near(), g.far()), (0.1, 100.0));
         assert_eq!(p.light_count, 1);
         let l = p.lights.get(0);
@@ -510,7 +510,7 @@ mod tests {
                 r#"{{{CAMERA}, "grid": {{"x": 2, "y": 2, "z": 2, "depth": {depth}}}, "lights": []}}"#
             );
             let p = parse(text.as_bytes()).unwrap();
-            assert_eq!(p.grid.map(|g| g.slicing), expected, "{depth}");
+            assert_eq!(p.grid.map(|g| g.slicing()), expected, "{depth}");
             assert_eq!(p.scene_problems.is_empty(), expected.is_some(), "{depth}");
         }
         let text = format!(

@@ -148,8 +148,8 @@ impl Scene {
         let mut sink = Sink::new(&mut problems, Prefix::Section("grid"));
         let g = &self.grid;
         let parts = GridParts {
-            dims: g.dims.to_array().map(Some),
-            slicing: Some(g.slicing),
+            dims: g.dims().to_array().map(Some),
+            slicing: Some(g.slicing()),
         };
         checks::check_grid(&parts, camera.depth_range, &mut sink);
         if (g.near(), g.far()) != (self.camera.near, self.camera.far) {
@@ -232,10 +232,12 @@ impl Scene {
         write!(
             out,
             "}},\n  \"grid\": {{\"x\": {}, \"y\": {}, \"z\": {}, \"depth\": ",
-            g.dims.x, g.dims.y, g.dims.z
+            g.dims().x,
+            g.dims().y,
+            g.dims().z
         )
         .map_err(io)?;
-        match g.slicing {
+        match g.slicing() {
             DepthSlicing::Linear => write!(out, "\"{DEPTH_LINEAR}\"").map_err(io)?,
             DepthSlicing::Log => write!(out, "\"{DEPTH_LOG}\"").map_err(io)?,
             DepthSlicing::LogWithNearSlice { first_slice_depth } => {

@@ -66,9 +66,9 @@ fn camera_bits(c: &Camera) -> Vec<u32> {
 }
 
 fn grid_bits(g: &ClusterGrid) -> Vec<u32> {
-    let mut v = g.dims.to_array().to_vec();
+    let mut v = g.dims().to_array().to_vec();
     v.extend([g.near().to_bits(), g.far().to_bits()]);
-    match g.slicing {
+    match g.slicing() {
         DepthSlicing::Linear => v.push(0),
         DepthSlicing::Log => v.push(1),
         DepthSlicing::LogWithNearSlice { first_slice_depth } => {
@@ -119,8 +119,8 @@ fn hand_written_design_md_file_loads_as_written() {
     assert_eq!(c.fov_y, 60f64.to_radians() as f32);
     assert!((c.fov_y - 60f32.to_radians()).abs() <= f32::EPSILON);
     assert_eq!((c.width, c.height, c.near, c.far), (1536, 768, 0.1, 100.0));
-    assert_eq!(s.grid.dims, UVec3::new(24, 12, 16));
-    assert_eq!(s.grid.slicing, DepthSlicing::Log);
+    assert_eq!(s.grid.dims(), UVec3::new(24, 12, 16));
+    assert_eq!(s.grid.slicing(), DepthSlicing::Log);
     assert_eq!((s.grid.near(), s.grid.far()), (0.1, 100.0));
 
     let l = &s.lights;

@@ -72,7 +72,7 @@ impl std::ops::Deref for Truth {
 
 /// For every cluster, the lights the f64 oracle says touch it, by testing every (light, cluster).
 pub fn brute_force(lights: &Columns, spots: bool, camera: &Camera, grid: &ClusterGrid) -> Truth {
-    let d = grid.dims;
+    let d = grid.dims();
     let cells: Vec<Cell> = (0..grid.cluster_count() as u32)
         .map(|c| {
             let v = grid.cluster_coords(c);

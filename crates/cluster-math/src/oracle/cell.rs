@@ -21,8 +21,8 @@ impl Cell {
         let (d0, d1) = grid.slice_depth_range(k);
         Self::of_tile(
             camera.tan_half_fov_f64(),
-            grid.dims.x,
-            grid.dims.y,
+            grid.dims().x,
+            grid.dims().y,
             i,
             j,
             [d0, d1],

@@ -378,7 +378,7 @@ impl Renderer {
                 target_size.width, target_size.height
             )));
         }
-        let dims = frame.grid.dims;
+        let dims = frame.grid.dims();
         if 2 * width as u64 * dims.x as u64 > u32::MAX as u64
             || 2 * height as u64 * dims.y as u64 > u32::MAX as u64
         {
@@ -448,7 +448,7 @@ impl Renderer {
             Some(_) => true,
             None => self
                 .lists_uploaded
-                .is_some_and(|(dims, _)| dims == frame.grid.dims),
+                .is_some_and(|(dims, _)| dims == frame.grid.dims()),
         };
         if frame.mode == ShadingMode::Lists && !lists_for_grid {
             return Err(missing_lists(frame.grid));
@@ -495,12 +495,12 @@ impl Renderer {
                 rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
                 report.upload_bytes += stage(&mut self.belt, &mut encoder, buffer, data);
             }
-            self.lists_uploaded = Some((frame.grid.dims, lists.max_count()));
+            self.lists_uploaded = Some((frame.grid.dims(), lists.max_count()));
             self.uploads += 1;
         }
         let max_count = match (frame.mode, self.lists_uploaded) {
             (ShadingMode::BruteForce, _) => self.light_count as u32,
-            (ShadingMode::Lists, Some((dims, max))) if dims == frame.grid.dims => max,
+            (ShadingMode::Lists, Some((dims, max))) if dims == frame.grid.dims() => max,
             (ShadingMode::Lists, _) => {
                 return Err(missing_lists(frame.grid));
             }
@@ -555,7 +555,7 @@ impl Renderer {
 
 /// The error of a clustered frame without lists for its grid (none uploaded, or for another grid).
 fn missing_lists(grid: &ClusterGrid) -> GpuError {
-    let d = grid.dims;
+    let d = grid.dims();
     GpuError::InvalidInput(format!(
         "clustered shading needs light lists for this grid ({}x{}x{}, {} clusters)",
         d.x,
@@ -585,7 +585,7 @@ pub fn frame_uniforms(frame: &FrameDesc<'_>, light_count: u32, max_count: u32) -
     let clip_from_world_rel = camera.clip_from_view() * Mat4::from_mat3(camera.view_rotation());
     let inverse =
         DMat4::from_cols_array(&clip_from_world_rel.to_cols_array().map(f64::from)).inverse();
-    let dims = frame.grid.dims;
+    let dims = frame.grid.dims();
     FrameUniforms {
         clip_from_world_rel: clip_from_world_rel.to_cols_array_2d(),
         world_rel_from_clip: inverse.as_mat4().to_cols_array_2d(),
