@@ -42,7 +42,7 @@ impl ActiveClusters {
         self.dims
     }
 
-    /// Marks cluster `id` active.
+    /// Marks cluster `id` active. Panics when `id` is not a cluster of the mask's grid.
     #[inline]
     pub fn mark(&mut self, id: u32) {
         let c = id as usize;
@@ -53,8 +53,11 @@ impl ActiveClusters {
     }
 
     /// Marks every cluster with tile column in `x`, row in `y` and slice in `z` (inclusive
-    /// ranges, clamped to the grid).
+    /// ranges, clamped to the grid). Marks nothing on a mask of no grid (`default()`).
     pub fn mark_box(&mut self, x: [u32; 2], y: [u32; 2], z: [u32; 2]) {
+        if self.cluster.is_empty() {
+            return;
+        }
         let d = self.dims - UVec3::ONE;
         for k in z[0].min(d.z)..=z[1].min(d.z) {
             for j in y[0].min(d.y)..=y[1].min(d.y) {
@@ -71,7 +74,7 @@ impl ActiveClusters {
         self.active = self.cluster.len();
     }
 
-    /// Whether cluster `id` is active.
+    /// Whether cluster `id` is active. Panics when `id` is not a cluster of the mask's grid.
     #[inline]
     pub fn is_active(&self, id: u32) -> bool {
         self.cluster[id as usize]
@@ -147,5 +150,9 @@ mod tests {
         assert_eq!(m.active_count(), 24);
         m.reset(&grid);
         assert_eq!(m.active_count(), 0);
+        // A mask of no grid has nothing to mark.
+        let mut empty = ActiveClusters::default();
+        empty.mark_box([0, 3], [0, 3], [0, 3]);
+        assert_eq!(empty.active_count(), 0);
     }
 }

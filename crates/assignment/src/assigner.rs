@@ -78,7 +78,10 @@ pub struct AssignStats {
     pub lights: u32,
     /// Lights skipped because their position or radius was not finite, or the radius not positive.
     pub rejected: u32,
-    /// Valid lights outside the frustum (touching no cluster).
+    /// Valid lights the frustum test rejected before any cluster was looked at. Not every
+    /// light that reaches no cluster: one kept by that (conservative, padded) test may still
+    /// list nowhere, e.g. a spot whose cone misses every cluster its sphere touches, or a light
+    /// only in inactive clusters; those count as [`visible`](Self::visible).
     pub culled: u32,
     /// Cluster–light pairs written.
     pub pairs: u64,

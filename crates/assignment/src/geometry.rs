@@ -21,9 +21,9 @@ use crate::search::FramePlanes;
 use glam::DVec3;
 use myriad_cluster_math::Camera;
 
-/// Relative padding of light radii: 4e-6 of the light's view-space extent, about 34–67 f32 ulps of
-/// it (a ulp is 2⁻²³–2⁻²⁴ of a value).
-pub(crate) const PAD: f32 = 4.0e-6;
+/// Relative padding of light radii ([`myriad_cluster_math::RADIUS_PAD`], shared with the frame
+/// systems' frustum cull): 4e-6 of the light's view-space extent.
+pub(crate) use myriad_cluster_math::{RADIUS_PAD as PAD, pad_radius};
 
 /// A spot light's unit axis in view space, from its world axis `(x, y, z)` of any length.
 ///
@@ -35,14 +35,6 @@ pub(crate) const PAD: f32 = 4.0e-6;
 pub(crate) fn spot_view_axis(view_from_world: glam::Mat3, x: f32, y: f32, z: f32) -> glam::Vec3 {
     let unit = DVec3::new(x.into(), y.into(), z.into()).normalize_or_zero();
     (view_from_world * unit.as_vec3()).normalize_or_zero()
-}
-
-/// The light's radius grown so that f32 rounding can never shrink its footprint below the exact
-/// f64 one: `r + PAD·(|cx| + |cy| + |dc| + r)` (the sum bounds the length `|c|` from above).
-#[inline]
-pub(crate) fn pad_radius(cx: f32, cy: f32, dc: f32, r: f32) -> f32 {
-    let extent = cx.abs() + cy.abs() + dc.abs() + r;
-    r + PAD * extent
 }
 
 /// Depth band and slices touched by a light.

@@ -167,7 +167,8 @@ impl ClusterGrid {
         i + self.dims.x * (j + self.dims.y * k)
     }
 
-    /// Inverse of [`Self::cluster_id`].
+    /// Inverse of [`Self::cluster_id`], for `id < self.cluster_count()` (larger ids give
+    /// coordinates outside the grid).
     pub fn cluster_coords(&self, id: u32) -> UVec3 {
         let (x, y) = (self.dims.x, self.dims.y);
         UVec3::new(id % x, (id / x) % y, id / (x * y))
@@ -279,6 +280,7 @@ impl ClusterGrid {
     }
 
     /// Cluster id of pixel `(px, py)` at view depth `depth` on a `width × height` target.
+    /// Panics when the pixel lies outside the target (a programming error: no cluster holds it).
     pub fn cluster_of_pixel(&self, px: u32, py: u32, depth: f32, width: u32, height: u32) -> u32 {
         self.cluster_id(
             self.tile_x_of_pixel(px, width),

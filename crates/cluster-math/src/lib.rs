@@ -18,6 +18,8 @@
 //!   `(pixel, depth)` → cluster id `c = i + X·(j + Y·k)`.
 //! * [`PlaneSets`]: the view-space x-, y- and z-plane sets the assignment crate searches.
 //! * [`spot_bounding_sphere`]: the tightest simple sphere around a spot light's volume.
+//! * [`pad_radius`]: the radius allowance for f32 rounding shared by every f32 light test (the
+//!   assignment and the frame systems' cull), so neither drops a light the other keeps.
 //! * [`oracle`]: the exact f64 reference tests (sphere vs cell, spot volume vs cell). They define what
 //!   "a light touches a cluster" means; every fast method in `myriad-assignment` is proven
 //!   conservative against them.
@@ -38,11 +40,13 @@ mod bounds;
 mod camera;
 mod grid;
 pub mod oracle;
+mod padding;
 mod planes;
 
 pub use bounds::{SpotCone, spot_bounding_sphere};
 pub use camera::Camera;
 pub use grid::{ClusterGrid, DepthSlicing, InvalidGrid};
+pub use padding::{RADIUS_PAD, pad_radius};
 pub use planes::PlaneSets;
 
 /// Re-exported so callers use the same `glam` version as the crate's public types.

@@ -97,7 +97,8 @@ pub struct LightSlices<'a> {
     pub spot: Option<SpotSlices<'a>>,
 }
 
-/// Borrowed spot columns: unit axis and outer half angle (radians; `>= π` omnidirectional).
+/// Borrowed spot columns: axis and outer half angle (radians; `>= π` omnidirectional). The axis
+/// need not be unit length: the cull normalises it, `lights_to_view` rotates it as given.
 #[derive(Clone, Copy, Debug)]
 pub struct SpotSlices<'a> {
     /// Axis x.

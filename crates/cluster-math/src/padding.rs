@@ -1,0 +1,21 @@
+//! The one allowance for f32 rounding in "does this light's sphere touch that volume".
+//!
+//! Every fast f32 test of a light against planes (the assignment's phases, the frame systems'
+//! frustum cull) brings the centre to view space and compares dot products with the radius. Each
+//! step rounds by about 1e-7 of the magnitudes in play, so a light the f64 oracle sees touching a
+//! plane by less than that could be judged outside and lost. Growing the radius by
+//! [`RADIUS_PAD`] of the light's view-space extent absorbs all of it, and with one shared pad the
+//! cull in front of the assignment can never drop a light the assignment would keep.
+
+/// Relative padding of light radii: 4e-6 of the light's view-space extent, about 34–67 f32 ulps
+/// of it (a ulp is 2⁻²³–2⁻²⁴ of a value).
+pub const RADIUS_PAD: f32 = 4.0e-6;
+
+/// The light's radius grown so that f32 rounding can never shrink its footprint below the exact
+/// f64 one: `r + RADIUS_PAD·(|cx| + |cy| + |dc| + r)`, for a view-space centre `(cx, cy)` at
+/// depth `dc` (the sum bounds the length `|c|` from above).
+#[inline]
+pub fn pad_radius(cx: f32, cy: f32, dc: f32, r: f32) -> f32 {
+    let extent = cx.abs() + cy.abs() + dc.abs() + r;
+    r + RADIUS_PAD * extent
+}
