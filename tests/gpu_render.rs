@@ -367,9 +367,73 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
             .map(|_| ()),
         "needs light lists for this grid",
     );
-    // The scene's own grid still renders with the kept lists.
+    // The same shape over another depth range (a fitted grid) or slicing is other clusters:
+    // the kept lists were shaded with it, 189/255 off brute force (audit f3).
+    let nearer = g.try_with_depth_range(g.near(), g.far() / 3.0).unwrap();
+    let sliced_linearly = ClusterGrid::new(g.dims(), DepthSlicing::Linear, g.near(), g.far());
+    for other in [nearer, sliced_linearly] {
+        invalid(
+            renderer
+                .render(ctx, geometry, &frame(&scene.camera, &other), &target.view)
+                .map(|_| ()),
+            "kept ones were built for another grid",
+        );
+    }
+    // Fewer lights uploaded under the kept lists: they name lights that are gone, whose old
+    // records the never-shrinking buffer still holds (195/255 off, audit f3).
+    let few = myriad::render::light_columns(&scene.lights);
+    let few = myriad::gpu::LightColumns {
+        x: &few.x[..8],
+        y: &few.y[..8],
+        z: &few.z[..8],
+        radius: &few.radius[..8],
+        r: &few.r[..8],
+        g: &few.g[..8],
+        b: &few.b[..8],
+        intensity: &few.intensity[..8],
+        spot: few.spot.map(|s| myriad::gpu::SpotColumns {
+            dir_x: &s.dir_x[..8],
+            dir_y: &s.dir_y[..8],
+            dir_z: &s.dir_z[..8],
+            angle: &s.angle[..8],
+        }),
+    };
+    let fewer_lights = myriad::gpu::FrameDesc {
+        lights: Some(few),
+        ..frame(&scene.camera, &g)
+    };
+    invalid(
+        renderer
+            .render(ctx, geometry, &fewer_lights, &target.view)
+            .map(|_| ()),
+        "upload lists built for these lights",
+    );
+    // The scene's own grid still renders with the kept lists, and nothing above was uploaded.
+    let generation = renderer.upload_generation();
     let kept = renderer.render(ctx, geometry, &frame(&scene.camera, &g), &target.view);
-    assert!(kept.is_ok(), "{:?}", kept.err());
+    assert_eq!(
+        kept.as_ref().map(|r| r.lights).ok(),
+        Some(200),
+        "{:?}",
+        kept.err()
+    );
+    // A refused render_after_prepass (the prepass was of another size) leaves the uploads as
+    // they were: it used to replace the light buffer and its bookkeeping before refusing.
+    let mut other_size = scene.camera;
+    other_size.width = 96;
+    renderer.render_prepass(ctx, geometry, &other_size).unwrap();
+    let all = myriad::render::light_columns(&scene.lights);
+    let refused = myriad::gpu::FrameDesc {
+        lights: Some(all),
+        ..frame(&scene.camera, &g)
+    };
+    invalid(
+        renderer
+            .render_after_prepass(ctx, geometry, &refused, &target.view)
+            .map(|_| ()),
+        "needs a prepass of the same size",
+    );
+    assert_eq!(renderer.upload_generation(), generation);
 }
 
 #[test]

@@ -107,12 +107,18 @@ impl ClusterLists<'_> {
         {
             return Err(format!("cluster {c}'s list runs past the {total} indices"));
         }
-        if let Some(&i) = self.indices.iter().max().filter(|&&m| m as usize >= lights) {
+        if self.lights_named() > lights {
             return Err(format!(
-                "light index {i} in the lists, but only {lights} lights"
+                "light index {} in the lists, but only {lights} lights",
+                self.lights_named() - 1
             ));
         }
         Ok(())
+    }
+
+    /// How many lights the lists need: one more than the largest index (0 without indices).
+    pub fn lights_named(&self) -> usize {
+        self.indices.iter().max().map_or(0, |&i| i as usize + 1)
     }
 
     /// The largest list.

@@ -127,7 +127,7 @@ pub struct Renderer {
     scratch_draws: Vec<crate::scene::Draw>,
     light_count: usize,
     lights_camera: Option<[f32; 3]>,
-    lists_uploaded: Option<(glam::UVec3, u32)>,
+    lists_uploaded: Option<UploadedLists>,
     edges_uploaded: Option<ClusterGrid>,
     has_spots: bool,
     /// Bumped by every frame that uploads lights or lists (see [`Renderer::upload_generation`]).
@@ -398,7 +398,7 @@ impl Renderer {
                 ShadingMode::Lists => frame
                     .lists
                     .map(|l| l.max_count())
-                    .or(self.lists_uploaded.map(|(_, max)| max))
+                    .or(self.lists_uploaded.map(|u| u.max_count))
                     .unwrap_or(0) as u64,
             };
             if lights > max_lights {
@@ -444,15 +444,32 @@ impl Renderer {
                 "the camera moved, so the camera-relative lights must be uploaded again".into(),
             ));
         }
-        let lists_for_grid = match &frame.lists {
-            Some(_) => true,
-            None => self
-                .lists_uploaded
-                .is_some_and(|(dims, _)| dims == frame.grid.dims()),
-        };
-        if frame.mode == ShadingMode::Lists && !lists_for_grid {
-            return Err(missing_lists(frame.grid));
+        // Kept lists belong to the grid they were built for, all of it: the same dimensions
+        // over another depth range or slicing are other clusters. And they must not name
+        // lights beyond the ones uploaded now (the light buffer never shrinks, so the shader
+        // would read the records of lights that are gone).
+        if frame.mode == ShadingMode::Lists && frame.lists.is_none() {
+            match self.lists_uploaded {
+                Some(kept) if kept.grid == *frame.grid => {
+                    if kept.lights_named > light_count {
+                        return Err(GpuError::InvalidInput(format!(
+                            "the kept lists name light {}, but the frame has {light_count} \
+                             lights: upload lists built for these lights",
+                            kept.lights_named - 1
+                        )));
+                    }
+                }
+                _ => return Err(missing_lists(frame.grid)),
+            }
         }
+        if !draw_gbuffer && self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
+            return Err(GpuError::InvalidInput(
+                "render_after_prepass needs a prepass of the same size first".into(),
+            ));
+        }
+        // The last check that can fail (the G-buffer's size against the device); a new size's
+        // G-buffer changes nothing a later frame relies on.
+        self.ensure_gbuffer(device, width, height)?;
         profile_span!("upload lights and lists");
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
@@ -495,15 +512,17 @@ impl Renderer {
                 rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
                 report.upload_bytes += stage(&mut self.belt, &mut encoder, buffer, data);
             }
-            self.lists_uploaded = Some((frame.grid.dims(), lists.max_count()));
+            self.lists_uploaded = Some(UploadedLists {
+                grid: *frame.grid,
+                max_count: lists.max_count(),
+                lights_named: lists.lights_named(),
+            });
             self.uploads += 1;
         }
         let max_count = match (frame.mode, self.lists_uploaded) {
             (ShadingMode::BruteForce, _) => self.light_count as u32,
-            (ShadingMode::Lists, Some((dims, max))) if dims == frame.grid.dims() => max,
-            (ShadingMode::Lists, _) => {
-                return Err(missing_lists(frame.grid));
-            }
+            (ShadingMode::Lists, Some(kept)) => kept.max_count,
+            (ShadingMode::Lists, None) => unreachable!("checked above: lists for this grid"),
         };
         if self.edges_uploaded != Some(*frame.grid) {
             frame.grid.fill_slice_edges(&mut self.scratch_edges);
@@ -530,12 +549,6 @@ impl Renderer {
         if rebind_lights {
             self.lights_group = Some(self.lights_bind_group(device));
         }
-        if !draw_gbuffer && self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
-            return Err(GpuError::InvalidInput(
-                "render_after_prepass needs a prepass of the same size first".into(),
-            ));
-        }
-        self.ensure_gbuffer(device, width, height)?;
         if draw_gbuffer {
             self.encode_gbuffer(&mut encoder, scene);
         }
@@ -553,15 +566,30 @@ impl Renderer {
     }
 }
 
+/// What the last accepted lists were built for: a frame that keeps them is checked against it.
+#[derive(Clone, Copy, Debug)]
+struct UploadedLists {
+    /// The whole grid (dimensions, depth range, slicing).
+    grid: ClusterGrid,
+    /// The longest list (the shader loop-limit guard).
+    max_count: u32,
+    /// One more than the largest light index.
+    lights_named: usize,
+}
+
 /// The error of a clustered frame without lists for its grid (none uploaded, or for another grid).
 fn missing_lists(grid: &ClusterGrid) -> GpuError {
     let d = grid.dims();
     GpuError::InvalidInput(format!(
-        "clustered shading needs light lists for this grid ({}x{}x{}, {} clusters)",
+        "clustered shading needs light lists for this grid ({}x{}x{}, {} clusters, depth [{}, {}] \
+         sliced {:?}): none were uploaded, or the kept ones were built for another grid",
         d.x,
         d.y,
         d.z,
-        grid.cluster_count()
+        grid.cluster_count(),
+        grid.near(),
+        grid.far(),
+        grid.slicing()
     ))
 }
 
