@@ -525,6 +525,67 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
             .render(&viewer.ctx, &viewer.scene, &frame, &view);
         invalid(result.map(|_| ()), "the renderer draws into");
     }
+    // Targets only wgpu could tell apart panicked inside it mid-frame (audit f3): a texture
+    // whose sRGB-ness differs from the renderer's format, a view reinterpreting it, and a
+    // multisampled texture.
+    let srgb = myriad::gpu::HEADLESS_FORMAT;
+    let linear = srgb.remove_srgb_suffix();
+    assert_ne!(srgb, linear, "the headless format is an sRGB one");
+    let described = |format, view_formats: &[wgpu::TextureFormat], sample_count| {
+        viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("target the renderer must refuse"),
+            size: wgpu::Extent3d {
+                width: 64,
+                height: 32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats,
+        })
+    };
+    let linear_texture = described(linear, &[], 1);
+    let srgb_texture = described(srgb, &[linear], 1);
+    let msaa_texture = described(srgb, &[], 4);
+    for (view, want) in [
+        (
+            linear_texture.create_view(&Default::default()),
+            "cannot be drawn into",
+        ),
+        (
+            srgb_texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(linear),
+                ..Default::default()
+            }),
+            "cannot be drawn into",
+        ),
+        (
+            msaa_texture.create_view(&Default::default()),
+            "4 samples per pixel",
+        ),
+    ] {
+        let frame = FrameDesc::clustered(
+            &scene.camera,
+            &scene.grid,
+            light_columns(&scene.lights),
+            cluster_lists(&lists),
+        );
+        let result = viewer
+            .renderer
+            .render(&viewer.ctx, &viewer.scene, &frame, &view);
+        invalid(result.map(|_| ()), want);
+    }
+    // Output formats the passes cannot write or blend are refused up front.
+    for format in [
+        wgpu::TextureFormat::Rgba8Uint,
+        wgpu::TextureFormat::Depth32Float,
+    ] {
+        let refused = myriad::gpu::Renderer::try_new(&viewer.ctx, format).map(|_| ());
+        invalid(refused, "cannot draw into");
+    }
     // Read-backs: BGRA came back with its channels swapped, and a texture without COPY_SRC
     // was a wgpu validation error.
     let bgra = texture(wgpu::TextureFormat::Bgra8Unorm, attachment);
@@ -537,6 +598,29 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
         read_rgba8(&viewer.ctx, &no_copy).map(|_| ()),
         "lacks COPY_SRC",
     );
+    // Several layers overran the read-back buffer; samples cannot be copied (audit f3).
+    for (shape, want) in [
+        (described(srgb, &[], 4), "4 samples"),
+        (
+            viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("two layers"),
+                size: wgpu::Extent3d {
+                    width: 64,
+                    height: 32,
+                    depth_or_array_layers: 2,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: srgb,
+                usage: attachment,
+                view_formats: &[],
+            }),
+            "2 layers",
+        ),
+    ] {
+        invalid(read_rgba8(&viewer.ctx, &shape).map(|_| ()), want);
+    }
     // The right kind still works.
     let good = texture(myriad::gpu::HEADLESS_FORMAT, attachment);
     assert_eq!(read_rgba8(&viewer.ctx, &good).unwrap().len(), 64 * 32 * 4);

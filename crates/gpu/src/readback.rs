@@ -37,6 +37,19 @@ fn read_texels(
     texel_bytes: u32,
     aspect: wgpu::TextureAspect,
 ) -> Result<Vec<u8>, GpuError> {
+    // Layers overran the buffer sized for one, and multisampled textures cannot be copied.
+    if texture.sample_count() != 1
+        || texture.depth_or_array_layers() != 1
+        || texture.dimension() != wgpu::TextureDimension::D2
+    {
+        return Err(GpuError::InvalidInput(format!(
+            "only single-sample, single-layer 2D textures are read back; this one is {:?} with \
+             {} layers and {} samples",
+            texture.dimension(),
+            texture.depth_or_array_layers(),
+            texture.sample_count()
+        )));
+    }
     if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
         return Err(GpuError::InvalidInput(
             "the texture to read back lacks COPY_SRC usage".into(),

@@ -2,6 +2,7 @@
 //! heat map), forward pass for blended geometry, pass timestamps.
 
 mod passes;
+mod target_check;
 
 use crate::buffers::{GrowableBuffer, stage};
 use crate::frame_input::{ClusterLists, LightColumns, fill_gpu_lights};
@@ -129,6 +130,8 @@ pub struct Renderer {
     lights_camera: Option<[f32; 3]>,
     lists_uploaded: Option<UploadedLists>,
     edges_uploaded: Option<ClusterGrid>,
+    /// The last target the shading passes validated against (`target_check.rs`).
+    checked_target: Option<target_check::CheckedTarget>,
     has_spots: bool,
     /// Bumped by every frame that uploads lights or lists (see [`Renderer::upload_generation`]).
     uploads: u64,
@@ -146,8 +149,9 @@ impl Renderer {
         }
     }
 
-    /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`]: an
-    /// error naming every limit that is too low, where `new` would panic in wgpu's validation.
+    /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`] (an
+    /// error naming every limit that is too low) and `output_format` (a float colour format the
+    /// device can render to and blend), where `new` would panic in wgpu's validation later.
     pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
         let mut short = Vec::new();
         Self::required_limits().check_limits_with_fail_fn(
@@ -159,6 +163,26 @@ impl Renderer {
             return Err(GpuError::InvalidInput(format!(
                 "the device's limits are below the renderer's (Renderer::required_limits): {}",
                 short.join(", ")
+            )));
+        }
+        // The shading passes write a float colour and the forward pass blends it.
+        let features = output_format.guaranteed_format_features(ctx.device.features());
+        let float = matches!(
+            output_format.sample_type(None, Some(ctx.device.features())),
+            Some(wgpu::TextureSampleType::Float { .. })
+        );
+        if !(float
+            && features
+                .allowed_usages
+                .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+            && features
+                .flags
+                .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE))
+        {
+            return Err(GpuError::InvalidInput(format!(
+                "the renderer cannot draw into {output_format:?}: it needs a float colour format \
+                 that this device can render to and blend (e.g. Rgba8UnormSrgb, Bgra8UnormSrgb, \
+                 Rgba16Float)"
             )));
         }
         Ok(Self::new(ctx, output_format))
@@ -209,6 +233,7 @@ impl Renderer {
             lists_uploaded: None,
             uploads: 0,
             edges_uploaded: None,
+            checked_target: None,
             has_spots: false,
             pipelines,
         }
@@ -261,8 +286,11 @@ impl Renderer {
         self.timer.read(ctx)
     }
 
-    /// Records, encodes and submits one frame into `target` (a view of a texture of the
-    /// renderer's output format and the camera's size). Returns without waiting for the GPU.
+    /// Records, encodes and submits one frame into `target` (a single-sample view of mip 0 of a
+    /// texture of the camera's size, in exactly the renderer's output format). Returns without
+    /// waiting for the GPU. A target wgpu would reject (another sRGB-ness in the view, a mip of
+    /// another size) is an error: the first frame into each target checks it
+    /// (`target_check.rs`).
     pub fn render(
         &mut self,
         ctx: &GpuContext,
@@ -371,6 +399,13 @@ impl Renderer {
                 output
             )));
         }
+        if texture.sample_count() != 1 {
+            return Err(GpuError::InvalidInput(format!(
+                "the target has {} samples per pixel; the renderer draws single-sample targets \
+                 (resolve into one afterwards)",
+                texture.sample_count()
+            )));
+        }
         let target_size = texture.size();
         if (target_size.width, target_size.height) != (width, height) {
             return Err(GpuError::InvalidInput(format!(
@@ -467,9 +502,12 @@ impl Renderer {
                 "render_after_prepass needs a prepass of the same size first".into(),
             ));
         }
-        // The last check that can fail (the G-buffer's size against the device); a new size's
-        // G-buffer changes nothing a later frame relies on.
+        // The last checks that can fail: the G-buffer's size against the device (a new size's
+        // G-buffer changes nothing a later frame relies on), and the target against the passes.
         self.ensure_gbuffer(device, width, height)?;
+        let forward_pass =
+            (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map;
+        self.check_target(device, frame, target, forward_pass)?;
         profile_span!("upload lights and lists");
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
@@ -553,8 +591,7 @@ impl Renderer {
             self.encode_gbuffer(&mut encoder, scene);
         }
         self.encode_shading(device, &mut encoder, frame, target);
-        report.forward_pass =
-            (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map;
+        report.forward_pass = forward_pass;
         if report.forward_pass {
             self.encode_forward(device, &mut encoder, scene, frame, target);
         }
