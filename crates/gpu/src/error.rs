@@ -23,7 +23,14 @@ pub enum GpuError {
     /// A buffer would exceed what the device can bind; nothing is truncated, the frame is refused.
     #[error(
         "{what} needs {bytes} bytes, more than this device can bind in one storage buffer \
-         ({limit} bytes); use a coarser grid or a pair budget"
+         ({limit} bytes); {}",
+        if *what == "lights" {
+            "fewer lights per frame (cull first), or a device created with a larger \
+             max_storage_buffer_binding_size"
+        } else {
+            "use a coarser grid or a pair budget, or a device created with a larger \
+             max_storage_buffer_binding_size"
+        }
     )]
     BufferTooLarge {
         /// Which buffer.
@@ -73,5 +80,26 @@ fn loop_limit_advice(mode: crate::ShadingMode) -> &'static str {
             "use light lists (clustered shading) or fewer lights per pass"
         }
         crate::ShadingMode::Lists => "use a finer cluster grid (shorter lists) or fewer lights",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GpuError;
+
+    #[test]
+    fn a_buffer_too_large_says_what_would_help_for_that_buffer() {
+        let message = |what| {
+            GpuError::BufferTooLarge {
+                what,
+                bytes: 200,
+                limit: 100,
+            }
+            .to_string()
+        };
+        // The light buffer's size depends on the light count alone: no grid helps it.
+        assert!(message("lights").contains("fewer lights"));
+        assert!(!message("lights").contains("coarser grid"));
+        assert!(message("light indices").contains("coarser grid"));
     }
 }

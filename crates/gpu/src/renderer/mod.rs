@@ -266,6 +266,11 @@ impl Renderer {
             .transpose()
     }
 
+    /// The colour format the renderer draws into (targets must have exactly this format).
+    pub fn output_format(&self) -> wgpu::TextureFormat {
+        self.pipelines.output_format()
+    }
+
     /// How many frames have uploaded lights or lists so far. A caller that keeps what it last
     /// uploaded (to send nothing when nothing changed) compares this with the value after its own
     /// upload: if another frame uploaded in between, the GPU no longer holds its data.
