@@ -172,14 +172,7 @@ impl Renderer {
                     store: wgpu::StoreOp::Store,
                 },
             })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &gbuffer.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            depth_stencil_attachment: Some(forward_depth(&gbuffer.depth)),
             timestamp_writes: timestamps,
             occlusion_query_set: None,
             multiview_mask: None,
@@ -197,5 +190,19 @@ impl Renderer {
                 0..1,
             );
         }
+    }
+}
+
+/// The forward pass's depth attachment: the G-buffer's depth, loaded, tested against, kept.
+pub(super) fn forward_depth(
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view: depth,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
     }
 }

@@ -9,6 +9,7 @@
 //! A target already accepted at this G-buffer size is not checked again.
 
 use super::Renderer;
+use super::passes::forward_depth;
 use crate::FrameDesc;
 use crate::error::GpuError;
 use std::future::Future;
@@ -72,14 +73,7 @@ impl Renderer {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("target check: forward"),
                 color_attachments: &color,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &gbuffer.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: Some(forward_depth(&gbuffer.depth)),
                 ..Default::default()
             });
             pass.set_pipeline(pipeline);
