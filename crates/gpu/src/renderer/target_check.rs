@@ -6,7 +6,10 @@
 //! validation in the middle of the frame (audit f3). So the first frame into a target records
 //! both shading passes' attachments and pipelines into a throwaway encoder under a validation
 //! error scope, never submitted, and refuses the frame with wgpu's own message when that fails.
-//! A target already accepted at this G-buffer size is not checked again.
+//! A target already accepted at this G-buffer size is not checked again: the renderer keeps a
+//! clone of the last accepted view (which keeps that one texture alive until another target is
+//! drawn). A swap chain hands out a new view every frame, so there each frame pays for the check:
+//! one throwaway encoder with two empty passes, nothing submitted.
 
 use super::Renderer;
 use super::passes::forward_depth;
