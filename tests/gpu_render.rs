@@ -578,6 +578,40 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
             .render(&viewer.ctx, &viewer.scene, &frame, &view);
         invalid(result.map(|_| ()), want);
     }
+    // A view of a lower mip of a texture of the camera's size: without a forward pass (a heat
+    // map) it shaded 32x16 pixels as if they were 64x32, with Ok.
+    let mipped = viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("two mips"),
+        size: wgpu::Extent3d {
+            width: 64,
+            height: 32,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 2,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: srgb,
+        usage: attachment,
+        view_formats: &[],
+    });
+    let second_mip = mipped.create_view(&wgpu::TextureViewDescriptor {
+        base_mip_level: 1,
+        mip_level_count: Some(1),
+        ..Default::default()
+    });
+    let heat_map = FrameDesc {
+        heat_map: true,
+        ..FrameDesc::clustered(
+            &scene.camera,
+            &scene.grid,
+            light_columns(&scene.lights),
+            cluster_lists(&lists),
+        )
+    };
+    let result = viewer
+        .renderer
+        .render(&viewer.ctx, &viewer.scene, &heat_map, &second_mip);
+    invalid(result.map(|_| ()), "cannot be drawn into");
     // Output formats the passes cannot write or blend are refused up front.
     for format in [
         wgpu::TextureFormat::Rgba8Uint,

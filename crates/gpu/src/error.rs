@@ -62,6 +62,14 @@ pub enum GpuError {
         /// Its loop limit, over all loops of an invocation.
         limit: u64,
     },
+    /// The device was created with limits below [`crate::Renderer::required_limits`] (each
+    /// limit named, with what it is and what the renderer needs). Request those limits when
+    /// creating the device; every adapter the renderer runs on has them.
+    #[error(
+        "the device's limits are below the renderer's (Renderer::required_limits): {0}; create \
+         the device with at least those limits"
+    )]
+    DeviceLimits(String),
     /// Frame inputs that do not fit together (list sizes vs grid, target size vs grid).
     #[error("invalid frame input: {0}")]
     InvalidInput(String),

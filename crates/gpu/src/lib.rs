@@ -62,7 +62,7 @@ pub use readback::{encode_png, save_png};
 pub use readback::{read_depth, read_rgba8};
 pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_uniforms};
 pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
-pub use targets::{GBuffer, HEADLESS_FORMAT, HeadlessTarget};
+pub use targets::{DEPTH_FORMAT, GBuffer, HEADLESS_FORMAT, HeadlessTarget};
 pub use timing::PassTimes;
 /// The wgpu version this crate is built against, for callers that want to match it.
 pub use wgpu;

@@ -10,7 +10,8 @@ pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSr
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// See [`ALBEDO_FORMAT`].
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-/// See [`ALBEDO_FORMAT`].
+/// The G-buffer's depth (f32, 0 at the near plane, 1.0 where nothing was drawn): what an engine
+/// drawing against [`crate::Renderer::gbuffer`]'s depth builds its pipelines with.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The colour format headless targets use (and read back as RGBA8).

@@ -107,9 +107,12 @@ impl PassTimer {
         }
     }
 
-    /// Marks a new frame: no pass has run and nothing was uploaded yet.
-    pub fn begin_frame(&mut self) {
+    /// Marks a new frame: no pass has run and nothing was uploaded yet, except the G-buffer
+    /// pass when `keep_gbuffer` (a frame shading the G-buffer a prepass drew and timed).
+    pub fn begin_frame(&mut self, keep_gbuffer: bool) {
+        let gbuffer = keep_gbuffer && self.ran[TimedPass::GBuffer as usize];
         self.ran = [false; PASSES as usize];
+        self.ran[TimedPass::GBuffer as usize] = gbuffer;
         self.uploaded = false;
     }
 

@@ -149,8 +149,8 @@ impl Renderer {
         }
     }
 
-    /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`] (an
-    /// error naming every limit that is too low) and `output_format` (a float colour format the
+    /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`]
+    /// ([`GpuError::DeviceLimits`] naming every limit that is too low) and `output_format` (a float colour format the
     /// device can render to and blend), where `new` would panic in wgpu's validation later.
     pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
         let mut short = Vec::new();
@@ -160,10 +160,7 @@ impl Renderer {
             |name, needed, allowed| short.push(format!("{name} {allowed} (needs {needed})")),
         );
         if !short.is_empty() {
-            return Err(GpuError::InvalidInput(format!(
-                "the device's limits are below the renderer's (Renderer::required_limits): {}",
-                short.join(", ")
-            )));
+            return Err(GpuError::DeviceLimits(short.join(", ")));
         }
         // The shading passes write a float colour and the forward pass blends it.
         let features = output_format.guaranteed_format_features(ctx.device.features());
@@ -266,6 +263,15 @@ impl Renderer {
             .transpose()
     }
 
+    /// The G-buffer the last frame or prepass drew, at the camera's size (`None` before the
+    /// first): an engine can depth-test what it draws after the frame against its `depth`
+    /// ([`crate::DEPTH_FORMAT`], 0 at the near plane, 1.0 where nothing was drawn), or sample
+    /// its normals. It stays until a frame of another size replaces it; drawing into it changes
+    /// what a following [`Renderer::render_after_prepass`] shades.
+    pub fn gbuffer(&self) -> Option<&GBuffer> {
+        self.gbuffer.as_ref()
+    }
+
     /// The colour format the renderer draws into (targets must have exactly this format).
     pub fn output_format(&self) -> wgpu::TextureFormat {
         self.pipelines.output_format()
@@ -343,8 +349,11 @@ impl Renderer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("prepass"),
             });
-        self.timer.begin_frame();
+        self.timer.begin_frame(false);
         self.encode_gbuffer(&mut encoder, scene);
+        // Resolved now, so `last_pass_times` after a prepass reports it (and not the ticks of
+        // the frame before).
+        self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         Ok(())
     }
@@ -520,7 +529,9 @@ impl Renderer {
             label: Some("frame"),
         });
         let mut rebind_lights = self.lights_group.is_none();
-        self.timer.begin_frame();
+        // A frame after a prepass keeps the prepass's G-buffer timestamps (its queries stay as
+        // the prepass wrote them and are resolved again with this frame's).
+        self.timer.begin_frame(!draw_gbuffer);
         self.timer.upload_start(&mut encoder);
 
         // Lights.

@@ -3,9 +3,11 @@
 //! wgpu 30 cannot tell a `TextureView`'s format, mip level or sample count, only its texture's.
 //! A view whose sRGB-ness differs from the renderer's output format, a view of a lower mip, or a
 //! multisampled texture then passed the renderer's own checks and panicked inside wgpu's
-//! validation in the middle of the frame (audit f3). So the first frame into a target records
-//! both shading passes' attachments and pipelines into a throwaway encoder under a validation
-//! error scope, never submitted, and refuses the frame with wgpu's own message when that fails.
+//! validation in the middle of the frame (audit f3), or, for a lower mip without a forward pass,
+//! shaded pixels of the wrong size with `Ok`. So the first frame into a target records both
+//! shading passes' attachments (the forward pass's with the G-buffer's depth, whether it runs or
+//! not) and pipelines into a throwaway encoder under a validation error scope, never submitted,
+//! and refuses the frame with wgpu's own message when that fails.
 //! A target already accepted at this G-buffer size is not checked again: the renderer keeps a
 //! clone of the last accepted view (which keeps that one texture alive until another target is
 //! drawn). A swap chain hands out a new view every frame, so there each frame pays for the check:
@@ -71,15 +73,19 @@ impl Renderer {
             });
             pass.set_pipeline(pipeline);
         }
-        if forward {
-            let pipeline = self.pipelines.forward(device, frame.mode, has_spots);
+        {
+            // Always paired with the G-buffer's depth, even when no forward pass runs: wgpu then
+            // compares the view's own size (a lower mip's) with the camera's, which the deferred
+            // pass alone never does (it would shade the pixels of another size, with `Ok`).
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("target check: forward"),
                 color_attachments: &color,
                 depth_stencil_attachment: Some(forward_depth(&gbuffer.depth)),
                 ..Default::default()
             });
-            pass.set_pipeline(pipeline);
+            if forward {
+                pass.set_pipeline(self.pipelines.forward(device, frame.mode, has_spots));
+            }
         }
         drop(encoder.finish());
         if let Some(error) = ready(scope.pop()).flatten() {

@@ -1,0 +1,206 @@
+//! What an engine reaches of the renderer beyond a frame: a typed error for a device with too low
+//! limits, the G-buffer's depth to draw its own geometry against, and pass times after a depth
+//! prepass (audit f3).
+
+use myriad::assignment::Method;
+use myriad::gpu::{GpuContext, GpuError, Renderer, wgpu};
+use myriad::render::{RenderScene, Shading, Viewer};
+
+fn viewer_after_one_frame(width: u32, height: u32) -> Option<(RenderScene, Viewer)> {
+    let ctx = GpuContext::headless_for_tests()?;
+    let scene = RenderScene::default_scene(200, width, height).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    Some((scene, viewer))
+}
+
+#[test]
+fn a_device_below_the_required_limits_is_a_device_limits_error() {
+    // The adapter's own device is only to see that one exists (or to skip where allowed).
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    // The downlevel defaults allow four storage buffers per stage; the renderer needs five.
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: wgpu::Limits::downlevel_defaults(),
+        ..Default::default()
+    }))
+    .unwrap();
+    let ctx = GpuContext::from_device(device, queue);
+    match Renderer::try_new(&ctx, myriad::gpu::HEADLESS_FORMAT) {
+        Err(GpuError::DeviceLimits(limits)) => {
+            assert!(
+                limits.contains("max_storage_buffers_per_shader_stage 4 (needs 5)"),
+                "{limits}"
+            );
+        }
+        other => panic!("want DeviceLimits, got {:?}", other.map(|_| ())),
+    }
+}
+
+/// A full-screen triangle at NDC depth `DEPTH` (prepended), drawn red with a `Less` depth test
+/// and no depth writes: where the engine's geometry is behind what the frame drew, the frame shows
+/// through.
+const OVERLAY_WGSL: &str = "
+@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+    return vec4<f32>(xy, DEPTH, 1.0);
+}
+@fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(1.0, 0.0, 0.0, 1.0); }
+";
+
+#[test]
+fn an_engine_depth_tests_its_own_geometry_against_the_gbuffer() {
+    let Some((scene, viewer)) = viewer_after_one_frame(96, 48) else {
+        return;
+    };
+    let ctx = &viewer.ctx;
+    let frame_image = viewer.image().unwrap();
+    let gbuffer = viewer.renderer.gbuffer().expect("a frame was drawn");
+    assert_eq!(
+        gbuffer.size,
+        (scene.camera.width, scene.camera.height),
+        "the G-buffer is the camera's size"
+    );
+    let depth = viewer.renderer.read_depth(ctx).unwrap().unwrap();
+    // The overlay sits at the median depth of what the frame drew.
+    let mut drawn: Vec<f32> = depth.iter().copied().filter(|&d| d < 1.0).collect();
+    drawn.sort_by(f32::total_cmp);
+    let overlay_depth = drawn[drawn.len() / 2];
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("engine overlay"),
+            source: wgpu::ShaderSource::Wgsl(
+                format!("const DEPTH: f32 = {overlay_depth:?};{OVERLAY_WGSL}").into(),
+            ),
+        });
+    let pipeline = ctx
+        .device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("engine overlay"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: myriad::gpu::DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(myriad::gpu::HEADLESS_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("engine overlay"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &viewer.target.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &gbuffer.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline);
+        pass.draw(0..3, 0..1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let overlaid = viewer.image().unwrap();
+    let red = [255u8, 0, 0, 255];
+    let (mut in_front, mut behind) = (0, 0);
+    for (at, &d) in depth.iter().enumerate() {
+        let pixel = &overlaid[4 * at..4 * at + 4];
+        // Pixels within an ulp of the overlay's depth could go either way.
+        if (d - overlay_depth).abs() <= 1e-6 {
+            continue;
+        }
+        if d > overlay_depth {
+            assert_eq!(pixel, red, "pixel {at} (depth {d}) should show the overlay");
+            behind += 1;
+        } else {
+            assert_eq!(
+                pixel,
+                &frame_image[4 * at..4 * at + 4],
+                "pixel {at} (depth {d}) is in front of the overlay"
+            );
+            in_front += 1;
+        }
+    }
+    assert!(
+        in_front > 0 && behind > 0,
+        "the view must have geometry on both sides of the overlay ({in_front} in front, {behind} behind)"
+    );
+}
+
+#[test]
+fn pass_times_after_a_depth_prepass_include_the_prepass_gbuffer() {
+    let Some((scene, mut viewer)) = viewer_after_one_frame(96, 48) else {
+        return;
+    };
+    let ctx = viewer.ctx.clone();
+    if !ctx.has_timestamps() {
+        // llvmpipe (CI's adapter) has timestamps: the checks below must run there.
+        assert!(!ctx.describe().contains("llvmpipe"), "{}", ctx.describe());
+        return;
+    }
+    let lists = viewer.lists().clone();
+    let renderer = &mut viewer.renderer;
+    ctx.wait_idle().unwrap();
+    let frame = renderer.last_pass_times(&ctx).unwrap().unwrap();
+    assert!(frame.gbuffer_ms.is_some() && frame.shading_ms.is_some());
+
+    // Right after the prepass: its G-buffer pass alone (not the previous frame's passes).
+    renderer
+        .render_prepass(&ctx, &viewer.scene, &scene.camera)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    let prepass = renderer.last_pass_times(&ctx).unwrap().unwrap();
+    assert!(prepass.gbuffer_ms.is_some(), "{prepass:?}");
+    assert_eq!(prepass.shading_ms, None, "{prepass:?}");
+    assert_eq!(prepass.forward_ms, None, "{prepass:?}");
+
+    // Shading the prepass's G-buffer: the G-buffer time is the prepass's, beside the shading's.
+    let frame_desc = myriad::gpu::FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        myriad::render::light_columns(&scene.lights),
+        myriad::render::cluster_lists(&lists),
+    );
+    renderer
+        .render_after_prepass(&ctx, &viewer.scene, &frame_desc, &viewer.target.view)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    let after = renderer.last_pass_times(&ctx).unwrap().unwrap();
+    assert_eq!(after.gbuffer_ms, prepass.gbuffer_ms, "{after:?}");
+    assert!(after.shading_ms.is_some(), "{after:?}");
+}
