@@ -509,21 +509,27 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
     // A swap-chain format the renderer was not built for, and a texture it cannot draw into:
     // both were wgpu validation panics inside a function returning Result.
     let lists = viewer.lists().clone();
+    let mut render_into = |view: &wgpu::TextureView, heat_map: bool| {
+        let frame = FrameDesc {
+            heat_map,
+            ..FrameDesc::clustered(
+                &scene.camera,
+                &scene.grid,
+                light_columns(&scene.lights),
+                cluster_lists(&lists),
+            )
+        };
+        let result = viewer
+            .renderer
+            .render(&viewer.ctx, &viewer.scene, &frame, view);
+        result.map(|_| ())
+    };
     for target in [
         texture(wgpu::TextureFormat::Bgra8Unorm, attachment),
         texture(myriad::gpu::HEADLESS_FORMAT, wgpu::TextureUsages::COPY_SRC),
     ] {
         let view = target.create_view(&Default::default());
-        let frame = FrameDesc::clustered(
-            &scene.camera,
-            &scene.grid,
-            light_columns(&scene.lights),
-            cluster_lists(&lists),
-        );
-        let result = viewer
-            .renderer
-            .render(&viewer.ctx, &viewer.scene, &frame, &view);
-        invalid(result.map(|_| ()), "the renderer draws into");
+        invalid(render_into(&view, false), "the renderer draws into");
     }
     // Targets only wgpu could tell apart panicked inside it mid-frame (audit f3): a texture
     // whose sRGB-ness differs from the renderer's format, a view reinterpreting it, and a
@@ -567,16 +573,7 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
             "4 samples per pixel",
         ),
     ] {
-        let frame = FrameDesc::clustered(
-            &scene.camera,
-            &scene.grid,
-            light_columns(&scene.lights),
-            cluster_lists(&lists),
-        );
-        let result = viewer
-            .renderer
-            .render(&viewer.ctx, &viewer.scene, &frame, &view);
-        invalid(result.map(|_| ()), want);
+        invalid(render_into(&view, false), want);
     }
     // A view of a lower mip of a texture of the camera's size: without a forward pass (a heat
     // map) it shaded 32x16 pixels as if they were 64x32, with Ok.
@@ -599,19 +596,7 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
         mip_level_count: Some(1),
         ..Default::default()
     });
-    let heat_map = FrameDesc {
-        heat_map: true,
-        ..FrameDesc::clustered(
-            &scene.camera,
-            &scene.grid,
-            light_columns(&scene.lights),
-            cluster_lists(&lists),
-        )
-    };
-    let result = viewer
-        .renderer
-        .render(&viewer.ctx, &viewer.scene, &heat_map, &second_mip);
-    invalid(result.map(|_| ()), "cannot be drawn into");
+    invalid(render_into(&second_mip, true), "cannot be drawn into");
     // Output formats the passes cannot write or blend are refused up front.
     for format in [
         wgpu::TextureFormat::Rgba8Uint,
