@@ -57,12 +57,21 @@ impl Camera {
     }
 
     /// What makes this camera unusable, if anything: [`Self::view_problem`], or a depth range
-    /// not `0 < near < far` (finite). For engines that take cameras from users.
+    /// not `0 < near < far` (finite), or one whose `near·far` passes `f32::MAX`: depth is then
+    /// reconstructed as infinity ([`Self::view_depth_from_ndc_depth`], in f32 as on the GPU).
+    /// For engines that take cameras from users.
     pub fn problem(&self) -> Option<String> {
         self.view_problem().or_else(|| {
-            (!(self.near > 0.0 && self.near < self.far && self.far.is_finite())).then(|| {
-                format!(
+            if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
+                return Some(format!(
                     "depth range must satisfy 0 < near < far (finite), got [{}, {}]",
+                    self.near, self.far
+                ));
+            }
+            (!(self.near * self.far).is_finite()).then(|| {
+                format!(
+                    "depth range [{}, {}]: near·far overflows f32, so depths cannot be \
+                     reconstructed from the depth buffer; use smaller units",
                     self.near, self.far
                 )
             })
@@ -179,7 +188,8 @@ impl Camera {
     }
 
     /// View depth (positive distance along the view direction) of a wgpu depth-buffer value
-    /// produced by [`Self::clip_from_view`]: `depth = f·n / (n + (1 − ndc)·(f − n))`.
+    /// produced by [`Self::clip_from_view`]: `depth = f·n / (n + (1 − ndc)·(f − n))`. Infinite
+    /// when `f·n` overflows f32, a camera [`Self::problem`] refuses.
     ///
     /// Written so that f32 keeps it to a few ulps however small the near plane: the textbook
     /// `f·n / (f − ndc·(f − n))` subtracts two numbers that agree to 1 − n/depth, so at

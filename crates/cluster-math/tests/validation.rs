@@ -117,6 +117,15 @@ fn camera_problems_are_named() {
             "finite",
         ),
         (Camera { near: 0.0, ..good }, "0 < near < far"),
+        // Depth from the depth buffer would be infinite (audit g3).
+        (
+            Camera {
+                near: 1e19,
+                far: 1e20,
+                ..good
+            },
+            "overflows f32",
+        ),
         (
             Camera {
                 far: f32::INFINITY,
@@ -128,7 +137,7 @@ fn camera_problems_are_named() {
         let problem = camera.problem().expect("a problem");
         assert!(problem.contains(needle), "{camera:?}: {problem}");
         // The view alone ignores the depth range (assignment slices by the grid's).
-        let depth = needle == "0 < near < far";
+        let depth = needle == "0 < near < far" || needle == "overflows f32";
         assert_eq!(camera.view_problem().is_none(), depth, "{camera:?}");
     }
 }

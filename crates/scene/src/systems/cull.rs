@@ -22,12 +22,14 @@
 //! 3. A light is culled when its volume lies entirely outside one plane: the smallest value of
 //!    `n·x` over the volume exceeds `d`. For a sphere that is `n·c − r > d`. For a spot light —
 //!    the sector of points within range `r` of the apex `a` and within angle `θ` of the axis
-//!    `u` — it is `n·a − r·m > d` with `m = max(0, cos(max(0, α − θ)))`, where `α` is the
+//!    `u` — it is `n·a − r·m − pad > d` with `m = max(0, cos(max(0, α − θ)))`, where `α` is the
 //!    angle between `−n` and `u`: the farthest the sector reaches against `n` is along the cone
-//!    direction closest to `−n`, and not behind the apex. This is exact per plane, so a spot
+//!    direction closest to `−n`, and not behind the apex; `pad` is the sphere's f32 allowance,
+//!    added whatever the cone's reach. This is exact per plane, so a spot
 //!    pointing away from the frustum is culled even when its range sphere reaches in. A point
 //!    light in a mixed set (angle π) gets `m = 1`, the sphere test; so does a spot whose axis or
-//!    angle bounds nothing (a zero or non-finite axis, an angle ≤ 0 or NaN), as in the oracle. Axes
+//!    angle bounds nothing (a zero or non-finite axis, an angle ≤ 0, NaN or wider than 90°, whose
+//!    sector is not convex), as in the oracle and the assignment. Axes
 //!    need not be unit length: each is scaled by its largest component, then normalised.
 
 use super::{BLOCK, LightSlices, PARALLEL_MIN, fast_sin_cos};
@@ -108,22 +110,26 @@ impl Frustum {
 
     /// Step 3 for a spot cone with apex `p`, range `r`, axis `axis` (any length) and half angle
     /// `angle`: the sector's exact reach against each plane. Branch-free (selects only), so a
-    /// loop over a block vectorises. Meaningful for `angle < π` and an axis that
-    /// [`unit_axis`] keeps; callers treat the rest as point lights.
+    /// loop over a block vectorises. Meaningful for what [`is_cone`] accepts; callers treat the
+    /// rest as point lights.
     #[inline]
     fn cone_visible(&self, p: Vec3, r: f32, axis: Vec3, angle: f32) -> bool {
         let c = self.view_from_world * (p - self.eye);
-        let r = pad_radius(c.x, c.y, -c.z, r);
+        // The pad is added to every plane's reach, not to the range: a cone pointing out of a
+        // plane reaches 0 against it, and scaling the pad by that lost the apex's own rounding.
+        let pad = pad_radius(c.x, c.y, -c.z, r) - r;
         let axis = self.view_from_world * unit_axis(axis);
         let (sin_t, cos_t) = fast_sin_cos(angle);
         // Whether the sector lies entirely outside the plane with outward unit normal n and
-        // offset d; its reach against n is r, or r·cos(α − θ) (≥ 0) when α > θ.
+        // offset d; its reach against n is r, or r·cos(α − θ) (≥ 0) when α > θ. sin α comes from
+        // the cross product: √(1 − cos²α) is 0 in f32 within 2.4e-4 rad of the normal, the
+        // whole reach of a cone near 90° tilted that little into the frustum (audit g3).
         let outside = |n: Vec3, d: f32| {
             let cos_a = -n.dot(axis);
-            let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+            let sin_a = n.cross(axis).length();
             let tilted = r * (cos_a * cos_t + sin_a * sin_t).max(0.0);
             let reach = if cos_a >= cos_t { r } else { tilted };
-            n.dot(c) - reach > d
+            n.dot(c) - reach - pad > d
         };
         let [right, left, top, bottom] = self.sides;
         !(outside(Vec3::Z, -self.near)
@@ -149,12 +155,14 @@ impl Frustum {
     }
 }
 
-/// Whether a spot entry bounds a cone: an angle in (0, π) (not NaN) and an axis [`unit_axis`]
-/// can normalise. Anything else shines all round, as the assignment and the oracle treat it.
+/// Whether a spot entry bounds a cone: an angle in (0, π/2] (not NaN; in f64, as the oracle
+/// decides: f32's `FRAC_PI_2` rounds above π/2) and an axis [`unit_axis`] can normalise.
+/// Anything else shines all round, as the assignment and the oracle treat it; a cone wider than
+/// 90° was culled when it pointed away although both keep its ball (audit g1).
 #[inline]
 fn is_cone(axis: Vec3, angle: f32) -> bool {
     let largest = axis.abs().max_element();
-    (angle > 0.0) & (angle < std::f32::consts::PI) & (largest > 0.0) & largest.is_finite()
+    (angle > 0.0) & (angle < std::f32::consts::FRAC_PI_2) & (largest > 0.0) & largest.is_finite()
 }
 
 /// `axis` at unit length, for any finite non-zero length: divided by its largest component
@@ -344,69 +352,105 @@ mod tests {
     /// Spheres grazing the frustum from outside by 0–1e-4 of their distance, on random cameras,
     /// plus spots whose axis or angle bound nothing: every light the f64 oracle sees touching
     /// the frustum (a 1×1×1 grid's one cell) is kept. Unpadded, the cull dropped thousands.
-    #[test]
-    fn lights_grazing_the_frustum_are_kept_when_the_oracle_sees_them_touch() {
+    /// A random camera for the grazing tests: anywhere, any direction, fields of view 5–150°.
+    fn random_camera(rng: &mut rand_pcg::Pcg64) -> Camera {
+        let eye = Vec3::new(
+            rng.random_range(-50.0..50.0),
+            rng.random_range(-50.0..50.0),
+            rng.random_range(-50.0..50.0),
+        );
+        let look = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let fov = rng.random_range(5.0..150.0);
+        let (near, far) = (rng.random_range(0.01..1.0), rng.random_range(20.0..500.0));
+        Camera::new(eye, eye + look, Vec3::Y, fov, 1920, 1080, near, far)
+    }
+
+    /// A random point on face `face % 6` of `camera`'s frustum (right, left, top, bottom, near,
+    /// far) and that face's outward unit normal, in view space (f64).
+    fn face_point(
+        rng: &mut rand_pcg::Pcg64,
+        camera: &Camera,
+        face: usize,
+    ) -> (glam::DVec3, glam::DVec3) {
+        let t = camera.tan_half_fov().as_dvec2();
+        let (near, far) = (camera.near as f64, camera.far as f64);
+        let depth = rng.random_range(near..far);
+        let (u, v) = (rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let (p, normal) = match face % 6 {
+            0 => (
+                glam::DVec3::new(t.x * depth, v * t.y * depth, -depth),
+                glam::DVec3::new(1.0, 0.0, t.x),
+            ),
+            1 => (
+                glam::DVec3::new(-t.x * depth, v * t.y * depth, -depth),
+                glam::DVec3::new(-1.0, 0.0, t.x),
+            ),
+            2 => (
+                glam::DVec3::new(u * t.x * depth, t.y * depth, -depth),
+                glam::DVec3::new(0.0, 1.0, t.y),
+            ),
+            3 => (
+                glam::DVec3::new(u * t.x * depth, -t.y * depth, -depth),
+                glam::DVec3::new(0.0, -1.0, t.y),
+            ),
+            4 => (
+                glam::DVec3::new(u * t.x * near, v * t.y * near, -near),
+                glam::DVec3::Z,
+            ),
+            _ => (
+                glam::DVec3::new(u * t.x * far, v * t.y * far, -far),
+                glam::DVec3::NEG_Z,
+            ),
+        };
+        (p, normal.normalize())
+    }
+
+    /// Culls `lights` and counts, of those the f64 oracle sees touching `camera`'s frustum,
+    /// how many touch and how many the cull dropped.
+    fn touching_and_dropped(camera: &Camera, lights: &Lights) -> (usize, usize) {
         use myriad_cluster_math::oracle::{Cell, OracleView};
         use myriad_cluster_math::{ClusterGrid, DepthSlicing};
+        let grid = ClusterGrid::new(
+            glam::UVec3::ONE,
+            DepthSlicing::Linear,
+            camera.near,
+            camera.far,
+        );
+        let cell = Cell::of_cluster(camera, &grid, 0, 0, 0);
+        let oracle = OracleView::new(camera);
+        let mut vis = Visibility::new();
+        cull_lights(camera, lights.slices(), &mut vis);
+        let (mut touching, mut dropped) = (0, 0);
+        for (i, light) in lights.iter().enumerate() {
+            let spot = light.spot.map(|s| (s.direction, s.angle));
+            let volume = oracle.light(light.position, light.radius, spot).unwrap();
+            if volume.intersects_cell(&cell) {
+                touching += 1;
+                dropped += usize::from(!vis.mask[i]);
+            }
+        }
+        (touching, dropped)
+    }
+
+    #[test]
+    fn lights_grazing_the_frustum_are_kept_when_the_oracle_sees_them_touch() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(17);
         let (mut touching, mut dropped) = (0, 0);
         for _ in 0..60 {
-            let eye = Vec3::new(
-                rng.random_range(-50.0..50.0),
-                rng.random_range(-50.0..50.0),
-                rng.random_range(-50.0..50.0),
-            );
-            let look = Vec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-            );
-            let fov = rng.random_range(5.0..150.0);
-            let (near, far) = (rng.random_range(0.01..1.0), rng.random_range(20.0..500.0));
-            let camera = Camera::new(eye, eye + look, Vec3::Y, fov, 1920, 1080, near, far);
-            let grid = ClusterGrid::new(glam::UVec3::ONE, DepthSlicing::Linear, near, far);
-            let cell = Cell::of_cluster(&camera, &grid, 0, 0, 0);
-            let oracle = OracleView::new(&camera);
+            let camera = random_camera(&mut rng);
+            let eye = camera.position;
             let world_from_view = camera.view_rotation_f64().transpose();
-            let t = camera.tan_half_fov().as_dvec2();
             let mut lights = Lights::new();
             for i in 0..400 {
                 // A point on one of the six faces, then out along its normal by r·(1 − ε).
-                let depth = rng.random_range(near as f64..far as f64);
-                let (u, v) = (rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
-                let (mut p, normal) = match i % 6 {
-                    0 => (
-                        glam::DVec3::new(t.x * depth, v * t.y * depth, -depth),
-                        glam::DVec3::new(1.0, 0.0, t.x),
-                    ),
-                    1 => (
-                        glam::DVec3::new(-t.x * depth, v * t.y * depth, -depth),
-                        glam::DVec3::new(-1.0, 0.0, t.x),
-                    ),
-                    2 => (
-                        glam::DVec3::new(u * t.x * depth, t.y * depth, -depth),
-                        glam::DVec3::new(0.0, 1.0, t.y),
-                    ),
-                    3 => (
-                        glam::DVec3::new(u * t.x * depth, -t.y * depth, -depth),
-                        glam::DVec3::new(0.0, -1.0, t.y),
-                    ),
-                    4 => (
-                        glam::DVec3::new(
-                            u * t.x * near as f64,
-                            v * t.y * near as f64,
-                            -(near as f64),
-                        ),
-                        glam::DVec3::Z,
-                    ),
-                    _ => (
-                        glam::DVec3::new(u * t.x * far as f64, v * t.y * far as f64, -(far as f64)),
-                        glam::DVec3::NEG_Z,
-                    ),
-                };
+                let (mut p, normal) = face_point(&mut rng, &camera, i);
                 let r = rng.random_range(0.01..5.0f64);
-                p += normal.normalize() * r * (1.0 - rng.random_range(0.0..1e-4));
-                let world = (camera.position.as_dvec3() + world_from_view * p).as_vec3();
+                p += normal * r * (1.0 - rng.random_range(0.0..1e-4));
+                let world = (eye.as_dvec3() + world_from_view * p).as_vec3();
                 let light = LightRecord::point(world, r as f32);
                 lights.push(match i % 7 {
                     // Spots that bound nothing: zero axis, NaN or non-positive angle.
@@ -418,19 +462,49 @@ mod tests {
                     _ => light,
                 });
             }
-            let mut vis = Visibility::new();
-            cull_lights(&camera, lights.slices(), &mut vis);
-            for (i, light) in lights.iter().enumerate() {
-                let spot = light.spot.map(|s| (s.direction, s.angle));
-                let volume = oracle.light(light.position, light.radius, spot).unwrap();
-                if volume.intersects_cell(&cell) {
-                    touching += 1;
-                    dropped += usize::from(!vis.mask[i]);
-                }
-            }
+            let (t, d) = touching_and_dropped(&camera, &lights);
+            (touching, dropped) = (touching + t, dropped + d);
         }
         assert!(touching > 5000, "only {touching} grazing lights touch");
         assert_eq!(dropped, 0, "{dropped} of {touching} touching lights culled");
+    }
+
+    #[test]
+    fn cones_grazing_the_frustum_are_kept_when_the_oracle_sees_them_touch() {
+        // Audit g3: a spot with its apex just outside a face, its axis the face's outward normal
+        // tilted so that the cone's edge reaches in by r·sin ε, was culled (√(1 − cos²α) was 0
+        // in f32, and the pad was scaled by the cone's reach, 0 for a cone pointing out).
+        use std::f64::consts::FRAC_PI_2;
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(29);
+        let (mut touching, mut dropped) = (0, 0);
+        for _ in 0..40 {
+            let camera = random_camera(&mut rng);
+            let world_from_view = camera.view_rotation_f64().transpose();
+            let mut lights = Lights::new();
+            for i in 0..300 {
+                let (p, normal) = face_point(&mut rng, &camera, i);
+                let r = rng.random_range(0.05..50.0f64);
+                let half_angle = rng.random_range(0.01..FRAC_PI_2 - 1e-6);
+                let tilt = 10f64.powf(rng.random_range(-6.0..-2.0));
+                // The axis makes α = θ + π/2 − ε with −n, so the edge nearest −n reaches
+                // r·sin ε past the apex's plane.
+                let alpha = half_angle + FRAC_PI_2 - tilt;
+                let phi = rng.random_range(0.0..std::f64::consts::TAU);
+                let t0 = normal.any_orthonormal_vector();
+                let tangent = t0 * phi.cos() + normal.cross(t0) * phi.sin();
+                let axis = -normal * alpha.cos() + tangent * alpha.sin();
+                let apex = p + normal * rng.random_range(-0.5..2.0) * r * tilt.sin();
+                let world = camera.position.as_dvec3() + world_from_view * apex;
+                lights.push(
+                    LightRecord::point(world.as_vec3(), r as f32)
+                        .with_spot((world_from_view * axis).as_vec3(), half_angle as f32),
+                );
+            }
+            let (t, d) = touching_and_dropped(&camera, &lights);
+            (touching, dropped) = (touching + t, dropped + d);
+        }
+        assert!(touching > 1000, "only {touching} grazing cones touch");
+        assert_eq!(dropped, 0, "{dropped} of {touching} touching cones culled");
     }
 
     #[test]
@@ -473,6 +547,14 @@ mod tests {
             // Off to the right (x = 8 at depth 5, side plane at x = 5), pointing away/towards.
             LightRecord::point(Vec3::new(8.0, 0.0, -5.0), 4.0).with_spot(Vec3::X, 0.5),
             LightRecord::point(Vec3::new(8.0, 0.0, -5.0), 4.0).with_spot(Vec3::NEG_X, 0.5),
+            // Wider than 90° the oracle and the assignment take the ball (audit g1): kept.
+            LightRecord::point(Vec3::new(0.0, 0.0, 2.0), 5.0)
+                .with_spot(Vec3::Z, 100f32.to_radians()),
+            // f32's π/2 lies above π/2: a ball too; the f32 just below it is a cone.
+            LightRecord::point(Vec3::new(0.0, 0.0, 3.5), 5.0)
+                .with_spot(Vec3::Z, std::f32::consts::FRAC_PI_2),
+            LightRecord::point(Vec3::new(0.0, 0.0, 3.5), 5.0)
+                .with_spot(Vec3::Z, std::f32::consts::FRAC_PI_2.next_down()),
         ]
         .into_iter()
         .collect();
@@ -480,7 +562,9 @@ mod tests {
         cull_lights(&camera, lights.slices(), &mut vis);
         assert_eq!(
             vis.mask,
-            [false, true, false, true, false, true, false, true]
+            [
+                false, true, false, true, false, true, false, true, true, true, false
+            ]
         );
         // Without the spot columns the cones are spheres: the backward spot is kept.
         let spheres = LightSlices {
