@@ -985,6 +985,77 @@ fn frames_compares_sequential_and_pipelined_loops() {
 }
 
 #[test]
+fn outputs_never_replace_their_inputs_or_fifos() {
+    let dir = work_dir("outputs_vs_inputs");
+    let scene = paper_scene(&dir, 30);
+    let original = std::fs::read(&scene).unwrap();
+    // The scene named again as the dump, directly or through a link: refused before any work,
+    // and the scene is intact (it was replaced by its own dump).
+    let link = dir.join("link.json");
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&scene, &link).unwrap();
+    #[cfg(not(unix))]
+    std::fs::copy(&scene, &link).unwrap();
+    for out in [&scene, &link] {
+        let text = myriad_fails(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        assert_mentions(&text, &["is the input", "refusing to overwrite"]);
+        assert_eq!(std::fs::read(&scene).unwrap(), original);
+    }
+    // The model named again as the scene file: refused, the model intact.
+    let model = dir.join("model.glb");
+    myriad_ok(&["atrium".as_ref(), "--out".as_ref(), model.as_os_str()]);
+    let glb = std::fs::read(&model).unwrap();
+    let text = myriad_fails(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        model.as_os_str(),
+        "--out".as_ref(),
+        model.as_os_str(),
+    ]);
+    assert_mentions(&text, &["is the input"]);
+    assert_eq!(std::fs::read(&model).unwrap(), glb);
+    // A FIFO is written into, not renamed over (the same path as a device: `--out /dev/null`
+    // as root turned the device into a regular file).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let fifo = dir.join("fifo");
+        let made = Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let (sent, received) = std::sync::mpsc::channel();
+            let reader_path = fifo.clone();
+            std::thread::spawn(move || {
+                let _ = sent.send(std::fs::read(&reader_path));
+            });
+            myriad_ok(&[
+                "assign".as_ref(),
+                "--scene".as_ref(),
+                scene.as_os_str(),
+                "--out".as_ref(),
+                fifo.as_os_str(),
+            ]);
+            let dump = received
+                .recv_timeout(std::time::Duration::from_secs(60))
+                .expect("the dump reached the FIFO's reader")
+                .unwrap();
+            assert!(
+                dump.starts_with(b"{\"grid\""),
+                "{:?}",
+                &dump[..20.min(dump.len())]
+            );
+            let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+            assert!(kind.is_fifo(), "the FIFO became {kind:?}");
+        }
+    }
+}
+
+#[test]
 fn a_failed_render_leaves_the_old_output_set_whole() {
     if !gpu_available() {
         return;

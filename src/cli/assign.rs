@@ -40,6 +40,9 @@ pub fn parse_method(name: &str) -> Result<Method> {
 
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
+    if let Some(input) = &args.source.scene {
+        super::outputs::refuse_overwriting_inputs(&args.out, &[input])?;
+    }
     let (scene, name) = args.source.load()?;
     let pool = thread_pool(args.threads)?;
     let mut lists = LightLists::new();

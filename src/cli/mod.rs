@@ -8,6 +8,7 @@ mod frames;
 mod grid_options;
 mod info;
 mod oracle_check;
+mod outputs;
 mod paper;
 mod progress;
 mod render;

@@ -301,8 +301,19 @@ fn measure(
     ))
 }
 
+/// The files `render` writes into its `--out` folder.
+const OUTPUTS: [&str; 3] = ["frame.png", "heatmap.png", "stats.json"];
+
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
+    let inputs: Vec<&std::path::Path> = [&args.gltf, &args.scene]
+        .into_iter()
+        .flatten()
+        .map(|p| p.as_path())
+        .collect();
+    for output in OUTPUTS {
+        super::outputs::refuse_overwriting_inputs(&args.out.join(output), &inputs)?;
+    }
     let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
     let dims = scene.grid.dims();

@@ -235,6 +235,9 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
+    if let Some(model) = &args.gltf {
+        super::outputs::refuse_overwriting_inputs(&args.out, &[model])?;
+    }
     let (scene, what) = match (&args.preset, &args.gltf) {
         (Some(name), _) => {
             let preset = parse_preset(name)?;

@@ -4,13 +4,55 @@
 //! file-size limit, a signal) destroys a good file and leaves a truncated one. Here the bytes go
 //! to a temporary file in the same folder, which is renamed over the target only once it is
 //! complete: afterwards the target is either the old file or the new one, never a mix.
+//!
+//! A rename replaces whatever the name points at, so the target is looked at first (audit g2,
+//! where `--out /dev/null` as root turned the device into a regular file):
+//! - a **symbolic link** is followed, as a plain write would: the file it names is replaced and
+//!   the link stays;
+//! - a **device, FIFO or socket** is written in place (there is no file to keep whole), so
+//!   `--out /dev/null` discards and `--out /dev/stdout` prints;
+//! - a **read-only file** is refused, as a plain write refuses it (a rename would not ask);
+//! - a **folder** is refused.
+//!
+//! (Killed between the temporary file's creation and the rename, a hidden `.myriad-*` file stays
+//! beside the target; the target itself is intact.)
 
-use std::io::Write;
-use std::path::Path;
+use std::io::{Error, ErrorKind, Write};
+use std::path::{Path, PathBuf};
 
 /// Writes `bytes` to `path`, replacing it only once the whole content is written. On error the
-/// old file (if any) is untouched and no temporary file is left.
+/// old file (if any) is untouched and no temporary file is left. Links are followed, devices
+/// and FIFOs written in place, read-only files and folders refused (see the module docs).
 pub fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    // `metadata` follows links, as the OS does for a write.
+    let existing = match std::fs::metadata(path) {
+        Ok(metadata) => Some(metadata),
+        Err(e) if e.kind() == ErrorKind::NotFound => None,
+        Err(e) => return Err(e),
+    };
+    let path = match &existing {
+        Some(metadata) if metadata.is_dir() => {
+            return Err(Error::new(
+                ErrorKind::IsADirectory,
+                format!("{} is a folder", path.display()),
+            ));
+        }
+        // Through the links as given: `/dev/stdout`'s last link (`pipe:[…]`) names no path.
+        Some(metadata) if !metadata.is_file() => {
+            return std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)?
+                .write_all(bytes);
+        }
+        Some(metadata) if metadata.permissions().readonly() => {
+            return Err(Error::new(
+                ErrorKind::PermissionDenied,
+                format!("{} is read-only", path.display()),
+            ));
+        }
+        Some(_) => std::fs::canonicalize(path)?,
+        None => follow_links(path)?,
+    };
     let dir = match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
@@ -22,14 +64,36 @@ pub fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        let mode = std::fs::metadata(path).map_or(0o666, |m| m.permissions().mode() & 0o7777);
+        let mode = existing.map_or(0o666, |m| m.permissions().mode() & 0o7777);
         builder.permissions(std::fs::Permissions::from_mode(mode));
     }
     let mut temp = builder.tempfile_in(dir)?;
     temp.write_all(bytes)?;
     temp.as_file().sync_all()?;
-    temp.persist(path).map_err(|e| e.error)?;
+    temp.persist(&path).map_err(|e| e.error)?;
     Ok(())
+}
+
+/// `path` with symbolic links followed to the name a plain write would create (for a link whose
+/// target does not exist yet). More than 40 links is an error, as for the OS.
+fn follow_links(path: &Path) -> std::io::Result<PathBuf> {
+    let mut path = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&path) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&path)?;
+                path = match path.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            _ => return Ok(path),
+        }
+    }
+    Err(Error::other(format!(
+        "{}: too many levels of symbolic links",
+        path.display()
+    )))
 }
 
 #[cfg(test)]
@@ -65,5 +129,70 @@ mod tests {
         }
         // A missing folder is an error too.
         assert!(replace_file(&dir.path().join("no/such/out.json"), b"x").is_err());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn links_are_followed_and_other_kinds_of_file_are_never_renamed_over() {
+        use std::os::unix::fs::{FileTypeExt, PermissionsExt, symlink};
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("real.json");
+        std::fs::write(&file, b"old").unwrap();
+        // A link (relative, through a second link) is followed: the file is replaced, the
+        // links stay links.
+        let link = dir.path().join("link.json");
+        let link2 = dir.path().join("link2.json");
+        symlink("real.json", &link).unwrap();
+        symlink(&link, &link2).unwrap();
+        replace_file(&link2, b"new").unwrap();
+        assert_eq!(std::fs::read(&file).unwrap(), b"new");
+        for l in [&link, &link2] {
+            assert!(
+                std::fs::symlink_metadata(l)
+                    .unwrap()
+                    .file_type()
+                    .is_symlink()
+            );
+        }
+        // A dangling link creates its target, as a plain write does.
+        let dangling = dir.path().join("dangling.json");
+        symlink("created.json", &dangling).unwrap();
+        replace_file(&dangling, b"made").unwrap();
+        assert_eq!(
+            std::fs::read(dir.path().join("created.json")).unwrap(),
+            b"made"
+        );
+        // A socket cannot be written: an error, and it is still a socket (a rename replaced
+        // such files, and devices: `--out /dev/null` as root made /dev/null a regular file).
+        let socket = dir.path().join("socket");
+        let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+        assert!(replace_file(&socket, b"x").is_err());
+        assert!(
+            std::fs::symlink_metadata(&socket)
+                .unwrap()
+                .file_type()
+                .is_socket()
+        );
+        // A read-only file is refused and kept.
+        let read_only = dir.path().join("read_only.json");
+        std::fs::write(&read_only, b"keep").unwrap();
+        std::fs::set_permissions(&read_only, std::fs::Permissions::from_mode(0o444)).unwrap();
+        let e = replace_file(&read_only, b"x").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::PermissionDenied, "{e}");
+        assert_eq!(std::fs::read(&read_only).unwrap(), b"keep");
+        // (Devices take the same path: not tested here, where a regression would replace the
+        // machine's /dev/null; `tests/cli.rs` writes to /dev/null only as a non-root user.)
+        // Nothing was left behind.
+        let hidden = std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with('.')
+            })
+            .count();
+        assert_eq!(hidden, 0);
     }
 }
