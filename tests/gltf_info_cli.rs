@@ -54,6 +54,7 @@ fn info_reports_what_the_loader_sees() {
     assert_eq!(v["blended_materials"], s.blended_materials);
     assert_eq!(v["lights"]["point"], s.point_lights);
     assert_eq!(v["lights"]["spot"], s.spot_lights);
+    assert_eq!(v["lights"]["skipped"], s.skipped_lights);
     let names: Vec<&str> = v["cameras"]
         .as_array()
         .unwrap()
@@ -187,4 +188,62 @@ fn commands_that_load_a_model_print_what_the_loader_changed() {
         "{err}"
     );
     assert!(scene_file.is_file());
+}
+
+#[test]
+fn an_invalid_light_is_left_out_and_counted_not_fatal() {
+    // One triangle, a good point light and one with `range: 0`. The bad light used to make the
+    // whole file an error, `info` included; now it is skipped, counted and warned about, like an
+    // invalid light in a scene file.
+    let dir = work_dir("invalid_light");
+    let path = dir.join("range_0.gltf");
+    std::fs::write(
+        &path,
+        r#"{"asset": {"version": "2.0"},
+  "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
+  "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+      {"type": "point", "range": 0, "name": "dead"}, {"type": "point", "range": 3}]}},
+  "scenes": [{"nodes": [0, 1, 2]}],
+  "nodes": [{"mesh": 0},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 0, 1]},
+            {"extensions": {"KHR_lights_punctual": {"light": 1}}, "translation": [0, 0, 1]}]}"#,
+    )
+    .unwrap();
+    let warning =
+        "nodes[1]: KHR_lights_punctual lights[0] \"dead\": range 0 is not finite and > 0; left out";
+    let info = info_json(&path);
+    assert_eq!(info["triangles"], 1, "{info}");
+    assert_eq!(info["lights"]["point"], 1, "{info}");
+    assert_eq!(info["lights"]["skipped"], 1, "{info}");
+    assert_eq!(info["warnings"], serde_json::json!([warning]), "{info}");
+    let out = myriad(&["info".as_ref(), "--gltf".as_ref(), path.as_os_str()]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("lights      1 point, 0 spot, 0 directional; 1 invalid, left out"),
+        "{text}"
+    );
+    // Commands that use the model say so on stderr, naming the file.
+    let scene_file = dir.join("range_0.scene");
+    let out = myriad(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        path.as_os_str(),
+        "--lights".as_ref(),
+        "10".as_ref(),
+        "--out".as_ref(),
+        scene_file.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains(&format!("warning: {}: {warning}", path.display())),
+        "{err}"
+    );
 }

@@ -82,7 +82,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             "masked_materials": s.masked_materials,
             "images": s.images,
             "lights": {"point": s.point_lights, "spot": s.spot_lights,
-                       "directional": s.directional_lights},
+                       "directional": s.directional_lights, "skipped": s.skipped_lights},
             "cameras": cameras,
             "bounds": bounds.map(|b| json!({"min": nums(b.min.to_array()),
                                             "max": nums(b.max.to_array())})),
@@ -110,8 +110,16 @@ pub fn run(args: Args) -> Result<ExitCode> {
     );
     println!("  images      {} (not decoded)", s.images);
     println!(
-        "  lights      {} point, {} spot, {} directional",
-        s.point_lights, s.spot_lights, s.directional_lights
+        "  lights      {} point, {} spot, {} directional; {} invalid, left out{}",
+        s.point_lights,
+        s.spot_lights,
+        s.directional_lights,
+        s.skipped_lights,
+        if s.skipped_lights > 0 {
+            " (see the warnings)"
+        } else {
+            ""
+        }
     );
     let names = if s.cameras.is_empty() {
         "none".to_string()

@@ -37,8 +37,18 @@
 //! * **Light radius.** glTF lights may have no `range` (inverse-square falloff forever), but a
 //!   clustered light needs a finite one. Without `range`, the radius is where the illuminance of
 //!   the brightest channel, `intensity · max(color) / d²`, falls to [`LoadOptions::light_cutoff`]
-//!   (see [`radius_from_intensity`]). A light with zero intensity and no range lights nothing and
-//!   is left out with a warning.
+//!   (see [`radius_from_intensity`]).
+//! * **Invalid lights are left out, counted and reported, never fatal** — the scene file's
+//!   [`LightPolicy::SkipInvalid`](crate::LightPolicy::SkipInvalid), which every command uses.
+//!   A light whose values cannot make a light (`range` not finite and > 0, a colour or
+//!   intensity that is negative or not finite in f32, an `outerConeAngle` outside (0, π], zero
+//!   intensity without a `range`) or whose node gives it no direction (a spot or directional
+//!   light under a zero scale) is left out of [`Model::lights`] / [`Model::directional_lights`],
+//!   listed in [`Model::skipped_lights`] (one row per node that places it, with the light's
+//!   index, name and reason; `myriad info` counts them) and warned about as
+//!   `nodes[N] "node": KHR_lights_punctual lights[I] "name": <what is wrong>; left out`. The
+//!   geometry, the cameras and the other lights stay usable. Only a node naming a light that
+//!   does not exist is an error: then the document itself is broken.
 //! * **Left out, with a warning:** skins (meshes are drawn at their node's transform),
 //!   morph targets, animations, UV sets other than `TEXCOORD_0`, vertex colours.
 //! * **Out-of-range values the spec forbids are clamped and reported**, not fatal, since the
@@ -57,7 +67,7 @@ use crate::lights::LightRecord;
 use crate::model::{
     Aabb, AlphaMode, DirectionalLight, Image, ImagePixels, ImageSource, Instance, Material, Mesh,
     Model, ModelCamera, PixelFormat, PlacedLight, Primitive, Projection, PunctualKind,
-    TangentSource, TextureRef,
+    SkippedPunctualLight, TangentSource, TextureRef,
 };
 use crate::tangents::{flat_normals, generate_tangents};
 use glam::{Mat4, Quat, Vec3, Vec4};
@@ -1132,6 +1142,10 @@ impl Loader<'_> {
         Ok(())
     }
 
+    /// A node's `KHR_lights_punctual` light: a row of [`Model::lights`] (point, spot) or a
+    /// [`DirectionalLight`]. A light whose values cannot make a light is left out, listed in
+    /// [`Model::skipped_lights`] and warned about (see "Invalid lights" in the module docs); only
+    /// a light index that does not exist is an error, since then the document itself is broken.
     fn light(
         &mut self,
         index: usize,
@@ -1139,7 +1153,6 @@ impl Loader<'_> {
         n: &json::Node,
         world: Mat4,
     ) -> Result<(), String> {
-        use json::extensions::scene::khr_lights_punctual::Type;
         let light = self
             .root
             .extensions
@@ -1148,40 +1161,81 @@ impl Loader<'_> {
             .and_then(|l| l.lights.get(index))
             .ok_or_else(|| format!("KHR_lights_punctual light {index} does not exist"))?;
         let at = format!("KHR_lights_punctual lights[{index}]{}", quoted(&light.name));
-        let color = finite_vec3(light.color, "color").map_err(|e| format!("{at}: {e}"))?;
+        let name = light.name.clone().or_else(|| n.name.clone());
+        match self.usable_light(light, &at, world) {
+            Ok(Usable::Directional { direction, color }) => {
+                self.model.directional_lights.push(DirectionalLight {
+                    name,
+                    direction,
+                    color,
+                    intensity: light.intensity,
+                });
+            }
+            Ok(Usable::Clustered {
+                record,
+                kind,
+                range,
+            }) => {
+                let row = self.model.lights.len() as u32;
+                self.model.lights.push(record.with_source_index(row));
+                self.model.placed_lights.push(PlacedLight {
+                    name,
+                    node,
+                    light: index,
+                    kind,
+                    range,
+                });
+            }
+            Err(reason) => {
+                self.model.warnings.push(format!(
+                    "nodes[{node}]{}: {at}: {reason}; left out",
+                    quoted(&n.name)
+                ));
+                self.model.skipped_lights.push(SkippedPunctualLight {
+                    name,
+                    node,
+                    light: index,
+                    reason,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// What `light`, placed by a node with transform `world`, becomes; `Err` says why it cannot
+    /// be a light. Values the loader repairs (an inner cone outside the outer) are warned about
+    /// here, under `at`.
+    fn usable_light(
+        &mut self,
+        light: &json::extensions::scene::khr_lights_punctual::Light,
+        at: &str,
+        world: Mat4,
+    ) -> Result<Usable, String> {
+        use json::extensions::scene::khr_lights_punctual::Type;
+        let color = finite_vec3(light.color, "color")?;
         if color.min_element() < 0.0 || !(light.intensity >= 0.0 && light.intensity.is_finite()) {
             return Err(format!(
-                "{at}: color {color} and intensity {} must be finite and >= 0",
+                "color {color} and intensity {} must be finite and >= 0",
                 light.intensity
             ));
         }
-        let name = light.name.clone().or_else(|| n.name.clone());
         let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
         let kind = match light.type_ {
             Checked::Valid(Type::Directional) => {
                 if direction == Vec3::ZERO {
-                    self.model.warnings.push(format!(
-                        "{at}: its node's transform is degenerate (no direction); left out"
-                    ));
-                } else {
-                    self.model.directional_lights.push(DirectionalLight {
-                        name,
-                        direction,
-                        color,
-                        intensity: light.intensity,
-                    });
+                    return Err("its node's transform is degenerate (no direction)".into());
                 }
-                return Ok(());
+                return Ok(Usable::Directional { direction, color });
             }
             Checked::Valid(Type::Point) => PunctualKind::Point,
             Checked::Valid(Type::Spot) => {
                 let spot = light
                     .spot
                     .as_ref()
-                    .ok_or_else(|| format!("{at}: type spot without a spot object"))?;
+                    .ok_or("type spot without a spot object")?;
                 let outer = spot.outer_cone_angle;
                 if !(outer > 0.0 && outer <= std::f32::consts::PI) {
-                    return Err(format!("{at}: outerConeAngle {outer} is not in (0, π]"));
+                    return Err(format!("outerConeAngle {outer} is not in (0, π]"));
                 }
                 if outer > std::f32::consts::FRAC_PI_2 {
                     // The spec stops at π/2; the assignment, the oracle and the shaders handle
@@ -1207,11 +1261,11 @@ impl Loader<'_> {
                     outer_cone_angle: outer,
                 }
             }
-            Checked::Invalid => return Err(format!("{at}: invalid type")),
+            Checked::Invalid => return Err("invalid type".into()),
         };
         let range = match light.range {
             Some(r) if r > 0.0 && r.is_finite() => Some(r),
-            Some(r) => return Err(format!("{at}: range {r} is not finite and > 0")),
+            Some(r) => return Err(format!("range {r} is not finite and > 0")),
             None => None,
         };
         let radius = range.unwrap_or_else(|| {
@@ -1221,39 +1275,42 @@ impl Loader<'_> {
             )
         });
         if !(radius > 0.0 && radius.is_finite()) {
-            self.model.warnings.push(format!(
-                "{at}: no range, and its intensity gives the radius {radius} (lights nothing, \
-                 or everything); left out"
+            return Err(format!(
+                "no range, and its intensity gives the radius {radius} (lights nothing, or \
+                 everything)"
             ));
-            return Ok(());
         }
         let position = world.transform_point3(Vec3::ZERO);
         let mut record = LightRecord::point(position, radius)
             .with_color(color)
-            .with_intensity(light.intensity)
-            .with_source_index(self.model.lights.len() as u32);
+            .with_intensity(light.intensity);
         if let PunctualKind::Spot {
             outer_cone_angle, ..
         } = kind
         {
             if direction == Vec3::ZERO {
-                self.model.warnings.push(format!(
-                    "{at}: its node's transform is degenerate (no direction); left out"
-                ));
-                return Ok(());
+                return Err("its node's transform is degenerate (no direction)".into());
             }
             record = record.with_spot(direction, outer_cone_angle);
         }
-        self.model.lights.push(record);
-        self.model.placed_lights.push(PlacedLight {
-            name,
-            node,
-            light: index,
+        Ok(Usable::Clustered {
+            record,
             kind,
             range,
-        });
-        Ok(())
+        })
     }
+}
+
+/// What a valid `KHR_lights_punctual` light becomes (see `Loader::usable_light`).
+enum Usable {
+    /// A sun: only a direction.
+    Directional { direction: Vec3, color: Vec3 },
+    /// A point or spot light, ready for [`Model::lights`] but for its `source_index`.
+    Clustered {
+        record: LightRecord,
+        kind: PunctualKind,
+        range: Option<f32>,
+    },
 }
 
 #[cfg(test)]
@@ -1361,13 +1418,100 @@ mod tests {
         assert_eq!(model.placed_lights[1].range, Some(7.0));
         assert_eq!(model.directional_lights.len(), 1);
         assert_eq!(model.directional_lights[0].direction, Vec3::NEG_Z);
-        // A light of intensity 0 without range lights nothing: left out, with a warning.
+        // A light of intensity 0 without range lights nothing: left out, counted, warned about.
         assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
         assert!(
-            model.warnings[0].starts_with("KHR_lights_punctual lights[3]: no range"),
+            model.warnings[0]
+                .starts_with("nodes[8] \"dark\": KHR_lights_punctual lights[3]: no range"),
             "{:?}",
             model.warnings
         );
+        assert_eq!(model.skipped_lights.len(), 1);
+        assert_eq!(model.skipped_lights[0].node, 8);
+        assert_eq!(model.skipped_lights[0].light, 3);
+        assert_eq!(model.summary().skipped_lights, 1);
+    }
+
+    #[test]
+    fn invalid_lights_are_left_out_counted_and_reported() {
+        // Each bad light is skipped on its own: the triangle, the camera and the good light
+        // stay (these used to make the whole file an error).
+        let bad = [
+            (
+                r#"{"type": "point", "range": 0}"#,
+                "range 0 is not finite and > 0",
+            ),
+            (
+                r#"{"type": "point", "range": -3}"#,
+                "range -3 is not finite and > 0",
+            ),
+            (
+                r#"{"type": "point", "intensity": -1, "range": 2}"#,
+                "intensity -1 must be finite and >= 0",
+            ),
+            (
+                r#"{"type": "point", "intensity": 1e39, "range": 2}"#,
+                "intensity inf must be finite and >= 0",
+            ),
+            (
+                r#"{"type": "point", "color": [1, -1, 1], "range": 2, "name": "red"}"#,
+                "color [1, -1, 1] and intensity 1",
+            ),
+            (
+                r#"{"type": "spot", "range": 2, "spot": {"outerConeAngle": 0}}"#,
+                "outerConeAngle 0 is not in (0, π]",
+            ),
+            (
+                r#"{"type": "directional", "intensity": -2}"#,
+                "intensity -2 must be finite and >= 0",
+            ),
+        ];
+        let lights: Vec<&str> = bad.iter().map(|(light, _)| *light).collect();
+        let nodes: Vec<String> = (0..bad.len())
+            .map(|i| format!(r#"{{"extensions": {{"KHR_lights_punctual": {{"light": {i}}}}}}}"#))
+            .collect();
+        let good = bad.len();
+        let extra = format!(
+            r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{}, {{"type": "point", "range": 4}}]}}}},
+  "scenes": [{{"nodes": [{}]}}],
+  "nodes": [{}, {{"extensions": {{"KHR_lights_punctual": {{"light": {good}}}}}}}, {{"mesh": 0}}]"#,
+            lights.join(", "),
+            (0..good + 2)
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            nodes.join(", "),
+        );
+        let model = load_str(&triangle_gltf([0, 1, 2], &extra)).unwrap();
+        assert_eq!(model.triangle_count(), 1);
+        assert_eq!(model.lights.len(), 1);
+        assert_eq!(model.lights.radius[0], 4.0);
+        assert_eq!(model.placed_lights[0].light, good);
+        assert!(model.directional_lights.is_empty());
+        assert_eq!(
+            model.skipped_lights.len(),
+            bad.len(),
+            "{:?}",
+            model.warnings
+        );
+        assert_eq!(model.summary().skipped_lights, bad.len());
+        assert_eq!(model.warnings.len(), bad.len(), "{:?}", model.warnings);
+        for (i, (skipped, (_, why))) in model.skipped_lights.iter().zip(bad).enumerate() {
+            assert_eq!((skipped.node, skipped.light), (i, i));
+            assert!(skipped.reason.contains(why), "{skipped:?}");
+            let name = if i == 4 { " \"red\"" } else { "" };
+            let warning = &model.warnings[i];
+            assert!(
+                warning.starts_with(&format!(
+                    "nodes[{i}]: KHR_lights_punctual lights[{i}]{name}: "
+                )) && warning.contains(why)
+                    && warning.ends_with("; left out"),
+                "{warning}"
+            );
+        }
+        assert_eq!(model.skipped_lights[4].name.as_deref(), Some("red"));
     }
 
     #[test]

@@ -101,7 +101,8 @@
 //! The same stance holds for glTF files: the loader ([`Model::load`]) never panics on any input
 //! and reports broken files as [`Error::Gltf`] naming the file, the place in the document and the
 //! problem. What it leaves out of a valid file (lines and points, skins, animations, extra UV
-//! sets) it lists in [`Model::warnings`], never silently. It does not render, and it does not
+//! sets) it lists in [`Model::warnings`], never silently; an invalid light is left out, listed in
+//! [`Model::skipped_lights`] and warned about, as a scene file's invalid lights are skipped. It does not render, and it does not
 //! pick light radii by guesswork: glTF lights without a `range` get the documented
 //! inverse-square cut-off ([`LoadOptions::light_cutoff`]).
 #![forbid(unsafe_code)]
@@ -136,7 +137,7 @@ pub use lights::{LightRecord, Lights};
 pub use model::{
     Aabb, AlphaMode, DirectionalLight, Image, ImagePixels, ImageSource, Instance, Material, Mesh,
     Model, ModelCamera, ModelSummary, PixelFormat, PlacedLight, Primitive, Projection,
-    PunctualKind, TangentSource, TextureRef,
+    PunctualKind, SkippedPunctualLight, TangentSource, TextureRef,
 };
 pub use presets::Preset;
 pub use read_file::read_regular_file;

@@ -439,6 +439,22 @@ pub struct PlacedLight {
     pub range: Option<f32>,
 }
 
+/// A `KHR_lights_punctual` light that a node places but the loader left out: its values cannot
+/// make a light (a `range` that is not > 0, a negative or non-finite colour or intensity, a bad
+/// cone angle, no range and zero intensity) or its node gives it no direction. One row per node
+/// that places it, like [`PlacedLight`]; the same sentence is in [`Model::warnings`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedPunctualLight {
+    /// The light's name, else its node's name, if any.
+    pub name: Option<String>,
+    /// Index of the node that places it.
+    pub node: usize,
+    /// Index of the light in the file's `KHR_lights_punctual` array.
+    pub light: usize,
+    /// What is wrong with it.
+    pub reason: String,
+}
+
 /// A directional light (sun): no position, reaches everything, so it is not clustered.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DirectionalLight {
@@ -473,6 +489,8 @@ pub struct Model {
     pub placed_lights: Vec<PlacedLight>,
     /// Directional lights placed by nodes.
     pub directional_lights: Vec<DirectionalLight>,
+    /// Lights placed by nodes but left out as invalid (each also in [`Model::warnings`]).
+    pub skipped_lights: Vec<SkippedPunctualLight>,
     /// Things the loader left out or changed, one sentence each (e.g. a primitive of lines).
     pub warnings: Vec<String>,
 }
@@ -490,6 +508,7 @@ impl Model {
             lights: Lights::new(),
             placed_lights: Vec::new(),
             directional_lights: Vec::new(),
+            skipped_lights: Vec::new(),
             warnings: Vec::new(),
         }
     }
@@ -678,6 +697,7 @@ impl Model {
                 .filter(|l| matches!(l.kind, PunctualKind::Spot { .. }))
                 .count(),
             directional_lights: self.directional_lights.len(),
+            skipped_lights: self.skipped_lights.len(),
             cameras: self.cameras.iter().map(|c| c.name.clone()).collect(),
             bounds: self.bounds(),
         }
@@ -713,6 +733,8 @@ pub struct ModelSummary {
     pub spot_lights: usize,
     /// Directional lights placed.
     pub directional_lights: usize,
+    /// Lights placed but left out as invalid ([`Model::skipped_lights`]).
+    pub skipped_lights: usize,
     /// Camera names, in traversal order.
     pub cameras: Vec<String>,
     /// World bounds of everything drawn.
