@@ -49,6 +49,11 @@
 //!   `nodes[N] "node": KHR_lights_punctual lights[I] "name": <what is wrong>; left out`. The
 //!   geometry, the cameras and the other lights stay usable. Only a node naming a light that
 //!   does not exist is an error: then the document itself is broken.
+//! * **Directions ignore scale.** A spot's or sun's direction and a camera's view and up are the
+//!   node's −Z and +Y axes at unit length, however the node scales them (1e-30, 1e20, or
+//!   non-uniformly): normalised in f64 where f32 would square the length to 0 or ∞. Only a
+//!   transform that maps the axis to zero (a zero scale, a singular matrix) leaves no direction,
+//!   and the warning says that.
 //! * **Left out, with a warning:** skins (meshes are drawn at their node's transform),
 //!   morph targets, animations, UV sets other than `TEXCOORD_0`, vertex colours.
 //! * **Out-of-range values the spec forbids are clamped and reported**, not fatal, since the
@@ -501,6 +506,23 @@ fn fan_to_list(stream: &[u32]) -> Vec<u32> {
 /// ` "name"` for messages, or nothing.
 fn quoted(name: &Option<String>) -> String {
     name.as_ref().map_or(String::new(), |n| format!(" \"{n}\""))
+}
+
+/// Why a light or camera whose node maps its axis to nothing has no direction.
+const NO_AXIS: &str =
+    "its node's transform maps the -Z axis to zero (a zero scale or a singular matrix)";
+
+/// `v` at unit length, or zero only when `v` is zero. A node's scale scales the axes a light or
+/// camera points along (1e-30, 1e20, or [1, 1, 1e-30]) but not their direction (the
+/// `KHR_lights_punctual` spec: scale does not affect a light). f32's `normalize_or_zero`
+/// squares the length, which underflows below about 1e-19 and overflows above about 1e19 and
+/// then gives zero, as if there were no direction; f64 holds the square of every f32, so it
+/// takes over there. Ordinary vectors keep f32's result bit for bit.
+fn unit_or_zero(v: Vec3) -> Vec3 {
+    match v.normalize_or_zero() {
+        Vec3::ZERO => v.as_dvec3().normalize_or_zero().as_vec3(),
+        unit => unit,
+    }
 }
 
 fn finite_vec3(v: [f32; 3], what: &str) -> Result<Vec3, String> {
@@ -1117,12 +1139,19 @@ impl Loader<'_> {
             Checked::Invalid => return Err(format!("{at}: invalid type")),
         };
         let position = world.transform_point3(Vec3::ZERO);
-        let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let forward = unit_or_zero(world.transform_vector3(Vec3::NEG_Z));
         let up = world.transform_vector3(Vec3::Y);
-        let up = (up - forward * forward.dot(up)).normalize_or_zero();
-        if forward == Vec3::ZERO || up == Vec3::ZERO {
+        let up = unit_or_zero(up - forward * forward.dot(up));
+        let degenerate = if forward == Vec3::ZERO {
+            Some(NO_AXIS)
+        } else if up == Vec3::ZERO {
+            Some("its node's transform maps the up axis (+Y) to zero or onto the view axis")
+        } else {
+            None
+        };
+        if let Some(why) = degenerate {
             self.model.warnings.push(format!(
-                "{at}: its node's transform is degenerate (no view direction); left out"
+                "{at}: {why}, so the camera has no view direction; left out"
             ));
             return Ok(());
         }
@@ -1219,11 +1248,11 @@ impl Loader<'_> {
                 light.intensity
             ));
         }
-        let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let direction = unit_or_zero(world.transform_vector3(Vec3::NEG_Z));
         let kind = match light.type_ {
             Checked::Valid(Type::Directional) => {
                 if direction == Vec3::ZERO {
-                    return Err("its node's transform is degenerate (no direction)".into());
+                    return Err(format!("{NO_AXIS}, so the light has no direction"));
                 }
                 return Ok(Usable::Directional { direction, color });
             }
@@ -1289,7 +1318,7 @@ impl Loader<'_> {
         } = kind
         {
             if direction == Vec3::ZERO {
-                return Err("its node's transform is degenerate (no direction)".into());
+                return Err(format!("{NO_AXIS}, so the light has no direction"));
             }
             record = record.with_spot(direction, outer_cone_angle);
         }
@@ -1512,6 +1541,74 @@ mod tests {
             );
         }
         assert_eq!(model.skipped_lights[4].name.as_deref(), Some("red"));
+    }
+
+    #[test]
+    fn tiny_and_huge_node_scales_keep_directions_and_zero_scales_are_named() {
+        // A spot, a sun and a camera under one node scale, each rotated by `rotation`.
+        let with = |scale: &str, rotation: &str| {
+            let extra = format!(
+                r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [
+      {{"type": "spot", "range": 7, "spot": {{"outerConeAngle": 0.5}}}},
+      {{"type": "directional"}}]}}}},
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 1.0, "znear": 0.1}}}}],
+  "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"scale": {scale}, "children": [1, 2, 3]}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "rotation": {rotation}}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 1}}}}, "rotation": {rotation}}},
+            {{"camera": 0, "rotation": {rotation}}}]"#
+            );
+            load_str(&triangle_gltf([0, 1, 2], &extra)).unwrap()
+        };
+        // f32 normalising squares these lengths to 0 or ∞: the nodes used to be "degenerate".
+        // Uniform scales, with the nodes turned to look down -Y (up -Z); and the audit's
+        // non-uniform case, unrotated (down -Z, up +Y).
+        let down = "[-0.7071068, 0, 0, 0.7071068]";
+        let ahead = "[0, 0, 0, 1]";
+        for (scale, rotation, forward, up) in [
+            ("[1e-30, 1e-30, 1e-30]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+            ("[1e-40, 1e-40, 1e-40]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+            ("[1e20, 1e20, 1e20]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+            ("[3e38, 3e38, 3e38]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+            ("[1, 1, 1e-30]", ahead, Vec3::NEG_Z, Vec3::Y),
+            ("[1, 1, 1e30]", ahead, Vec3::NEG_Z, Vec3::Y),
+        ] {
+            let model = with(scale, rotation);
+            let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-4;
+            assert!(model.warnings.is_empty(), "{scale}: {:?}", model.warnings);
+            let spot = model.lights.get(0).spot.expect("the spot is kept");
+            assert!(near(spot.direction, forward), "{scale}: {}", spot.direction);
+            assert_eq!(model.directional_lights.len(), 1, "{scale}");
+            let sun = model.directional_lights[0].direction;
+            assert!(near(sun, forward), "{scale}: {sun}");
+            assert_eq!(model.cameras.len(), 1, "{scale}");
+            let camera = &model.cameras[0];
+            assert!(near(camera.forward, forward), "{scale}: {}", camera.forward);
+            assert!(near(camera.up, up), "{scale}: {}", camera.up);
+        }
+        // A zero scale really leaves no direction: left out, and the message says why.
+        let model = with("[1, 1, 0]", ahead);
+        assert!(model.lights.is_empty() && model.directional_lights.is_empty());
+        assert!(model.cameras.is_empty());
+        assert_eq!(model.skipped_lights.len(), 2, "{:?}", model.warnings);
+        let axis_to_zero =
+            "its node's transform maps the -Z axis to zero (a zero scale or a singular matrix)";
+        assert_eq!(
+            model.warnings,
+            [
+                format!(
+                    "nodes[1]: KHR_lights_punctual lights[0]: {axis_to_zero}, so the light has no direction; left out"
+                ),
+                format!(
+                    "nodes[2]: KHR_lights_punctual lights[1]: {axis_to_zero}, so the light has no direction; left out"
+                ),
+                format!(
+                    "cameras[0]: {axis_to_zero}, so the camera has no view direction; left out"
+                ),
+            ]
+        );
     }
 
     #[test]
