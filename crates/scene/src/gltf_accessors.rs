@@ -14,7 +14,9 @@
 //!    vertex data here), `normalized`, count; check them against what the caller allows.
 //! 2. Copy the elements tightly packed into a scratch vector: from the buffer view (honouring
 //!    `byteStride`), or zeros when the accessor has no view.
-//! 3. Apply a sparse substitution, if any: `count` (index, value) pairs, indices `< count`.
+//! 3. Apply a sparse substitution, if any: `count` (index, value) pairs, indices `< count`,
+//!    in file order. Indices that do not strictly increase (a spec MUST on the file) are not an
+//!    error: the loader reports them once per accessor (`sparse_order_warnings`).
 //! 4. Decode components (little-endian; normalised integers to [0, 1] or [−1, 1]).
 
 use glam::{Vec2, Vec3, Vec4};
@@ -263,51 +265,24 @@ impl BufferData<'_> {
             bytes.resize(count * elem, 0);
         }
         if let Some(sparse) = &a.sparse {
-            let n = usize::try_from(sparse.count.0).unwrap_or(usize::MAX);
-            if n > count {
-                return Err(format!(
-                    "{at}: sparse count {} exceeds the accessor's count {count}",
-                    sparse.count.0
-                ));
-            }
-            let Checked::Valid(IndexComponentType(index_type)) = sparse.indices.component_type
-            else {
-                return Err(format!("{at}: invalid sparse.indices.componentType"));
-            };
-            let index_size = component_size(index_type);
-            let slice = |view: usize, offset: u64, len: usize, what: &str| {
-                let (data, _) = self.view(view).map_err(|e| format!("{at}: {e}"))?;
-                usize::try_from(offset)
-                    .ok()
-                    .and_then(|o| data.get(o..o.checked_add(len)?))
-                    .ok_or_else(|| {
-                        format!("{at}: sparse {what} ({len} bytes from byte {offset}) do not fit in bufferViews[{view}]")
-                    })
-            };
-            let indices = slice(
-                sparse.indices.buffer_view.value(),
-                sparse.indices.byte_offset.0,
-                n * index_size,
-                "indices",
-            )?;
-            let values = slice(
-                sparse.values.buffer_view.value(),
-                sparse.values.byte_offset.0,
-                n * elem,
-                "values",
-            )?;
-            for k in 0..n {
-                let b = &indices[k * index_size..(k + 1) * index_size];
-                let i = match index_type {
-                    ComponentType::U8 => b[0] as usize,
-                    ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as usize,
-                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
-                };
-                if i >= count {
-                    return Err(format!(
-                        "{at}: sparse index {i} is out of range (count {count})"
-                    ));
-                }
+            let indices = self.sparse_indices(&at, sparse, count)?;
+            let (data, _) = self
+                .view(sparse.values.buffer_view.value())
+                .map_err(|e| format!("{at}: {e}"))?;
+            let (offset, len) = (sparse.values.byte_offset.0, indices.len() * elem);
+            let values = usize::try_from(offset)
+                .ok()
+                .and_then(|o| data.get(o..o.checked_add(len)?))
+                .ok_or_else(|| {
+                    format!(
+                        "{at}: sparse values ({len} bytes from byte {offset}) do not fit in \
+                         bufferViews[{}]",
+                        sparse.values.buffer_view.value()
+                    )
+                })?;
+            // In file order: a repeated index (which the spec forbids, and
+            // `sparse_order_warnings` reports) takes its last value.
+            for (k, &i) in indices.iter().enumerate() {
                 bytes[i * elem..(i + 1) * elem].copy_from_slice(&values[k * elem..(k + 1) * elem]);
             }
         }
@@ -318,6 +293,81 @@ impl BufferData<'_> {
             count,
             bytes,
         })
+    }
+
+    /// Step 3's indices: the `sparse.count` indices of an accessor of `count` elements, each
+    /// checked to be `< count`; `at` names the accessor in errors.
+    fn sparse_indices(
+        &self,
+        at: &str,
+        sparse: &json::accessor::sparse::Sparse,
+        count: usize,
+    ) -> Result<Vec<usize>, String> {
+        let n = usize::try_from(sparse.count.0).unwrap_or(usize::MAX);
+        if n > count {
+            return Err(format!(
+                "{at}: sparse count {} exceeds the accessor's count {count}",
+                sparse.count.0
+            ));
+        }
+        let Checked::Valid(IndexComponentType(index_type)) = sparse.indices.component_type else {
+            return Err(format!("{at}: invalid sparse.indices.componentType"));
+        };
+        let size = component_size(index_type);
+        let view = sparse.indices.buffer_view.value();
+        let (data, _) = self.view(view).map_err(|e| format!("{at}: {e}"))?;
+        let (offset, len) = (sparse.indices.byte_offset.0, n * size);
+        let bytes = usize::try_from(offset)
+            .ok()
+            .and_then(|o| data.get(o..o.checked_add(len)?))
+            .ok_or_else(|| {
+                format!(
+                    "{at}: sparse indices ({len} bytes from byte {offset}) do not fit in \
+                     bufferViews[{view}]"
+                )
+            })?;
+        bytes
+            .chunks_exact(size)
+            .map(|b| {
+                let i = match index_type {
+                    ComponentType::U8 => b[0] as usize,
+                    ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+                };
+                if i < count {
+                    Ok(i)
+                } else {
+                    Err(format!(
+                        "{at}: sparse index {i} is out of range (count {count})"
+                    ))
+                }
+            })
+            .collect()
+    }
+
+    /// One warning per accessor whose sparse indices do not strictly increase, which the glTF
+    /// spec requires of a file. The model is still well defined (the substitutions are applied
+    /// in file order, so a repeated index takes its last value, as readers that do not check
+    /// do), so this is reported, not fatal. An accessor whose sparse data cannot be read at all
+    /// is left to the read that uses it, which makes that an error.
+    pub(crate) fn sparse_order_warnings(&self) -> Vec<String> {
+        let accessors = self.root.accessors.iter().enumerate();
+        accessors
+            .filter_map(|(a, accessor)| {
+                let sparse = accessor.sparse.as_ref()?;
+                let count = usize::try_from(accessor.count.0).ok()?;
+                let at = format!("accessors[{a}]");
+                let indices = self.sparse_indices(&at, sparse, count).ok()?;
+                let k = indices.windows(2).position(|w| w[0] >= w[1])?;
+                Some(format!(
+                    "{at}: sparse indices must strictly increase, but element {} is {} after {}; \
+                     applied in file order (a repeated index takes its last value)",
+                    k + 1,
+                    indices[k + 1],
+                    indices[k]
+                ))
+            })
+            .collect()
     }
 
     /// Floats with `N` components per element, each finite.

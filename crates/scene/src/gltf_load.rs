@@ -13,13 +13,14 @@
 //!
 //! ## Loading, step by step
 //! 1. **Container.** A file starting with `glTF` is GLB: its header is checked (version 2, a
-//!    declared length within the file) before the `gltf` crate splits the chunks. Then
+//!    declared length equal to the file's) before the `gltf` crate splits the chunks. Then
 //!    `gltf::Gltf::from_slice` parses and validates the JSON (unknown required extensions,
-//!    bad enum values and out-of-range indices are errors there).
+//!    bad enum values and out-of-range indices are errors there), and `asset.version` and
+//!    `asset.minVersion` are checked (the crate does not).
 //! 2. **Buffers.** Each buffer is fetched (GLB chunk, `data:` URI, or a file in the glTF file's
 //!    folder or below; absolute paths, `file:` URIs and `../` above it are refused) and must hold
-//!    its declared `byteLength`, of which only that much is read; every buffer view must lie
-//!    inside its buffer.
+//!    its declared `byteLength`, of which only that much is read or kept; every buffer view must
+//!    lie inside that length.
 //! 3. **Materials**, then **meshes**: each triangle primitive's accessors are read with bounds
 //!    checks (`gltf_accessors.rs`); strips and fans become lists; indices are checked against the
 //!    vertex count; missing normals become flat normals; tangents are generated when the
@@ -62,6 +63,29 @@
 //!   outside [0, outer). A spot's outer cone above the spec's π/2 is kept as it is (the
 //!   assignment and the shaders handle cones up to π) and reported. Commands that load a model
 //!   print these warnings on stderr; `myriad info` lists them.
+//! * **Where the file breaks the glTF 2.0 spec**, the `gltf` crate parses it without a word
+//!   (its validation covers the schema's types, enums and indices, not these), so the loader
+//!   decides. It **refuses** (an error naming the file and the place) what the spec tells a
+//!   loader not to load, and files whose declared lengths contradict their bytes, since then
+//!   which bytes are meant is unknown:
+//!   - `asset.version` whose major version is not 2, or `asset.minVersion` above 2.0 (the spec:
+//!     a loader must not load an asset of a major version, or a minVersion, it does not
+//!     support; a later 2.x loads);
+//!   - a GLB header `length` other than the file's size (longer: truncated; shorter: bytes that
+//!     are not part of the GLB);
+//!   - a buffer view reaching past its buffer's `byteLength`, even where the data behind it
+//!     holds more bytes.
+//!
+//!   It **loads and reports** (a warning) what breaks a rule of the spec but has one clear
+//!   reading that keeps the model usable, as it clamps material factors:
+//!   - a node with both `matrix` and translation/rotation/scale: the matrix is used (as the
+//!     `gltf` crate's own `Node::transform` and common loaders do);
+//!   - a camera `aspectRatio` that is not > 0: ignored (the aspect always follows the output
+//!     size here, see [`ModelCamera::to_camera`]);
+//!   - sparse indices that do not strictly increase: applied in file order, so a repeated
+//!     index takes its last value;
+//!   - a buffer holding more than its `byteLength` (beyond the padding to 4 bytes): the rest
+//!     is ignored.
 //! * **Normals** that are not unit length are normalised (with a warning naming the primitive);
 //!   a trailing incomplete triangle of a list is dropped (with a warning).
 
@@ -174,12 +198,52 @@ fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
             "GLB version {version}; only version 2 is supported"
         ));
     }
+    // The header's length is the whole file's: shorter (bytes after the GLB) is as malformed as
+    // longer (a truncated file), and the Khronos validator rejects both.
     let length = word(8) as usize;
-    if length < 20 || length > bytes.len() {
+    if length != bytes.len() {
         return Err(format!(
             "GLB header declares {length} bytes, but the file has {}",
             bytes.len()
         ));
+    }
+    Ok(())
+}
+
+/// The spec's rule for loaders: an asset whose major `version` is not 2, or whose `minVersion` is
+/// above the 2.0 this loader implements, must not be loaded (a later minor version of 2 may be:
+/// it only adds what a 2.0 reader can ignore). The `gltf` crate does not check either.
+fn check_version(asset: &json::Asset) -> Result<(), String> {
+    let parse = |v: &str| {
+        let (major, minor) = v.split_once('.')?;
+        let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+        (digits(major) && digits(minor)).then(|| (major.parse::<u64>(), minor.parse::<u64>()))
+    };
+    match parse(&asset.version) {
+        Some((Ok(2), _)) => {}
+        Some(_) => {
+            return Err(format!(
+                "asset.version \"{}\": only glTF 2.x is supported",
+                asset.version
+            ));
+        }
+        None => {
+            return Err(format!(
+                "asset.version \"{}\" is not MAJOR.MINOR",
+                asset.version
+            ));
+        }
+    }
+    if let Some(min) = &asset.min_version {
+        match parse(min) {
+            Some((Ok(2), Ok(0))) => {}
+            Some(_) => {
+                return Err(format!(
+                    "asset.minVersion \"{min}\": this loader implements glTF 2.0 only"
+                ));
+            }
+            None => return Err(format!("asset.minVersion \"{min}\" is not MAJOR.MINOR")),
+        }
     }
     Ok(())
 }
@@ -351,6 +415,8 @@ fn load(
     prevalidate_json(&json)?;
     let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(bytes).map_err(describe)?;
     let root = document.as_json();
+    check_version(&root.asset)?;
+    let mut warnings = Vec::new();
 
     // 2. Buffers.
     let mut buffers = Vec::with_capacity(root.buffers.len());
@@ -394,13 +460,23 @@ fn load(
             None => gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)
                 .map_err(|e| format!("buffers[{i}]{name}: {}", describe(e)))?,
         };
-        if (data.0.len() as u64) < declared.byte_length.0 {
+        let (held, declared_len) = (data.0.len() as u64, declared.byte_length.0);
+        if held < declared_len {
             return Err(format!(
-                "buffers[{i}]{name}: declares {} bytes but holds {}",
-                declared.byte_length.0,
-                data.0.len()
+                "buffers[{i}]{name}: declares {declared_len} bytes but holds {held}"
             ));
         }
+        // The buffer is its declared `byteLength`: views must lie inside it (checked below), and
+        // bytes beyond it are not part of it. Up to 3 more are padding (GLB chunks and the
+        // crate's reads are padded to 4 bytes); more than that is reported.
+        if held > declared_len.next_multiple_of(4) {
+            warnings.push(format!(
+                "buffers[{i}]{name}: holds {held} bytes but declares byteLength {declared_len}; \
+                 the rest is ignored"
+            ));
+        }
+        let mut data = data;
+        data.0.truncate(declared_len as usize); // fits: at most `held`, a usize
         buffers.push(data);
     }
     let data = BufferData {
@@ -408,6 +484,7 @@ fn load(
         buffers: &buffers,
     };
     data.check_views()?;
+    warnings.extend(data.sparse_order_warnings());
 
     let mut loader = Loader {
         root,
@@ -415,6 +492,7 @@ fn load(
         model: Model::new(origin),
         options,
     };
+    loader.model.warnings = warnings;
     // 3. Materials and meshes.
     for (i, m) in root.materials.iter().enumerate() {
         let material = loader
@@ -961,6 +1039,22 @@ impl Loader<'_> {
                 Self::local_transform(n).map_err(|e| format!("nodes[{i}]{}: {e}", quoted(&n.name)))
             })
             .collect::<Result<Vec<_>, _>>()?;
+        for (i, n) in nodes.iter().enumerate() {
+            let trs = [
+                ("translation", n.translation.is_some()),
+                ("rotation", n.rotation.is_some()),
+                ("scale", n.scale.is_some()),
+            ];
+            let given: Vec<&str> = trs.iter().filter(|t| t.1).map(|t| t.0).collect();
+            if n.matrix.is_some() && !given.is_empty() {
+                self.model.warnings.push(format!(
+                    "nodes[{i}]{}: has both matrix and {} (the spec allows one or the other); \
+                     the matrix is used",
+                    quoted(&n.name),
+                    given.join(", ")
+                ));
+            }
+        }
         let scene = self
             .root
             .scene
@@ -1105,11 +1199,22 @@ impl Loader<'_> {
                         p.znear
                     ));
                 }
+                // The spec requires aspectRatio > 0. Only the output size sets the aspect here,
+                // so a bad one changes nothing; it is dropped and reported.
+                let aspect_ratio = p.aspect_ratio.filter(|a| *a > 0.0 && a.is_finite());
+                if let Some(a) = p.aspect_ratio
+                    && aspect_ratio.is_none()
+                {
+                    self.model.warnings.push(format!(
+                        "{at}: aspectRatio {a} is not finite and > 0; ignored (the aspect \
+                         follows the output size)"
+                    ));
+                }
                 Projection::Perspective {
                     yfov: p.yfov,
                     znear: p.znear,
                     zfar: p.zfar,
-                    aspect_ratio: p.aspect_ratio.filter(|a| *a > 0.0 && a.is_finite()),
+                    aspect_ratio,
                 }
             }
             Checked::Valid(json::camera::Type::Orthographic) => {
@@ -1771,6 +1876,134 @@ mod tests {
                 .to_string();
             assert!(e.starts_with("x.glb: ") && e.contains("GLB"), "{e}");
         }
+    }
+
+    /// `json` as a GLB with one JSON chunk (padded with spaces) and the given header length
+    /// (`None`: the true one).
+    fn glb(json: &str, declared: Option<u32>) -> Vec<u8> {
+        let mut chunk = json.as_bytes().to_vec();
+        chunk.resize(chunk.len().next_multiple_of(4), b' ');
+        let total = 12 + 8 + chunk.len() as u32;
+        let mut out = b"glTF".to_vec();
+        for word in [2, declared.unwrap_or(total), chunk.len() as u32, 0x4E4F534A] {
+            out.extend(u32::to_le_bytes(word));
+        }
+        out.extend(chunk);
+        out
+    }
+
+    #[test]
+    fn spec_violations_are_refused_or_reported() {
+        let text = triangle_gltf(
+            [0, 1, 2],
+            r#", "scenes": [{"nodes": [0, 1]}], "nodes": [{"mesh": 0}, {}]"#,
+        );
+        // Refused: what the spec tells a loader not to load, and containers or buffers whose
+        // declared lengths contradict their bytes.
+        let refused = [
+            (
+                text.replace(r#""version": "2.0""#, r#""version": "3.0""#),
+                "asset.version \"3.0\": only glTF 2.x is supported",
+            ),
+            (
+                text.replace(
+                    r#""version": "2.0""#,
+                    r#""version": "2.0", "minVersion": "2.1""#,
+                ),
+                "asset.minVersion \"2.1\": this loader implements glTF 2.0 only",
+            ),
+            (
+                text.replace(r#""version": "2.0""#, r#""version": "two""#),
+                "asset.version \"two\" is not MAJOR.MINOR",
+            ),
+            (
+                text.replace(r#""byteLength": 44"#, r#""byteLength": 10"#),
+                "bufferViews[0]: bytes 0..0+36 lie outside buffer 0 (10 bytes)",
+            ),
+        ];
+        for (text, expected) in refused {
+            let e = load_str(&text).unwrap_err().to_string();
+            assert!(e.starts_with("t.gltf: ") && e.contains(expected), "{e}");
+        }
+        // A later minor version of 2 loads.
+        let minor = text.replace(
+            r#""version": "2.0""#,
+            r#""version": "2.7", "minVersion": "2.0""#,
+        );
+        assert_eq!(load_str(&minor).unwrap().triangle_count(), 1);
+        // The GLB header's length must be the file's, shorter as well as longer.
+        let load_glb =
+            |bytes: &[u8]| Model::from_gltf_slice(bytes, "t.glb", None, &LoadOptions::default());
+        let good = glb(&text, None);
+        assert_eq!(load_glb(&good).unwrap().triangle_count(), 1);
+        let short = glb(&text, Some(20));
+        let e = load_glb(&short).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "t.glb: GLB header declares 20 bytes, but the file has {}",
+                short.len()
+            )
+        );
+
+        // Reported: the file breaks a rule, but one reading is clear and the model stays usable.
+        let reported = [
+            (
+                text.replace(
+                    r#""nodes": [{"mesh": 0}, {}]"#,
+                    r#""nodes": [{}, {"mesh": 0, "name": "both", "translation": [0, 7, 0], "scale": [2, 2, 2],
+                      "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 0, 0, 1]}]"#,
+                ),
+                "nodes[1] \"both\": has both matrix and translation, scale (the spec allows one or \
+                 the other); the matrix is used",
+            ),
+            (
+                text.replace(
+                    r#""nodes": [{"mesh": 0}, {}]"#,
+                    r#""nodes": [{"mesh": 0}, {"camera": 0}],
+                    "cameras": [{"type": "perspective",
+                                 "perspective": {"yfov": 1, "znear": 0.1, "aspectRatio": 0}}]"#,
+                ),
+                "cameras[0]: aspectRatio 0 is not finite and > 0; ignored (the aspect follows the \
+                 output size)",
+            ),
+            (
+                text.replace(
+                    r#""nodes": [{"mesh": 0}, {}]"#,
+                    r#""nodes": [{"mesh": 0}, {"camera": 0}],
+                    "cameras": [{"type": "perspective",
+                                 "perspective": {"yfov": 1, "znear": 0.1, "aspectRatio": -2}}]"#,
+                ),
+                "cameras[0]: aspectRatio -2 is not finite and > 0; ignored (the aspect follows the \
+                 output size)",
+            ),
+            (
+                triangle_gltf([2, 1, 0], r#", "scenes": [{"nodes": [0, 1]}], "nodes": [{"mesh": 0}, {}]"#).replace(
+                    r#""max": [1, 1, 0]}"#,
+                    r#""max": [1, 1, 0], "sparse": {"count": 3,
+                        "indices": {"bufferView": 1, "componentType": 5123},
+                        "values": {"bufferView": 0}}}"#,
+                ),
+                "accessors[0]: sparse indices must strictly increase, but element 1 is 1 after 2; \
+                 applied in file order (a repeated index takes its last value)",
+            ),
+            (
+                r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4,
+                    "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}]}"#
+                    .to_string(),
+                "buffers[0] (data URI): holds 12 bytes but declares byteLength 4; the rest is \
+                 ignored",
+            ),
+        ];
+        for (text, expected) in &reported {
+            let model = load_str(text).unwrap();
+            assert_eq!(&model.warnings, &[*expected]);
+            assert_eq!(model.triangle_count(), model.instances.len());
+        }
+        // The matrix wins over the TRS given beside it.
+        let both = load_str(&reported[0].0).unwrap();
+        assert_eq!(both.bounds().min, Vec3::new(5.0, 0.0, 0.0));
+        assert_eq!(both.bounds().max, Vec3::new(6.0, 1.0, 0.0));
     }
 
     #[test]
