@@ -13,7 +13,9 @@
 //!
 //! Glue between them lives here and only here: the crates never depend on each other beyond
 //! `cluster-math` (see ARCHITECTURE.md).
-#![forbid(unsafe_code)]
+// One `unsafe` call, with the `tracy` feature only: the profiler's shutdown (`profiling.rs`).
+#![cfg_attr(not(feature = "tracy"), forbid(unsafe_code))]
+#![cfg_attr(feature = "tracy", deny(unsafe_code))]
 
 pub use myriad_assignment as assignment;
 pub use myriad_cluster_math as cluster_math;

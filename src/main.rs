@@ -4,15 +4,27 @@
 mod cli;
 
 use clap::Parser;
+use std::process::ExitCode;
 
-fn main() -> std::process::ExitCode {
-    myriad::profiling::start();
-    let args = cli::Cli::parse();
+fn main() -> ExitCode {
+    // First in, last out: the session shuts the Tracy client down when `main` returns, by any
+    // path (the reason arguments are parsed with `try_parse`: clap's own exit would skip it).
+    let _profiler = myriad::profiling::start();
+    myriad::profiling::name_this_thread("myriad main");
+    cli::name_worker_threads();
+    let args = match cli::Cli::try_parse() {
+        Ok(args) => args,
+        // Help, version or a usage error: printed and exited with as `Cli::parse` would.
+        Err(err) => {
+            let _ = err.print();
+            return ExitCode::from(err.exit_code() as u8);
+        }
+    };
     match cli::run(args) {
         Ok(code) => code,
         Err(err) => {
             eprintln!("error: {err:#}");
-            std::process::ExitCode::FAILURE
+            ExitCode::FAILURE
         }
     }
 }

@@ -3,6 +3,11 @@
 //! every one of them expands to nothing, so a default build carries no profiler code (CI checks
 //! the release binary for tracy symbols). With it on, they record once a client is started
 //! ([`start`], as `myriad` does in `main`), and are skipped before.
+//!
+//! The client's lifetime is the program's ([`Session`]): tracy-client's `manual-lifetime` starts
+//! it only when asked and leaves the shutdown to the program. The shutdown is what sends the
+//! events still queued, tells the profiler the capture ended and honours `TRACY_NO_EXIT=1`; a
+//! program that skips it loses the tail of every capture.
 
 /// Opens a Tracy span named `$name` until the end of the enclosing block, once a client runs
 /// (nothing without the facade's `tracy` feature).
@@ -32,13 +37,28 @@ macro_rules! profile_span {
 #[doc(hidden)]
 pub use tracy_client as __tracy;
 
-/// Marks the end of a frame in Tracy.
+/// Marks the end of a frame in Tracy: once per rendered frame, by whatever rendered it.
 #[inline]
 pub fn frame_mark() {
+    #[cfg(test)]
+    FRAME_MARKS.with(|marks| marks.set(marks.get() + 1));
     #[cfg(feature = "tracy")]
     if let Some(client) = tracy_client::Client::running() {
         client.frame_mark();
     }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Frame marks made on this thread, so tests can count them with or without a client (a
+    /// counter per thread: tests run side by side, and frames are marked on the rendering thread).
+    static FRAME_MARKS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// The frame marks this thread has made so far (tests only).
+#[cfg(test)]
+pub(crate) fn frame_marks_on_this_thread() -> u64 {
+    FRAME_MARKS.with(std::cell::Cell::get)
 }
 
 /// Plots `value` on the Tracy plot `name` (a static name per call site) once a client runs.
@@ -62,21 +82,99 @@ macro_rules! profile_plot {
     };
 }
 
-/// Starts the Tracy client (a no-op without the `tracy` feature). Call once, early in `main`.
+/// Starts the Tracy client (nothing without the `tracy` feature) and returns the [`Session`] that
+/// shuts it down. Call once, first thing in `main`, and keep the session until `main` returns.
 ///
 /// The client never starts by itself (tracy-client's `manual-lifetime`): a program that does not
-/// call this records nothing and opens no socket, whatever features are on.
-pub fn start() {
+/// call this records nothing and opens no socket, whatever features are on. Where the client
+/// was already running (an engine started its own `tracy_client::Client`), the session leaves
+/// the shutdown to whoever started it.
+pub fn start() -> Session {
     #[cfg(feature = "tracy")]
     {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        /// Whether some [`start`] has handed out the session that owns the client.
+        static OWNED: AtomicBool = AtomicBool::new(false);
+        let owns_client =
+            !tracy_client::Client::is_running() && !OWNED.swap(true, Ordering::AcqRel);
         let _ = tracy_client::Client::start();
+        Session {
+            owns_client,
+            _same_thread: std::marker::PhantomData,
+        }
     }
+    #[cfg(not(feature = "tracy"))]
+    Session {
+        _same_thread: std::marker::PhantomData,
+    }
+}
+
+/// The running Tracy client, from [`start`] until this is dropped: dropping the session that
+/// started the client shuts the profiler down (`___tracy_shutdown_profiler`), which sends what
+/// is still queued, ends the capture cleanly and, with `TRACY_NO_EXIT=1`, waits until a profiler
+/// has taken the data. Without the `tracy` feature it is an empty value that does nothing.
+///
+/// Drop it last, at the end of `main` (on every path out: an early `return` or a panic's unwind
+/// drops it too), once every instrumented thread is idle: nothing may record after the shutdown
+/// (tracy-client still reports the client as running then, and a span would use the freed
+/// profiler), and the client cannot start again in the same process. Not `Send`: Tracy must be
+/// shut down on the thread that started it.
+#[must_use = "dropping the session shuts the profiler down: keep it until the end of `main`"]
+pub struct Session {
+    /// Whether this session started the client, so its drop shuts it down.
+    #[cfg(feature = "tracy")]
+    owns_client: bool,
+    _same_thread: std::marker::PhantomData<*const ()>,
+}
+
+#[cfg(feature = "tracy")]
+impl Drop for Session {
+    fn drop(&mut self) {
+        if self.owns_client {
+            shutdown();
+        }
+    }
+}
+
+/// Shuts the profiler down (counted instead in tests, which share one process and client).
+#[cfg(feature = "tracy")]
+fn shutdown() {
+    #[cfg(not(test))]
+    // SAFETY: called once, by the session that started the client (`OWNED`), on the thread that
+    // started it (`Session` is not `Send`), at the end of `main`, when no other thread records
+    // (the `Session` contract); tracy-client's `Client::start` documents this call as the
+    // program's job under `manual-lifetime`.
+    #[allow(unsafe_code)]
+    unsafe {
+        tracy_client::sys::___tracy_shutdown_profiler();
+    }
+    #[cfg(test)]
+    tests::SHUTDOWNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Names the calling thread in Tracy (and for the OS, which Tracy also sets), once a client
+/// runs; nothing without the `tracy` feature. Threads the program spawns are better named
+/// where they are spawned (`std::thread::Builder::name`, rayon's `thread_name`): Tracy reads
+/// the OS name of a thread it was not told about.
+pub fn name_this_thread(name: &str) {
+    #[cfg(feature = "tracy")]
+    if let Some(client) = tracy_client::Client::running() {
+        client.set_thread_name(name);
+    }
+    #[cfg(not(feature = "tracy"))]
+    let _ = name;
 }
 
 #[cfg(all(test, feature = "tracy"))]
 mod tests {
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// Shutdowns the sessions asked for (the real one would end the tests' shared client).
+    pub(super) static SHUTDOWNS: AtomicU64 = AtomicU64::new(0);
+
+    /// The only test that starts the client: others would race it to "before main".
     #[test]
-    fn the_client_starts_only_when_asked_and_spans_before_it_are_skipped() {
+    fn the_client_starts_only_when_asked_and_its_first_session_shuts_it_down() {
         assert!(
             tracy_client::Client::running().is_none(),
             "the tracy client started before main"
@@ -85,9 +183,15 @@ mod tests {
             crate::profile_span!("before the client");
             crate::profile_plot!("before the client", 1.0);
         }
-        super::start();
+        let session = super::start();
         assert!(tracy_client::Client::running().is_some());
         crate::profile_span!("after the client");
         crate::profile_plot!("after the client", 2.0);
+        super::name_this_thread("profiling test");
+        // A second start finds the client running: its session is not the one to shut it down.
+        drop(super::start());
+        assert_eq!(SHUTDOWNS.load(Ordering::Relaxed), 0);
+        drop(session);
+        assert_eq!(SHUTDOWNS.load(Ordering::Relaxed), 1);
     }
 }

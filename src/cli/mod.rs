@@ -20,6 +20,8 @@ mod source;
 mod stress;
 mod validate;
 
+pub use source::name_worker_threads;
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -101,12 +101,29 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
     );
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
+        .thread_name(worker_name)
         .build()
         // rayon's error prints its io::Error and also returns it as its source: one copy only.
         .map_err(|e| match threads {
             0 => anyhow::anyhow!("cannot start the worker threads: {e}"),
             n => anyhow::anyhow!("cannot start {n} worker threads: {e}"),
         })
+}
+
+/// Names the threads of rayon's global pool, which the commands without `--threads` use (and
+/// starts them: the pool is otherwise built on first use, unnamed). A named thread is told apart
+/// in Tracy, a debugger or `top`; unnamed, every one is "myriad".
+pub fn name_worker_threads() {
+    // Fails only when the global pool already exists (it does not before `main`'s first use),
+    // and then the threads merely keep their names.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .thread_name(worker_name)
+        .build_global();
+}
+
+/// A rayon worker's thread name (short: Linux keeps 15 bytes of it).
+fn worker_name(index: usize) -> String {
+    format!("rayon {index}")
 }
 
 /// Bytes a frame of `grid` with `lights` lights needs at the least, before a single pair: per

@@ -248,17 +248,21 @@ pub fn run_frames(
             for _ in 0..FRAMES_IN_FLIGHT {
                 free_tx.send(empty_work()).expect("channel has room");
             }
-            s.spawn(move || {
-                let mut cpu = CpuStage::new(scene, method);
-                for index in 0..frames {
-                    // The renderer hung up (an error): stop.
-                    let Ok(mut work) = free_rx.recv() else { return };
-                    cpu.run(index, &mut work);
-                    if ready_tx.send(work).is_err() {
-                        return;
+            // Named, so Tracy and debuggers tell it from the rayon workers it hands jobs to.
+            std::thread::Builder::new()
+                .name("cpu stage".into())
+                .spawn_scoped(s, move || {
+                    let mut cpu = CpuStage::new(scene, method);
+                    for index in 0..frames {
+                        // The renderer hung up (an error): stop.
+                        let Ok(mut work) = free_rx.recv() else { return };
+                        cpu.run(index, &mut work);
+                        if ready_tx.send(work).is_err() {
+                            return;
+                        }
                     }
-                }
-            });
+                })
+                .context("cannot start the assignment worker")?;
             for index in 0..frames {
                 let work = ready_rx
                     .recv()
