@@ -224,6 +224,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             viewer
                 .renderer
                 .render(&viewer.ctx, &viewer.scene, &warm_up, &viewer.target.view)?;
+            myriad::profiling::frame_mark();
             viewer.ctx.wait_idle()?;
             Ok(viewer)
         })?;
@@ -259,6 +260,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 scene.lights.len()
             ))
         })?;
+    myriad::profiling::frame_mark();
     stages.upload_ms = report.upload_seconds * 1e3;
     stages.encode_ms = report.encode_seconds * 1e3;
     progress.done(

@@ -2,6 +2,8 @@
 //! renders frames, and the pipelined frame loop.
 
 mod depth_buffer;
+#[cfg(test)]
+mod frame_marks;
 mod geometry;
 mod pipelined;
 mod pixel_stats;

@@ -186,7 +186,8 @@ pub struct SkipState {
 }
 
 impl Viewer {
-    /// One clustered frame with `skips` applied; submits without waiting for the GPU.
+    /// One clustered frame with `skips` applied; submits without waiting for the GPU. Marks the
+    /// frame for Tracy, reused or not.
     pub fn frame_with_skips(
         &mut self,
         scene: &RenderScene,
@@ -200,6 +201,9 @@ impl Viewer {
         let mut state = std::mem::take(&mut self.skip_state);
         let result = self.skipping_frame(scene, method, skips, settings, &mut state);
         self.skip_state = state;
+        if result.is_ok() {
+            crate::profiling::frame_mark();
+        }
         result
     }
 
