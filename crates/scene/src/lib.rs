@@ -119,6 +119,7 @@ mod light_fields;
 mod lights;
 mod model;
 mod presets;
+mod profiling;
 mod read;
 mod read_file;
 mod replace_file;

@@ -77,6 +77,7 @@ fn orbit_point(cx: f32, cz: f32, radius: f32, speed: f32, phase: f32, time: f32)
 /// `|angular_speed · time|` below about 10⁴ (wrap `time` for long runs) to stay within a
 /// millimetre on a 10 m orbit.
 pub fn animate_orbits(orbits: &Orbits, time: f32, x: &mut [f32], z: &mut [f32]) {
+    crate::profiling::profile_span!("animate orbits");
     let n = orbits.len();
     assert!(x.len() == n && z.len() == n, "one orbit per light");
     assert!(
@@ -269,6 +270,7 @@ pub fn animate_wander(
     y: &mut [f32],
     z: &mut [f32],
 ) {
+    crate::profiling::profile_span!("animate wander");
     let n = wander.len();
     assert!(
         x.len() == n && y.len() == n && z.len() == n,

@@ -178,6 +178,7 @@ fn unit_axis(axis: Vec3) -> Vec3 {
 /// `out.indices`, the visible ones ascending. Returns how many are visible. Parallel in blocks
 /// above [`super::PARALLEL_MIN`] lights; the result does not depend on the thread count.
 pub fn cull_lights(camera: &Camera, lights: LightSlices<'_>, out: &mut Visibility) -> usize {
+    crate::profiling::profile_span!("cull lights");
     lights.assert_consistent();
     let n = lights.len();
     let frustum = Frustum::new(camera);

@@ -63,6 +63,7 @@ pub fn lights_to_view(
     indices: Option<&[u32]>,
     out: &mut ViewLights,
 ) {
+    crate::profiling::profile_span!("lights to view");
     lights.assert_consistent();
     let n = lights.len();
     let rows = indices.map_or(n, <[u32]>::len);
