@@ -149,7 +149,7 @@ impl Viewer {
         let mut grid = shading.grid(&scene.grid);
         let (mut assign_seconds, mut stats) = (0.0, None);
         if shading != Shading::BruteForce {
-            crate::profile_span!("assign");
+            crate::profile_span!("viewer: assign");
             let start = Instant::now();
             let s = self.assigner.assign(
                 method,

@@ -317,7 +317,7 @@ impl Assigner {
             ref grid,
             active,
         } = *frame;
-        profile_span!("assign");
+        profile_span!("assign on one grid");
         lights.assert_consistent();
         let n = lights.len();
         self.planes.update(camera, grid);

@@ -158,6 +158,9 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     let mut block_start = begin;
     while block_start < end {
         let n = (end - block_start).min(BLOCK);
+        // Each phase of the block is a span of its own: fine-grained (a few µs each), and nothing
+        // at all without the `tracy` feature.
+        crate::profiling::profile_span!("phase: view and cull", view_and_cull);
         // Phase 0a: camera-relative view transform, validity and padding, branch-free over the
         // block's columns so that it vectorises.
         let (xs, ys, zs) = (
@@ -270,9 +273,11 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 block.rad[b] = block.rad[b] * 1.001 + 1e-3 * extent;
             }
         }
+        crate::profiling::end_span!(view_and_cull);
         // Phases 1–3: z, then x and y (which use the z phase's depth band).
         block.run_phases(alive, &ctx.planes);
         // Phase 4: emit spans.
+        crate::profiling::profile_span!("phase: emit");
         for b in 0..alive {
             let source = block.source[b] as usize;
             let light = (block_start + source) as u32;

@@ -6,6 +6,7 @@
 //! that the passes give exactly its boxes.
 
 use crate::geometry::{self, ClusterBox, ZRange};
+use crate::profiling::profile_span;
 use crate::search::FramePlanes;
 
 /// Lights per SoA block inside a task.
@@ -65,8 +66,15 @@ impl Block {
     /// Runs the z, x and y phases over the first `n` lights.
     #[inline(always)]
     pub fn run_phases(&mut self, n: usize, planes: &FramePlanes<'_>) {
-        self.z_phase(n, planes);
-        self.x_phase(n, planes);
+        {
+            profile_span!("phase: z");
+            self.z_phase(n, planes);
+        }
+        {
+            profile_span!("phase: x");
+            self.x_phase(n, planes);
+        }
+        profile_span!("phase: y");
         self.y_phase(n, planes);
     }
 
