@@ -240,6 +240,7 @@ impl Viewer {
                 && c.base_grid == scene.grid
                 && !geometry_dirty(&c.lights, lights)
         }) {
+            crate::profile_span!("skipping frame: reused");
             let appearance = appearance_dirty(&cache.lights, lights);
             frame.grid = cache.grid;
             frame.lights_assigned = if skips.cull {
@@ -291,13 +292,16 @@ impl Viewer {
         let start = Instant::now();
         let mut grid = scene.grid;
         if skips.needs_prepass() {
-            self.renderer
-                .render_prepass(&self.ctx, &self.scene, &scene.camera)?;
-            let depth = self
-                .renderer
-                .read_depth(&self.ctx)?
-                .context("prepass drew")?;
+            let depth = {
+                crate::profile_span!("depth prepass and read-back");
+                self.renderer
+                    .render_prepass(&self.ctx, &self.scene, &scene.camera)?;
+                self.renderer
+                    .read_depth(&self.ctx)?
+                    .context("prepass drew")?
+            };
             frame.prepass_seconds = start.elapsed().as_secs_f64();
+            crate::profile_span!("fitted depth and active clusters");
             let start = Instant::now();
             if skips.fitted_depth {
                 grid = fitted_grid(&scene.grid, &scene.camera, &depth, &scene.blended_bounds);

@@ -8,7 +8,7 @@ use crate::buffers::{GrowableBuffer, stage};
 use crate::frame_input::{ClusterLists, LightColumns, fill_gpu_lights};
 use crate::layout::{FrameUniforms, GpuLight};
 use crate::pipelines::{Pipelines, ShadingMode};
-use crate::profiling::profile_span;
+use crate::profiling::{end_span, profile_span};
 use crate::scene::{GpuScene, SceneGeometry};
 use crate::targets::GBuffer;
 use crate::timing::{PassTimer, PassTimes};
@@ -349,6 +349,7 @@ impl Renderer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("prepass"),
             });
+        profile_span!("prepass: encode and submit");
         self.timer.begin_frame(false);
         self.encode_gbuffer(&mut encoder, scene);
         // Resolved now, so `last_pass_times` after a prepass reports it (and not the ticks of
@@ -522,7 +523,7 @@ impl Renderer {
         let forward_pass =
             (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map;
         self.check_target(device, frame, target, forward_pass)?;
-        profile_span!("upload lights and lists");
+        profile_span!("upload lights and lists", upload);
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -597,6 +598,7 @@ impl Renderer {
             .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
         self.belt.finish();
         report.upload_seconds = upload_start.elapsed().as_secs_f64();
+        end_span!(upload);
 
         profile_span!("encode and submit");
         let encode_start = Instant::now();

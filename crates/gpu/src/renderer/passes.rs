@@ -2,6 +2,7 @@
 //! the G-buffer, deferred shading and forward passes (each with its timestamp writes).
 
 use super::{FrameDesc, Renderer};
+use crate::profiling::profile_span;
 use crate::scene::GpuScene;
 use crate::targets::GBuffer;
 use crate::timing::TimedPass;
@@ -63,6 +64,7 @@ impl Renderer {
     }
 
     pub(super) fn encode_gbuffer(&mut self, encoder: &mut wgpu::CommandEncoder, scene: &GpuScene) {
+        profile_span!("encode pass: G-buffer");
         let gbuffer = self
             .gbuffer
             .as_ref()
@@ -118,6 +120,7 @@ impl Renderer {
         frame: &FrameDesc<'_>,
         target: &wgpu::TextureView,
     ) {
+        profile_span!("encode pass: deferred shading");
         let has_spots = self.has_spots || frame.settings.force_all_features;
         let timestamps = self.timer.writes(TimedPass::Shading);
         let pipeline = self
@@ -153,6 +156,7 @@ impl Renderer {
         frame: &FrameDesc<'_>,
         target: &wgpu::TextureView,
     ) {
+        profile_span!("encode pass: forward");
         let gbuffer = self
             .gbuffer
             .as_ref()
