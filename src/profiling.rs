@@ -155,7 +155,8 @@ fn shutdown() {
 /// Names the calling thread in Tracy (and for the OS, which Tracy also sets), once a client
 /// runs; nothing without the `tracy` feature. Threads the program spawns are better named
 /// where they are spawned (`std::thread::Builder::name`, rayon's `thread_name`): Tracy reads
-/// the OS name of a thread it was not told about.
+/// the OS name of a thread it was not told about. Threads spawned later from this one by code
+/// that does not name its own (a driver's) inherit the OS name.
 pub fn name_this_thread(name: &str) {
     #[cfg(feature = "tracy")]
     if let Some(client) = tracy_client::Client::running() {
