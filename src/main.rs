@@ -20,11 +20,14 @@ fn main() -> ExitCode {
             return ExitCode::from(err.exit_code() as u8);
         }
     };
+    // As `diff` and `grep`: 1 is a verdict (a check found a miss, a scene file has problems),
+    // 2 is a run that could not finish (bad input, unreadable or unwritable files, no adapter),
+    // like clap's usage errors. A script can tell "the lists are wrong" from "the check broke".
     match cli::run(args) {
         Ok(code) => code,
         Err(err) => {
             eprintln!("error: {err:#}");
-            ExitCode::FAILURE
+            ExitCode::from(2)
         }
     }
 }

@@ -496,6 +496,28 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
     assert!(!out.status.success(), "{}", all_output(&out));
     let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert!(u64_field(&cmp, "misses") > 0, "{cmp}");
+
+    // Listing the invalid light as well as every right one is no miss, but still wrong: it
+    // passed as a false positive (audit g2). The last cluster gains light 2.
+    let mut dump = read_json(&exact_dump);
+    let last = dump["counts"].as_array().unwrap().len() - 1;
+    let count = dump["counts"][last].as_u64().unwrap();
+    dump["counts"][last] = (count + 1).into();
+    dump["indices"].as_array_mut().unwrap().push(2.into());
+    let with_invalid = write(&dir, "with_invalid.json", &dump.to_string());
+    let out = myriad(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        with_bad.as_os_str(),
+        "--dump".as_ref(),
+        with_invalid.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", all_output(&out));
+    let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(u64_field(&cmp, "misses"), 0, "{cmp}");
+    assert_eq!(u64_field(&cmp, "invalid_lights_listed"), 1, "{cmp}");
+    assert_mentions(&stderr(&out), &["1 invalid light", "light 2"]);
 }
 
 #[test]
@@ -762,6 +784,34 @@ fn bad_options_fail_with_a_helpful_message() {
 
     let out = myriad_fails(&["bench", "--preset", "paper", "--methods", "refined,bogus"]);
     assert_mentions(&out, &["unknown method", "bogus"]);
+    // Counts past what a run can hold aborted on a 32 GiB allocation or slept forever, and a
+    // method listed twice was timed twice (audit g2).
+    assert_rejected(&[
+        (
+            &["bench", "--preset", "paper", "--runs", "4294967296"],
+            &["--runs", "1..=1000000"],
+        ),
+        (
+            &[
+                "bench",
+                "--preset",
+                "paper",
+                "--idle-us",
+                "18446744073709551615",
+            ],
+            &["--idle-us", "0..=1000000"],
+        ),
+        (
+            &[
+                "bench",
+                "--preset",
+                "paper",
+                "--methods",
+                "binary,refined,binary",
+            ],
+            &["--methods lists binary twice"],
+        ),
+    ]);
 
     let out = myriad_fails(&[
         "scene".as_ref(),
@@ -1572,6 +1622,25 @@ fn stress_checks_every_cluster_against_the_oracle() {
     // Lights (32 bytes or more each) and the lists went up.
     assert!(u64_field(&r, "upload_bytes") > 20000 * 32 + 4 * pairs);
     assert_stress_stages(&r);
+}
+
+#[test]
+fn stress_checks_the_exact_method_independently() {
+    if !gpu_available() {
+        return;
+    }
+    // The exact method's lists were compared with themselves, a check that could not fail
+    // (audit g1): every cluster goes through the independent oracle instead.
+    let r = stress_json(&["--lights", "3000", "--size", "64x36", "--method", "exact"]);
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["mode"], "independent");
+    assert_eq!(check["clusters_checked"], check["clusters_total"]);
+    assert_eq!(check["misses"], 0);
+    let pairs = u64_field(&r["assignment"], "pairs");
+    // The exact method lists exactly the pairs the independent oracle finds.
+    assert_eq!(u64_field(check, "exact_pairs"), pairs);
+    assert_eq!(u64_field(check, "reported_pairs"), pairs);
 }
 
 #[test]

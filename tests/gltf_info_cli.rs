@@ -139,7 +139,7 @@ fn bad_input_exits_1_naming_the_file() {
                 args.push("--json".as_ref());
             }
             let out = myriad(&args);
-            assert_eq!(out.status.code(), Some(1), "{}", path.display());
+            assert_eq!(out.status.code(), Some(2), "{}", path.display());
             let err = String::from_utf8_lossy(&out.stderr);
             assert!(err.starts_with("error: "), "{err}");
             assert!(err.contains(&path.display().to_string()), "{err}");

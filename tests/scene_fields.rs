@@ -143,7 +143,7 @@ fn options_choose_camera_grid_radii_and_spots() {
         "--out".as_ref(),
         dir.join("x.json").as_os_str(),
     ]);
-    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("no camera named \"Nope\""));
 }
 

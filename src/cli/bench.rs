@@ -3,7 +3,7 @@
 use super::assign::parse_method;
 use super::oracle_check::independent_lists;
 use super::source::{SceneSource, thread_pool};
-use anyhow::Result;
+use anyhow::{Result, ensure};
 use myriad::assignment::{Method, Parallelism};
 use myriad::core_link::{self, CoreLink, HANDOFF_BYTES};
 use myriad::evaluate::{Idle, MethodResult, Timing, measure};
@@ -22,13 +22,14 @@ pub struct Args {
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Timed runs per method (the median is reported).
-    #[arg(long, value_parser = super::at_least_one, default_value_t = 21)]
-    runs: usize,
+    /// Timed runs per method (the median is reported), 1 to 1 000 000.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000), default_value_t = 21)]
+    runs: u32,
     /// Wait this many microseconds before each timed call, as an engine's frames are apart (the
     /// pool's workers fall asleep in between; 0 = calls back to back). The thread sleeps, unless
     /// --busy.
-    #[arg(long, default_value_t = 0)]
+    /// At most 1 000 000 (a second).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(..=1_000_000), default_value_t = 0)]
     idle_us: u64,
     /// Spin through --idle-us instead of sleeping: the calling thread stays busy, as an engine's
     /// frame thread doing other work.
@@ -67,10 +68,19 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let methods = if args.methods.is_empty() {
         Method::ALL.to_vec()
     } else {
-        args.methods
+        let methods: Vec<Method> = args
+            .methods
             .iter()
             .map(|m| parse_method(m))
-            .collect::<Result<_>>()?
+            .collect::<Result<_>>()?;
+        for (i, method) in methods.iter().enumerate() {
+            ensure!(
+                !methods[..i].contains(method),
+                "--methods lists {} twice",
+                method.name()
+            );
+        }
+        methods
     };
     let (scene, name) = args.source.load()?;
     let time = Duration::from_micros(args.idle_us);
@@ -85,7 +95,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         Parallelism::Paced
     };
     let timing = Timing {
-        runs: args.runs,
+        runs: args.runs as usize,
         idle,
         parallelism,
     };

@@ -53,6 +53,9 @@ struct CheckOutput {
     false_positive_ratio: f64,
     /// The miss in the lowest cluster (lowest light first, as a scene-file index), if any.
     first_miss: Option<oracle_check::Miss>,
+    /// Pairs naming a light the scene file holds but that is invalid (skipped on loading): none
+    /// in a right dump.
+    invalid_lights_listed: u64,
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
@@ -63,13 +66,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let grid = grid_of_dump(&scene.grid, dump.grid);
     dump.check_against(&grid, file_lights)
         .with_context(|| format!("{} does not match {name}", args.dump.display()))?;
-    // The checks work on the loaded lights' columns: a skipped (invalid) light listed in the
-    // dump maps to no column, so it can only count as a false positive.
+    // The checks work on the loaded lights' columns. A skipped (invalid) light maps to no
+    // column: an assignment never lists one (its NaN or negative radius touches nothing), so a
+    // dump that does is wrong whatever the oracle says (audit g2: it passed as a false positive).
     let mut column_of = vec![u32::MAX; file_lights];
     for (column, &file_index) in scene.lights.source_index.iter().enumerate() {
         column_of[file_index as usize] = column as u32;
     }
     let mut lists: LightLists = dump.lists();
+    let invalid = invalid_lights_listed(&lists, &column_of);
     for l in &mut lists.indices {
         *l = column_of[*l as usize];
     }
@@ -84,6 +89,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let out = CheckOutput {
         reference: args.reference,
         grid: grid.dims().to_array(),
+        invalid_lights_listed: invalid.count,
         exact_pairs: report.exact_pairs,
         reported_pairs: report.reported_pairs,
         misses: report.misses,
@@ -109,7 +115,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         if grid.dims() != scene.grid.dims() {
             let [x, y, z] = out.grid;
             println!(
-                "  grid                  {x}x{y}x{z} (coarsened from the scene's by a pair budget)"
+                "  grid                  {x}x{y}x{z} (coarser than the scene's, as a pair budget makes it)"
             );
         }
         println!("  exact pairs           {}", out.exact_pairs);
@@ -125,11 +131,42 @@ pub fn run(args: Args) -> Result<ExitCode> {
             out.misses, m.cluster, m.tile[0], m.tile[1], m.tile[2], m.light
         );
     }
-    Ok(if out.misses == 0 {
+    if let Some((cluster, light)) = invalid.first {
+        eprintln!(
+            "error: the dump lists {} invalid light(s), skipped when the scene was loaded; e.g. \
+             cluster {cluster} lists light {light} (scene-file index)",
+            invalid.count
+        );
+    }
+    Ok(if out.misses == 0 && invalid.count == 0 {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// How many pairs of `lists` (scene-file indices) name a light without a column, and the first.
+struct InvalidListed {
+    count: u64,
+    /// (cluster, scene-file index) of the first.
+    first: Option<(u32, u32)>,
+}
+
+fn invalid_lights_listed(lists: &LightLists, column_of: &[u32]) -> InvalidListed {
+    let mut found = InvalidListed {
+        count: 0,
+        first: None,
+    };
+    for (cluster, (&offset, &count)) in lists.offsets.iter().zip(&lists.counts).enumerate() {
+        let start = offset as usize;
+        for &light in &lists.indices[start..start + count as usize] {
+            if column_of[light as usize] == u32::MAX {
+                found.count += 1;
+                found.first.get_or_insert((cluster as u32, light));
+            }
+        }
+    }
+    found
 }
 
 /// The grid a dump of `dims` was built for: the scene's, or one of the coarser grids a pair budget
