@@ -944,6 +944,30 @@ fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
         let out = myriad_fails(&["scene", "--gltf", &atrium, flag, "0", "--out", out_path]);
         assert_mentions(&out, &[flag, "0 is not in 1.."]);
     }
+    // Options of another light field were silently ignored (audit g2).
+    let base = ["scene", "--gltf", &atrium, "--out", out_path];
+    assert_rejected(&[
+        (
+            &[&base[..], &["--field", "box", "--clumps", "3"]].concat(),
+            &["--clumps only applies to --field clumps"],
+        ),
+        (
+            &[&base[..], &["--spread", "2"]].concat(),
+            &[
+                "--spread only applies to --field clumps",
+                "--field surfaces",
+            ],
+        ),
+        (
+            &[&base[..], &["--field", "frustum", "--offset", "1"]].concat(),
+            &["--offset only applies to --field surfaces"],
+        ),
+        (
+            &[&base[..], &["--spot-angles", "10..20"]].concat(),
+            &["--spot-angles only applies with --spots"],
+        ),
+    ]);
+    assert!(!out_file.exists(), "nothing is written for refused options");
     let far_slice = "log_near:5000";
     let out = myriad_fails(&[
         "scene", "--gltf", &atrium, "--depth", far_slice, "--out", out_path,

@@ -142,6 +142,21 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     check_slicing(slicing, dims.z, camera.near, camera.far)?;
     let grid = ClusterGrid::try_new(dims, slicing, camera.near, camera.far)
         .with_context(|| format!("{}: camera {camera_name}", path.display()))?;
+    // An option of another field would be ignored, silently (audit g2): refused instead.
+    for (given, option, field) in [
+        (args.offset.is_some(), "--offset", "surfaces"),
+        (args.clumps.is_some(), "--clumps", "clumps"),
+        (args.spread.is_some(), "--spread", "clumps"),
+    ] {
+        ensure!(
+            !given || field_name == field,
+            "{option} only applies to --field {field}, not to --field {field_name}"
+        );
+    }
+    ensure!(
+        args.spot_angles.is_none() || args.spots.is_some_and(|f| f != 0.0),
+        "--spot-angles only applies with --spots F (a fraction of spot lights above 0)"
+    );
     let placement = match field_name {
         "surfaces" => Placement::Surfaces {
             surfaces: SurfaceSampler::new(&model),
