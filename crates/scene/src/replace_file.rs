@@ -67,11 +67,23 @@ pub fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let mode = existing.map_or(0o666, |m| m.permissions().mode() & 0o7777);
         builder.permissions(std::fs::Permissions::from_mode(mode));
     }
-    let mut temp = builder.tempfile_in(dir)?;
-    temp.write_all(bytes)?;
-    temp.as_file().sync_all()?;
-    temp.persist(&path).map_err(|e| e.error)?;
+    let mut temp = builder.tempfile_in(dir).map_err(without_temp_name)?;
+    temp.write_all(bytes).map_err(without_temp_name)?;
+    temp.as_file().sync_all().map_err(without_temp_name)?;
+    temp.persist(&path)
+        .map_err(|e| without_temp_name(e.error))?;
     Ok(())
+}
+
+/// The OS error alone: `tempfile` names its hidden temporary file in its errors ("… at path
+/// \"dir/.myriad-XXXXXX\"", and hides the OS error behind that text), which the caller, naming
+/// the target, would pass on as if the user had asked for that file.
+fn without_temp_name(error: Error) -> Error {
+    let text = error.to_string();
+    match text.split_once(" at path \"") {
+        Some((os_error, _)) => Error::new(error.kind(), os_error.to_owned()),
+        None => error,
+    }
 }
 
 /// `path` with symbolic links followed to the name a plain write would create (for a link whose
@@ -127,8 +139,10 @@ mod tests {
             replace_file(&path, b"third").unwrap();
             assert_eq!(mode(&path), 0o640);
         }
-        // A missing folder is an error too.
-        assert!(replace_file(&dir.path().join("no/such/out.json"), b"x").is_err());
+        // A missing folder is an error too, which does not name the temporary file.
+        let e = replace_file(&dir.path().join("no/such/out.json"), b"x").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::NotFound);
+        assert!(!e.to_string().contains(".myriad-"), "{e}");
     }
 
     #[cfg(unix)]
