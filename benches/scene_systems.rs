@@ -57,7 +57,7 @@ fn systems(c: &mut Criterion) {
         let mut lights = surface_lights(&surfaces, n, 0.0);
         animate.throughput(Throughput::Elements(n as u64));
         let orbits = Orbits::around(Vec3::ZERO, &lights.x, &lights.z, [0.2, 1.0], 1);
-        let mut time = 0.0f32;
+        let mut time = 0.0f64;
         animate.bench_function(BenchmarkId::new("orbits", n), |b| {
             b.iter(|| {
                 time += 1.0 / 60.0;
@@ -121,7 +121,7 @@ fn systems(c: &mut Criterion) {
         let mut lights = surface_lights(&surfaces, n, 0.3);
         let orbits = Orbits::around(Vec3::ZERO, &lights.x, &lights.z, [0.2, 1.0], 1);
         let (mut vis, mut out) = (Visibility::new(), ViewLights::new());
-        let mut time = 0.0f32;
+        let mut time = 0.0f64;
         frame_group.throughput(Throughput::Elements(n as u64));
         frame_group.bench_function(BenchmarkId::new("orbit_cull_view", n), |b| {
             b.iter(|| {

@@ -30,8 +30,9 @@ use std::time::Instant;
 /// Frames the worker may be ahead of the renderer (buffer sets in circulation).
 pub const FRAMES_IN_FLIGHT: usize = 2;
 
-/// Seconds of animation between frames.
-const FRAME_DT: f32 = 1.0 / 60.0;
+/// Seconds of animation between frames. Frame times are f64 (`index · FRAME_DT`): an f32 time
+/// stops advancing at 2²⁴ frames (78 hours at 60 fps).
+const FRAME_DT: f64 = 1.0 / 60.0;
 
 /// What one frame's stages took.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -136,7 +137,7 @@ impl<'a> CpuStage<'a> {
         let lights = &mut work.lights;
         animate_orbits(
             &self.orbits,
-            index as f32 * FRAME_DT,
+            index as f64 * FRAME_DT,
             &mut lights.x,
             &mut lights.z,
         );

@@ -2,7 +2,9 @@
 //!
 //! Both move positions in place and are deterministic per light, so they parallelise without
 //! changing results. Orbits are a closed-form function of absolute time (no drift, any frame
-//! can be computed directly); wandering is a random walk integrated frame by frame, its random
+//! can be computed directly, and time is f64 with each light's turn reduced in f64 before the
+//! f32 angle, so the animation neither freezes nor degrades however long a run lasts);
+//! wandering is a random walk integrated frame by frame, its random
 //! steps drawn from a hash of (seed, frame, light index) instead of a shared generator.
 
 use super::{BLOCK, PARALLEL_MIN, fast_sin_cos};
@@ -68,15 +70,27 @@ impl Orbits {
 
 /// One light's orbit position `(x, z)` at `time`: the kernel of [`animate_orbits`].
 #[inline]
-fn orbit_point(cx: f32, cz: f32, radius: f32, speed: f32, phase: f32, time: f32) -> (f32, f32) {
-    let (s, c) = fast_sin_cos(phase + speed * time);
+fn orbit_point(cx: f32, cz: f32, radius: f32, speed: f32, phase: f32, time: f64) -> (f32, f32) {
+    let (s, c) = fast_sin_cos(phase + turned_angle(speed, time));
     (cx + radius * c, cz + radius * s)
 }
 
-/// Sets each light's `x` and `z` to its orbit position at `time` (seconds). f32 angles: keep
-/// `|angular_speed · time|` below about 10⁴ (wrap `time` for long runs) to stay within a
-/// millimetre on a 10 m orbit.
-pub fn animate_orbits(orbits: &Orbits, time: f32, x: &mut [f32], z: &mut [f32]) {
+/// `speed · time` reduced to [−π, π], in f64 so that it keeps advancing for any realistic run
+/// (an f32 `speed · time` has a step of 0.016 rad at 10⁵ rad, and an f32 time stops at 2²⁴
+/// frames). Rounds the turn count by the 1.5·2⁵² trick (no rounding call, so the loop still
+/// vectorises); exact while `|speed · time| < 2⁵¹` turns, within 1e-6 rad below 10¹⁰ rad.
+#[inline]
+fn turned_angle(speed: f32, time: f64) -> f32 {
+    const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5 · 2⁵²
+    let turns = speed as f64 * time * (1.0 / std::f64::consts::TAU);
+    let fraction = turns - ((turns + ROUND) - ROUND);
+    (fraction * std::f64::consts::TAU) as f32
+}
+
+/// Sets each light's `x` and `z` to its orbit position at `time` (seconds since time 0). The
+/// angle `phase + speed · time` is reduced per light in f64, so positions stay within a few
+/// micrometres of the exact orbit on a 10 m radius at any time a program can reach.
+pub fn animate_orbits(orbits: &Orbits, time: f64, x: &mut [f32], z: &mut [f32]) {
     crate::profiling::profile_span!("animate orbits");
     let n = orbits.len();
     assert!(x.len() == n && z.len() == n, "one orbit per light");
@@ -360,6 +374,37 @@ mod tests {
                 .iter()
                 .all(|&s| (0.5..1.5).contains(&s.abs()))
         );
+    }
+
+    /// From 2²⁴ frames on, an f32 frame time no longer advances, and long before that an f32
+    /// angle moves in coarse steps: positions must keep tracking the f64 orbit.
+    #[test]
+    fn orbits_keep_moving_after_two_to_the_24_frames() {
+        let orbits = Orbits {
+            center_x: vec![0.0; 3],
+            center_z: vec![0.0; 3],
+            orbit_radius: vec![10.0; 3],
+            angular_speed: vec![0.1, -0.5, 1.5],
+            phase: vec![0.0, 1.0, -2.0],
+        };
+        let dt = 1.0 / 60.0;
+        for frame in [(1u64 << 24) + 1, 1 << 30, 1 << 36] {
+            let (mut x, mut z) = ([0.0; 3], [0.0; 3]);
+            let mut previous = None;
+            for k in 0..3 {
+                let time = (frame + k) as f64 * dt;
+                animate_orbits(&orbits, time, &mut x, &mut z);
+                for i in 0..3 {
+                    let o = &orbits;
+                    let angle = o.phase[i] as f64 + o.angular_speed[i] as f64 * time;
+                    let (es, ec) = angle.sin_cos();
+                    let error = (x[i] as f64 - 10.0 * ec).hypot(z[i] as f64 - 10.0 * es);
+                    assert!(error < 1e-4, "frame {frame}+{k}, light {i}: {error} m");
+                }
+                assert_ne!(previous, Some((x, z)), "frame {frame}+{k} did not move");
+                previous = Some((x, z));
+            }
+        }
     }
 
     #[test]
