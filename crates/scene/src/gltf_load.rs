@@ -74,7 +74,11 @@
 //!   - a GLB header `length` other than the file's size (longer: truncated; shorter: bytes that
 //!     are not part of the GLB);
 //!   - a buffer view reaching past its buffer's `byteLength`, even where the data behind it
-//!     holds more bytes.
+//!     holds more bytes;
+//!   - a node `matrix` whose last row is not exactly (0, 0, 0, 1): the spec requires a matrix
+//!     decomposable into translation, rotation and scale, and a projective one has no reading
+//!     that other loaders share (the mesh's points would be divided by a `w` of their own, or
+//!     the row silently dropped, as this loader did before). Exporters write the row exactly.
 //!
 //!   It **loads and reports** (a warning) what breaks a rule of the spec but has one clear
 //!   reading that keeps the model usable, as it clamps material factors:
@@ -1006,10 +1010,20 @@ impl Loader<'_> {
         })
     }
 
-    /// A node's own transform, checked to be finite.
+    /// A node's own transform, checked to be finite and, given as a `matrix`, affine.
     fn local_transform(node: &json::Node) -> Result<Mat4, String> {
         let m = match node.matrix {
-            Some(m) => Mat4::from_cols_array(&m),
+            Some(m) => {
+                // Column-major: the last row is elements 3, 7, 11 and 15.
+                let last_row = [m[3], m[7], m[11], m[15]];
+                if last_row != [0.0, 0.0, 0.0, 1.0] {
+                    return Err(format!(
+                        "matrix has last row {last_row:?}, not [0, 0, 0, 1]: the spec requires \
+                         a matrix made of translation, rotation and scale"
+                    ));
+                }
+                Mat4::from_cols_array(&m)
+            }
             None => {
                 let t = Vec3::from_array(node.translation.unwrap_or([0.0; 3]));
                 let s = Vec3::from_array(node.scale.unwrap_or([1.0; 3]));
@@ -1919,6 +1933,21 @@ mod tests {
             (
                 text.replace(r#""byteLength": 44"#, r#""byteLength": 10"#),
                 "bufferViews[0]: bytes 0..0+36 lie outside buffer 0 (10 bytes)",
+            ),
+            (
+                text.replace(
+                    r#""nodes": [{"mesh": 0}, {}]"#,
+                    r#""nodes": [{"mesh": 0}, {"name": "proj",
+                      "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0]}]"#,
+                ),
+                "nodes[1] \"proj\": matrix has last row [0.0, 0.0, 0.0, 0.0], not [0, 0, 0, 1]",
+            ),
+            (
+                text.replace(
+                    r#""nodes": [{"mesh": 0}, {}]"#,
+                    r#""nodes": [{"mesh": 0, "matrix": [1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}, {}]"#,
+                ),
+                "nodes[0]: matrix has last row [0.5, 0.0, 0.0, 1.0], not [0, 0, 0, 1]",
             ),
         ];
         for (text, expected) in refused {
