@@ -49,20 +49,22 @@ const GRIDS: [[u32; 3]; 3] = [[24, 12, 16], [16, 9, 24], [32, 18, 48]];
 /// Light counts of the scaling groups.
 const LIGHT_COUNTS: [usize; 5] = [10, 1_000, 10_000, 100_000, 1_000_000];
 /// Methods of the scaling groups.
-const METHODS: [Method; 4] = [
+const METHODS: [Method; 5] = [
     Method::Linear,
     Method::Binary,
     Method::Refined,
+    Method::Cone,
     Method::Exact,
 ];
 
 /// Sample size, warm-up and measurement time for one benchmark, by its rough cost per run.
 fn timing(group: &mut BenchmarkGroup<'_, WallTime>, method: Method, lights: usize) {
     // The oracle costs a few times what the fast methods do per light (2–4x at 10k lights here).
-    let weight = if method == Method::Exact {
-        4 * lights
-    } else {
-        lights
+    // `cone`'s per-tile tests cost several times `refined`'s per light (4–15x here).
+    let weight = match method {
+        Method::Exact => 4 * lights,
+        Method::Cone => 4 * lights,
+        _ => lights,
     };
     let (samples, warm_up, measurement) = match weight {
         0..=10_000 => (50, 0.5, 2.0),

@@ -278,7 +278,7 @@ fn every_method_passes_the_oracle_check() {
     let scene = paper_scene(&dir, 300);
     let hand_written = write(&dir, "good.json", GOOD_SCENE);
     for scene in [&scene, &hand_written] {
-        for method in ["exact", "linear", "binary", "refined"] {
+        for method in ["exact", "linear", "binary", "refined", "cone"] {
             let dump = dir.join(format!("{method}.dump.json"));
             let cmp = assign_and_check(scene, method, &dump);
             let context = format!("{} / {method}: {cmp}", scene.display());
@@ -311,7 +311,7 @@ fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
     // must verify it on that grid.
     let dir = work_dir("coarsened_dump");
     let scene = paper_scene(&dir, 300);
-    for method in ["exact", "linear", "binary", "refined"] {
+    for method in ["exact", "linear", "binary", "refined", "cone"] {
         let dump = dir.join(format!("{method}.dump.json"));
         let out = myriad_ok(&[
             "assign".as_ref(),
@@ -655,7 +655,7 @@ fn bench_json_reports_every_method_without_misses() {
         .iter()
         .map(|m| m["method"].as_str().expect("method name"))
         .collect();
-    assert_eq!(names, ["exact", "linear", "binary", "refined"]);
+    assert_eq!(names, ["exact", "linear", "binary", "refined", "cone"]);
     for m in methods {
         assert!(m["median_us"].as_f64().is_some_and(|t| t > 0.0), "{m}");
         assert!(u64_field(m, "pairs") > 0, "{m}");
@@ -1450,7 +1450,7 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
     let (scenes, grids, methods) = (
         ["paper", "uniform", "sphere"],
         ["8×4×8", "16×9×24"],
-        ["exact", "linear", "binary", "refined"],
+        ["exact", "linear", "binary", "refined", "cone"],
     );
 
     // report.md, also printed to stdout: one table row per scene × grid × method, no misses.
@@ -1462,7 +1462,7 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
         .filter(|l| l.starts_with("| ") && !l.starts_with("| scene") && !l.starts_with("| ---"))
         .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
         .collect();
-    assert_eq!(rows.len(), 3 * 2 * 4, "{md}");
+    assert_eq!(rows.len(), 3 * 2 * methods.len(), "{md}");
     for scene in scenes {
         for grid in grids {
             for method in methods {
@@ -1487,7 +1487,7 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
     // report.json: every number, misses 0 everywhere.
     let report = read_json(&dir.join("report.json"));
     let json_rows = report["rows"].as_array().expect("a rows array");
-    assert_eq!(json_rows.len(), 24);
+    assert_eq!(json_rows.len(), 3 * 2 * methods.len());
     for r in json_rows {
         assert_eq!(u64_field(r, "misses"), 0, "{r}");
         assert!(r["median_us"].as_f64().is_some_and(|t| t > 0.0), "{r}");

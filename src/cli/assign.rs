@@ -11,7 +11,7 @@ use std::process::ExitCode;
 pub struct Args {
     #[command(flatten)]
     source: SceneSource,
-    /// exact, linear, binary or refined.
+    /// exact, linear, binary, refined or cone.
     #[arg(long, default_value = "refined")]
     method: String,
     /// Worker threads (0 = one per core).

@@ -69,7 +69,7 @@ pub struct Args {
     /// a configuration whose frames take over 10 s gets one timed frame).
     #[arg(long, value_parser = super::at_least_one, default_value_t = 3)]
     runs: usize,
-    /// Assignment method: exact, linear (the paper's Algorithm 1), binary or refined.
+    /// Assignment method: exact, linear (the paper's Algorithm 1), binary, refined or cone.
     #[arg(long, default_value = "refined")]
     method: String,
     /// Depth slicing of the grids: log, linear (the paper's uniform spacing) or log_near:D.

@@ -40,7 +40,7 @@ pub struct Args {
     /// Seed of the generated lights [default: 1].
     #[arg(long)]
     seed: Option<u64>,
-    /// Assignment method: exact, linear, binary or refined.
+    /// Assignment method: exact, linear, binary, refined or cone.
     #[arg(long, default_value = "refined")]
     method: String,
     /// Cluster grid XxYxZ [default: 24x12x16, or the scene's].

@@ -330,7 +330,8 @@ fn method_colour(method: &str) -> RGBColor {
         "linear" => RGBColor(214, 39, 40),
         "binary" => RGBColor(31, 119, 180),
         "refined" => RGBColor(44, 160, 44),
-        _ => RGBColor(148, 103, 189),
+        "cone" => RGBColor(148, 103, 189),
+        _ => RGBColor(140, 86, 75),
     }
 }
 

@@ -67,7 +67,7 @@ pub struct Args {
     /// Render size WxH (the atrium's camera is built for it).
     #[arg(long, default_value = "320x180")]
     size: String,
-    /// Assignment method: exact, linear, binary or refined.
+    /// Assignment method: exact, linear, binary, refined or cone.
     #[arg(long, default_value = "refined")]
     method: String,
     /// Cluster grid XxYxZ (log depth slices over the camera's range).

@@ -2,6 +2,7 @@
 
 use crate::ActiveClusters;
 use crate::append::{self, Parts};
+use crate::cone::{self, TileCone};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
 use crate::pacing::{Pacing, Parallelism};
@@ -24,15 +25,20 @@ pub enum Method {
     Binary,
     /// Binary's box tightened per slice and per row (sphere shrunk to the slab).
     Refined,
+    /// Binary's box cut per tile by spherical-sliced cone tests (seed 004): a tile is kept when
+    /// the ball's cone from the eye meets the tile's, and only in the slices the ball's
+    /// distance range within the tile reaches (`cone.rs`).
+    Cone,
 }
 
 impl Method {
     /// Every method, the reference first.
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 5] = [
         Method::Exact,
         Method::Linear,
         Method::Binary,
         Method::Refined,
+        Method::Cone,
     ];
 
     /// The name used on the command line and in reports.
@@ -42,6 +48,7 @@ impl Method {
             Method::Linear => "linear",
             Method::Binary => "binary",
             Method::Refined => "refined",
+            Method::Cone => "cone",
         }
     }
 
@@ -139,6 +146,10 @@ pub struct Assigner {
     active_before: Vec<u32>,
     cluster_spheres: Vec<Vec4>,
     spheres_key: Option<(glam::Vec2, ClusterGrid)>,
+    /// The `cone` method's tile cones (`cone.rs`), kept while the field of view and the tiling
+    /// stay the same; empty for grids of more than [`cone::MAX_CACHED_TILES`] tiles.
+    tile_cones: Vec<TileCone>,
+    cones_key: Option<((f64, f64), u32, u32)>,
     linear: LinearScratch,
     append: AppendStrategy,
     /// When the previous frame ended and how big it was: whether the next runs in parallel.
@@ -350,6 +361,20 @@ impl Assigner {
                 self.spheres_key = Some(key);
             }
         }
+        let tan_half_fov = camera.tan_half_fov_f64();
+        if method == Method::Cone {
+            let d = grid.dims();
+            let key = (tan_half_fov, d.x, d.y);
+            if self.cones_key != Some(key) {
+                let tiles = d.x as usize * d.y as usize;
+                if tiles <= cone::MAX_CACHED_TILES {
+                    cone::tile_cones(tan_half_fov, d, &mut self.tile_cones);
+                } else {
+                    self.tile_cones = Vec::new();
+                }
+                self.cones_key = Some(key);
+            }
+        }
         let clusters = grid.cluster_count();
         let tasks = plan_tasks(n, method);
         if self.tasks.len() < tasks {
@@ -369,6 +394,12 @@ impl Assigner {
             planes: FramePlanes::new(&self.planes, grid),
             view_from_world,
             cluster_spheres: &self.cluster_spheres,
+            tile_cones: if method == Method::Cone {
+                &self.tile_cones
+            } else {
+                &[]
+            },
+            tan_half_fov,
             cull: jobs::FrustumCull {
                 sides: [
                     self.planes.x_plane_normal(0),

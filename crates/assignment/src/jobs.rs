@@ -11,6 +11,7 @@
 
 use crate::active::ActiveView;
 use crate::append::{Bucket, Span};
+use crate::cone::{LightCone, TileCone};
 use crate::geometry::{self, ClusterBox, ZRange};
 use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
@@ -29,6 +30,11 @@ pub(crate) struct FrameContext<'a> {
     pub view_from_world: Mat3,
     /// View-space bounding spheres of the clusters (for spot cone tests); empty without spots.
     pub cluster_spheres: &'a [Vec4],
+    /// The `cone` method's tile cones, row by row; empty when the grid has too many tiles to
+    /// keep them (each is then computed where it is needed) or for the other methods.
+    pub tile_cones: &'a [TileCone],
+    /// The camera's `tan` of the half fields of view, in f64 (for tile cones made on the fly).
+    pub tan_half_fov: (f64, f64),
     /// The f64 view transform and projection of the `exact` method, computed once per frame
     /// (`None` for the other methods, which never need them).
     pub exact: Option<ExactFrame>,
@@ -113,6 +119,8 @@ pub(crate) struct TaskOutput {
     pub buckets: Vec<Bucket>,
     /// Scratch of the refinement: two squared gaps per tile column.
     gaps: Vec<f32>,
+    /// Scratch of the `cone` method: the slices `[first, last]` kept in each column of a row.
+    cone_slices: Vec<(u32, u32)>,
     pub rejected: u32,
     pub culled: u32,
 }
@@ -145,6 +153,9 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     out.rejected = 0;
     out.culled = 0;
     out.gaps.resize(2 * ctx.grid.dims().x as usize, 0.0);
+    if ctx.method == Method::Cone {
+        out.cone_slices.resize(ctx.grid.dims().x as usize, (0, 0));
+    }
     let eye = ctx.camera.position;
     let mut block = Block::new();
     // Pre-cull columns of the current block, indexed by position in the block.
@@ -302,6 +313,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 &spots[source],
                 &mut out.buckets[..ctx.parts],
                 &mut out.gaps,
+                &mut out.cone_slices,
             );
         }
         block_start += n;
@@ -327,6 +339,7 @@ fn emit_overflowed(ctx: &FrameContext<'_>, light: u32, spot: &SpotView, out: &mu
         spot,
         buckets,
         &mut out.gaps,
+        &mut out.cone_slices,
     );
 }
 
@@ -343,6 +356,7 @@ fn emit(
     spot: &SpotView,
     buckets: &mut [Bucket],
     gaps: &mut [f32],
+    cone_slices: &mut [(u32, u32)],
 ) {
     let grid = ctx.grid;
     let push_row = |bucket: &mut Bucket, first: u32, len: u32| {
@@ -359,8 +373,11 @@ fn emit(
     // (`myriad bench`, 1 thread).
     let refine = ctx.method == Method::Refined && bx.i1 > bx.i0 && bx.j1 > bx.j0 && r.is_finite();
     let width = grid.dims().x;
+    // An infinite radius (an overflowed light) keeps the whole box, as for `refined`.
+    let cone = ctx.method == Method::Cone && r.is_finite();
     match ctx.method {
-        Method::Binary | Method::Refined if !refine => {
+        _ if cone => emit_cone(ctx, cx, cy, dc, r, bx, buckets, cone_slices, push_row),
+        Method::Binary | Method::Refined | Method::Cone if !refine => {
             let (len, rows) = (bx.i1 - bx.i0 + 1, bx.j1 - bx.j0 + 1);
             for k in bx.z.k0..=bx.z.k1 {
                 let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
@@ -377,7 +394,8 @@ fn emit(
                 }
             }
         }
-        Method::Binary | Method::Refined => {
+        // `refine` holds only for `refined`.
+        Method::Binary | Method::Refined | Method::Cone => {
             for k in bx.z.k0..=bx.z.k1 {
                 let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
                 let slice_first = grid.cluster_id(0, 0, k);
@@ -394,6 +412,79 @@ fn emit(
             emit_exact(ctx, exact, light, bx, buckets)
         }
         Method::Linear => unreachable!("the linear method has its own serial path"),
+    }
+}
+
+/// The `cone` method's box (`cone.rs`): per row of the box, each tile's slices from its cone
+/// test and distance range, then per slice the maximal runs of tiles that keep it.
+#[allow(clippy::too_many_arguments)] // One light's columns, passed by value.
+#[inline(never)]
+fn emit_cone(
+    ctx: &FrameContext<'_>,
+    cx: f32,
+    cy: f32,
+    dc: f32,
+    r: f32,
+    bx: &ClusterBox,
+    buckets: &mut [Bucket],
+    slices: &mut [(u32, u32)],
+    mut push_row: impl FnMut(&mut Bucket, u32, u32),
+) {
+    let grid = ctx.grid;
+    let dims = grid.dims();
+    let light = LightCone::new(cx, cy, dc, r);
+    let z = &ctx.planes.sets.z_depths;
+    let (k0, k1) = (bx.z.k0, bx.z.k1);
+    let columns = (bx.i1 - bx.i0 + 1) as usize;
+    let slices = &mut slices[..columns];
+    for j in bx.j0..=bx.j1 {
+        let mut any = false;
+        for (slot, i) in slices.iter_mut().zip(bx.i0..=bx.i1) {
+            let tile = match ctx.tile_cones.get((j * dims.x + i) as usize) {
+                Some(tile) => *tile,
+                None => TileCone::of_tile(ctx.tan_half_fov, dims, i, j),
+            };
+            // The box's slices `[k0, k1]` that the ball's depth range in the tile reaches (a
+            // closed slice touches it when its far edge is ≥ lo and its near edge ≤ hi), walked
+            // in from both ends: most tiles keep them all, and walks beat searches over a box's
+            // few slices. Empty (`first > last`) when the cones miss.
+            *slot = match light.depth_range(&tile) {
+                Some((lo, hi)) => {
+                    let (mut first, mut last) = (k0, k1);
+                    while first <= last && f64::from(z[first as usize + 1]) < lo {
+                        first += 1;
+                    }
+                    while first <= last && f64::from(z[last as usize]) > hi {
+                        last -= 1;
+                    }
+                    (first, last)
+                }
+                None => (1, 0),
+            };
+            any |= slot.0 <= slot.1;
+        }
+        if !any {
+            continue;
+        }
+        for k in k0..=k1 {
+            let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
+            let row_first = grid.cluster_id(bx.i0, j, k);
+            let mut run_start = None;
+            for (c, &(first, last)) in slices.iter().enumerate() {
+                let keep = first <= k && k <= last;
+                match (keep, run_start) {
+                    (true, None) => run_start = Some(c as u32),
+                    (false, Some(s)) => {
+                        push_row(bucket, row_first + s, c as u32 - s);
+                        run_start = None;
+                    }
+                    _ => {}
+                }
+            }
+            if let Some(s) = run_start {
+                push_row(bucket, row_first + s, columns as u32 - s);
+            }
+        }
     }
 }
 

@@ -64,6 +64,7 @@
 mod active;
 mod append;
 mod assigner;
+mod cone;
 mod geometry;
 mod input;
 mod jobs;

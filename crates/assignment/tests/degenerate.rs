@@ -262,6 +262,20 @@ fn grids_wider_and_taller_than_16_bits() {
     }
 }
 
+/// A grid with more tiles than the `cone` method keeps cones for (2^18): each tile's cone is
+/// made where it is needed, and the lists still cover the oracle.
+#[test]
+fn cone_method_past_its_cached_tiles() {
+    let cam = camera(1920, 1080);
+    let grid = ClusterGrid::new(UVec3::new(730, 360, 2), DepthSlicing::Log, 0.1, 100.0);
+    let mut lights = random_lights(&cam, 20, 23);
+    lights.push(cam.position, 0.5);
+    let truth = brute_force(&lights, false, &cam, &grid);
+    let (lists, _) = assign(Method::Cone, &lights, &cam, &grid);
+    let (exact, _) = assert_conservative("cone", &lists, &truth, "730x360 tiles");
+    assert!(exact > 10_000, "{exact} pairs");
+}
+
 #[test]
 fn grid_of_one_cluster() {
     let cam = camera(640, 480);
