@@ -36,8 +36,9 @@
 //! | `linear` | the paper's Algorithm 1: planes stepped one by one | the baseline to beat |
 //! | `binary` | binary search of the x-, y-, z-plane sets → a box of clusters | fast |
 //! | `refined` | binary's box tightened per slice and row | fast, few false positives |
+//! | `cone` | binary's box cut per tile by spherical-sliced cone tests (seed 004) | the fewest false positives short of `exact` on `paper` and `sphere`; several times `refined`'s time |
 //!
-//! ## A frame, step by step (`binary`, `refined`, `exact`)
+//! ## A frame, step by step (`binary`, `refined`, `cone`, `exact`)
 //! 1. **Plan**: split the lights into contiguous ranges, one task each (one task below
 //!    [`SERIAL_LIGHTS`], except for `exact`, which is split at any size).
 //! 2. **Axis phases, in parallel** (`jobs.rs`, `phases.rs`, `search.rs`; `geometry.rs` is their
