@@ -450,14 +450,19 @@ fn emit_cone(
             // few slices. Empty (`first > last`) when the cones miss.
             *slot = match light.depth_range(&tile) {
                 Some((lo, hi)) => {
-                    let (mut first, mut last) = (k0, k1);
-                    while first <= last && f64::from(z[first as usize + 1]) < lo {
+                    // `first .. end`, exclusive, so that an empty range cannot wrap below 0.
+                    let (mut first, mut end) = (k0, k1 + 1);
+                    while first < end && f64::from(z[first as usize + 1]) < lo {
                         first += 1;
                     }
-                    while first <= last && f64::from(z[last as usize]) > hi {
-                        last -= 1;
+                    while end > first && f64::from(z[end as usize - 1]) > hi {
+                        end -= 1;
                     }
-                    (first, last)
+                    if first < end {
+                        (first, end - 1)
+                    } else {
+                        (1, 0)
+                    }
                 }
                 None => (1, 0),
             };

@@ -21,7 +21,7 @@ fn identical_lists_for_1_2_3_and_8_threads() {
         spots: true,
     });
     for spots in [false, true] {
-        for method in [Method::Binary, Method::Refined] {
+        for method in [Method::Binary, Method::Refined, Method::Cone] {
             let mut reference: Option<LightLists> = None;
             for threads in [1, 2, 3, 8] {
                 let pool = rayon::ThreadPoolBuilder::new()
@@ -73,7 +73,7 @@ fn parallel_tasks_agree_with_a_single_serial_task() {
             );
         }
     }
-    for method in [Method::Binary, Method::Refined] {
+    for method in [Method::Binary, Method::Refined, Method::Cone] {
         let mut small = LightLists::new();
         let mut large = LightLists::new();
         let s = Assigner::new().assign(
@@ -121,7 +121,7 @@ fn both_append_strategies_give_identical_lists() {
             .num_threads(threads)
             .build()
             .unwrap();
-        for method in [Method::Binary, Method::Refined] {
+        for method in [Method::Binary, Method::Refined, Method::Cone] {
             let mut a = LightLists::new();
             let mut b = LightLists::new();
             pool.install(|| {

@@ -57,7 +57,12 @@ fn steady_state_frames_do_not_allocate() {
         .build()
         .unwrap();
     for (spots, in_pool) in [(false, true), (true, true), (true, false)] {
-        for method in [Method::Linear, Method::Binary, Method::Refined] {
+        for method in [
+            Method::Linear,
+            Method::Binary,
+            Method::Refined,
+            Method::Cone,
+        ] {
             let mut assigner = Assigner::new();
             let mut lists = LightLists::new();
             let input = scene.lights.input(spots);
@@ -100,7 +105,12 @@ fn frames_on_changing_grids_do_not_allocate_once_warm() {
     });
     let small = myriad_assignment::coarser_grid(&myriad_assignment::coarser_grid(&scene.grid));
     let input = scene.lights.input(false);
-    for method in [Method::Linear, Method::Binary, Method::Refined] {
+    for method in [
+        Method::Linear,
+        Method::Binary,
+        Method::Refined,
+        Method::Cone,
+    ] {
         for budget in [None, Some(20_000)] {
             let mut assigner = Assigner::new();
             if let Some(pairs) = budget {

@@ -53,7 +53,7 @@ fn spot_lists_are_tighter_than_bounding_spheres_and_cover_the_oracle() {
         spheres.push(c, r);
     }
     let truth = brute_force(&spots, true, &scene.camera, &scene.grid);
-    for method in [Method::Binary, Method::Refined] {
+    for method in [Method::Binary, Method::Refined, Method::Cone] {
         let mut with_cones = LightLists::new();
         let mut as_spheres = LightLists::new();
         let a = Assigner::new().assign(
