@@ -33,6 +33,7 @@ fn over_budget_frames_coarsen_the_grid_and_stay_conservative() {
     for method in [
         Method::Binary,
         Method::Refined,
+        Method::Cone,
         Method::Linear,
         Method::Exact,
     ] {
