@@ -474,21 +474,13 @@ fn emit_cone(
         for k in k0..=k1 {
             let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
             let row_first = grid.cluster_id(bx.i0, j, k);
-            let mut run_start = None;
-            for (c, &(first, last)) in slices.iter().enumerate() {
-                let keep = first <= k && k <= last;
-                match (keep, run_start) {
-                    (true, None) => run_start = Some(c as u32),
-                    (false, Some(s)) => {
-                        push_row(bucket, row_first + s, c as u32 - s);
-                        run_start = None;
-                    }
-                    _ => {}
-                }
-            }
-            if let Some(s) = run_start {
-                push_row(bucket, row_first + s, columns as u32 - s);
-            }
+            let keeps_k = |c: u32| {
+                let (first, last) = slices[(c - row_first) as usize];
+                first <= k && k <= last
+            };
+            for_each_run(row_first, columns as u32, keeps_k, |s, n| {
+                push_row(bucket, s, n)
+            });
         }
     }
 }
@@ -528,31 +520,35 @@ fn push_filtered(
     light: u32,
     first: u32,
     len: u32,
+    keep: impl FnMut(u32) -> bool,
+) {
+    for_each_run(first, len, keep, |first, len| {
+        bucket.push(Span { light, first, len }, ctx.active.as_ref());
+    });
+}
+
+/// Calls `run(start, len)` for each maximal run of `first .. first + len` whose clusters pass
+/// `keep`.
+#[inline]
+fn for_each_run(
+    first: u32,
+    len: u32,
     mut keep: impl FnMut(u32) -> bool,
+    mut run: impl FnMut(u32, u32),
 ) {
     let mut run_start = None;
     for c in first..first + len {
         match (keep(c), run_start) {
             (true, None) => run_start = Some(c),
             (false, Some(s)) => {
-                let span = Span {
-                    light,
-                    first: s,
-                    len: c - s,
-                };
-                bucket.push(span, ctx.active.as_ref());
+                run(s, c - s);
                 run_start = None;
             }
             _ => {}
         }
     }
     if let Some(s) = run_start {
-        let span = Span {
-            light,
-            first: s,
-            len: first + len - s,
-        };
-        bucket.push(span, ctx.active.as_ref());
+        run(s, first + len - s);
     }
 }
 
