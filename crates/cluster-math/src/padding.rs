@@ -19,3 +19,31 @@ pub fn pad_radius(cx: f32, cy: f32, dc: f32, r: f32) -> f32 {
     let extent = cx.abs() + cy.abs() + dc.abs() + r;
     r + RADIUS_PAD * extent
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pad_is_a_fixed_fraction_of_the_view_space_extent() {
+        // |cx| + |cy| + |dc| + r = 3 + 4 + 12 + 1 = 20, whatever the signs.
+        assert_eq!(pad_radius(-3.0, 4.0, 12.0, 1.0), 1.0 + RADIUS_PAD * 20.0);
+        assert_eq!(pad_radius(3.0, -4.0, -12.0, 1.0), 1.0 + RADIUS_PAD * 20.0);
+        // At the eye only the radius itself is padded.
+        assert_eq!(pad_radius(0.0, 0.0, 0.0, 2.0), 2.0 * (1.0 + RADIUS_PAD));
+    }
+
+    #[test]
+    fn a_small_far_light_is_padded_by_many_ulps_of_its_depth() {
+        // A light 1e-3 wide a million units deep: each f32 step of its transform rounds by half
+        // an ulp of 1e6 (0.03), thirty times its radius; the pad must dwarf that.
+        let (depth, r) = (1.0e6f32, 1.0e-3f32);
+        let ulp = depth.next_up() - depth;
+        let pad = pad_radius(0.0, 0.0, depth, r) - r;
+        assert!(pad >= 32.0 * ulp, "pad {pad} vs ulp {ulp}");
+        assert!(
+            pad <= 128.0 * ulp,
+            "pad {pad} is not a few dozen ulps of {depth}"
+        );
+    }
+}
