@@ -244,6 +244,32 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_ball_centred_inside_a_cell_touches_it_however_small() {
+        // The depth cut must not shrink below the ball: a light far smaller than an ulp of its
+        // depth (or of radius zero) whose centre lies in the cell still touches it.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(14);
+        for n in 0..200 {
+            let cell = crate::oracle::random_cell(&mut rng, [1.0, 1e3, 1e6][n % 3]);
+            let p = cell_point(
+                &cell,
+                rng.random_range(0.1..0.9),
+                rng.random_range(0.1..0.9),
+                rng.random_range(0.1..0.9),
+            );
+            assert!(cell.contains(p), "{p} inside {cell:?}");
+            for r in [
+                0.0,
+                f64::MIN_POSITIVE,
+                1e-300,
+                1e-20,
+                1e-3 * f64::EPSILON * -p.z,
+            ] {
+                assert!(sphere_intersects_cell(p, r, &cell), "{p} r {r} {cell:?}");
+            }
+        }
+    }
+
     /// The cell of tile `(i, j, k)` under a camera at the origin looking down −z.
     fn cell_at(
         fov: f32,
