@@ -83,3 +83,25 @@ impl LightLists {
         assert_eq!(running as usize, self.indices.len());
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn byte_size_counts_offsets_counts_and_indices() {
+        assert_eq!(LightLists::byte_size_for(0, 0), 0);
+        assert_eq!(LightLists::byte_size_for(3, 0), 24);
+        assert_eq!(LightLists::byte_size_for(3, 5), 44);
+        let lists = LightLists {
+            offsets: vec![0, 2, 2],
+            counts: vec![2, 0, 3],
+            indices: vec![4, 7, 1, 2, 9],
+        };
+        assert_eq!(lists.byte_size(), 44);
+        assert_eq!((lists.cluster_count(), lists.pair_count()), (3, 5));
+        assert_eq!(lists.lights_of(0), [4, 7]);
+        assert_eq!(lists.lights_of(1), [] as [u32; 0]);
+        assert_eq!(lists.lights_of(2), [1, 2, 9]);
+    }
+}

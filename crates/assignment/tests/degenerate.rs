@@ -584,3 +584,44 @@ fn spot_axes_of_any_length() {
         assert_spots_conservative(&lights, &camera, &grid, &format!("axis x {scale:e}"));
     }
 }
+
+/// Columns of different lengths are a programming error that [`Assigner::assign`] documents as a
+/// panic, with every method: a longer radius or angle column would otherwise be read only up to
+/// `x`'s length, unnoticed.
+#[test]
+fn columns_of_different_lengths_panic_with_every_method() {
+    let cam = camera(64, 64);
+    let grid = ClusterGrid::new(UVec3::new(4, 4, 4), DepthSlicing::Log, 0.1, 100.0);
+    let mut lights = Columns::default();
+    for x in [-1.0, 0.0, 1.0] {
+        lights.push(world_of(&cam, Vec3::new(x, 0.0, -5.0)), 1.0);
+    }
+    let mut long_radius = lights.clone();
+    long_radius.radius.push(1.0);
+    let mut long_angle = lights.clone();
+    long_angle.angle.push(0.5);
+    let cases = [
+        (&long_radius, false, "light columns differ in length"),
+        (&long_angle, true, "spot columns differ in length"),
+    ];
+    for method in Method::ALL {
+        for (columns, spots, want) in cases {
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let mut lists = LightLists::new();
+                Assigner::new().assign(method, &columns.input(spots), &cam, &grid, &mut lists);
+            }));
+            let Err(payload) = outcome else {
+                panic!("{method}: assigned mismatched columns ({want})");
+            };
+            let message = payload
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| payload.downcast_ref::<&str>().copied())
+                .unwrap_or_default();
+            assert!(
+                message.contains(want),
+                "{method}: panicked with {message:?}"
+            );
+        }
+    }
+}
