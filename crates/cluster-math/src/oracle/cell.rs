@@ -270,6 +270,30 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_cell_of_zero_thickness_is_touched_like_its_face() {
+        // Slices of a very thin log grid can have equal f32 edges: such a cell is its near face,
+        // and a ball reaching that face touches it.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(15);
+        for _ in 0..200 {
+            let mut cell = crate::oracle::random_cell(&mut rng, 1.0);
+            cell.depths[1] = cell.depths[0];
+            let on_face = cell_point(
+                &cell,
+                rng.random_range(0.1..0.9),
+                rng.random_range(0.1..0.9),
+                0.0,
+            );
+            let gap = rng.random_range(0.01..1.0) * cell.depths[0];
+            for side in [-1.0, 1.0] {
+                let centre = on_face + DVec3::Z * (side * gap);
+                assert!(sphere_intersects_cell(centre, gap * (1.0 + 1e-9), &cell));
+                assert!(!sphere_intersects_cell(centre, gap * 0.999, &cell));
+            }
+            assert!(sphere_intersects_cell(on_face, 1e-9 * gap, &cell));
+        }
+    }
+
     /// The cell of tile `(i, j, k)` under a camera at the origin looking down −z.
     fn cell_at(
         fov: f32,
