@@ -37,6 +37,8 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
             "first_slice_depth",
         ),
         (UVec3::new(65536, 65536, 2), log, 0.1, 100.0, "u32 id"),
+        (UVec3::new(2, 65536, 65536), log, 0.1, 100.0, "u32 id"),
+        (UVec3::new(65536, 2, 65536), log, 0.1, 100.0, "u32 id"),
         (UVec3::new(24, 12, 16), log, 1e-22, 1e-16, "at least 1e-12"),
         (
             UVec3::new(24, 12, 16),
@@ -57,6 +59,18 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
         assert_eq!(message, &e.to_string());
     }
     assert!(ClusterGrid::try_new(UVec3::new(24, 12, 16), log, ClusterGrid::MIN_NEAR, 1e-6).is_ok());
+    // The largest grid: 65 535 × 65 537 = u32::MAX clusters, the last id u32::MAX − 1.
+    let largest = ClusterGrid::try_new(UVec3::new(65535, 65537, 1), log, 0.1, 100.0).unwrap();
+    assert_eq!(largest.cluster_count(), u32::MAX as usize);
+    // The first slice edge must lie strictly inside the range: at `near` or `far` one slice
+    // would have zero thickness.
+    for edge in [0.1, 100.0] {
+        let at_edge = DepthSlicing::LogWithNearSlice {
+            first_slice_depth: edge,
+        };
+        let e = ClusterGrid::try_new(UVec3::new(24, 12, 16), at_edge, 0.1, 100.0).unwrap_err();
+        assert!(e.to_string().contains("first_slice_depth"), "{edge}: {e}");
+    }
     let ok = ClusterGrid::try_new(UVec3::new(24, 12, 16), near_slice, 0.1, 100.0).unwrap();
     assert_eq!(
         ok,
