@@ -345,3 +345,74 @@ fn spots_at_around_and_behind_the_eye() {
     assert!(truth.iter().map(Vec::len).sum::<usize>() > 500);
     check_spots(cam, grid, lights, "spots at the eye");
 }
+
+/// Each light's clusters, per light: the lists turned inside out.
+fn clusters_of_each_light(lists: &LightLists, lights: usize) -> Vec<Vec<u32>> {
+    let mut out = vec![Vec::new(); lights];
+    for c in 0..lists.cluster_count() {
+        for &l in lists.lights_of(c) {
+            out[l as usize].push(c as u32);
+        }
+    }
+    out
+}
+
+/// What tells the methods apart beyond conservativeness: `binary` (and `linear`) give a point
+/// light the whole cluster box of its sphere, every cluster of `i0..=i1 × j0..=j1 × k0..=k1`;
+/// `refined` only cuts clusters from that box, and on a scene of large spheres it cuts many.
+#[test]
+fn binary_lists_are_whole_boxes_and_refined_lists_cut_them() {
+    let scene = make_scene(&SceneParams {
+        seed: 31,
+        lights: 300,
+        ..SceneParams::WIDE
+    });
+    let n = scene.lights.len();
+    let input = scene.lights.input(false);
+    let assign = |method| {
+        let mut lists = LightLists::new();
+        Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut lists);
+        clusters_of_each_light(&lists, n)
+    };
+    let binary = assign(Method::Binary);
+    for method in [Method::Binary, Method::Linear] {
+        let per_light = if method == Method::Binary {
+            binary.clone()
+        } else {
+            assign(method)
+        };
+        for (l, clusters) in per_light.iter().enumerate() {
+            let Some(&first) = clusters.first() else {
+                continue;
+            };
+            let coords: Vec<UVec3> = clusters
+                .iter()
+                .map(|&c| scene.grid.cluster_coords(c))
+                .collect();
+            let (lo, hi) = coords.iter().fold(
+                (scene.grid.cluster_coords(first), UVec3::ZERO),
+                |(lo, hi), &v| (lo.min(v), hi.max(v)),
+            );
+            let size = hi - lo + UVec3::ONE;
+            assert_eq!(
+                clusters.len(),
+                (size.x * size.y * size.z) as usize,
+                "{method}: light {l}'s clusters are not the box {lo}..={hi}"
+            );
+        }
+    }
+    let refined = assign(Method::Refined);
+    let (mut binary_pairs, mut refined_pairs) = (0, 0);
+    for (l, (b, r)) in binary.iter().zip(&refined).enumerate() {
+        assert!(
+            r.iter().all(|c| b.binary_search(c).is_ok()),
+            "refined: light {l} has clusters outside its binary box"
+        );
+        binary_pairs += b.len();
+        refined_pairs += r.len();
+    }
+    assert!(
+        refined_pairs * 10 < binary_pairs * 9,
+        "refined {refined_pairs} pairs, binary {binary_pairs}: the refinement cut little"
+    );
+}
