@@ -1343,6 +1343,32 @@ mod tests {
         check_touching_family(7, 1.0, 1e-6, random_angle);
     }
 
+    #[test]
+    fn a_cell_reaching_very_deep_does_not_widen_a_tiny_spots_tolerance() {
+        // A spot 1e-6 long beside the right wall of a slice reaching 10⁷ deep, pointing straight
+        // at the wall: its tolerance band must stay local to the light (about 1e-12 of the depth
+        // 2 where it is), not grow with the cell's far corners (1e-12 of 10⁷ is ten ranges).
+        let r = 1e-6;
+        let wall = DVec3::new(1.0, 0.0, 0.1).normalize(); // outward normal of x = 0.1·d
+        let on_wall = DVec3::new(0.2, 0.0, -2.0);
+        for far in [10.0, 1e7] {
+            let cell = Cell {
+                x_slopes: [-0.1, 0.1],
+                y_slopes: [-0.1, 0.1],
+                depths: [1.0, far],
+            };
+            let spot = |gap: f64| SpotVolume {
+                apex: on_wall + wall * gap,
+                direction: -wall,
+                range: r,
+                angle: 0.5,
+            };
+            assert!(spot_intersects_cell(&spot(0.95 * r), &cell), "far {far}");
+            assert!(!spot_intersects_cell(&spot(1.05 * r), &cell), "far {far}");
+            assert!(!spot_intersects_cell(&spot(3.0 * r), &cell), "far {far}");
+        }
+    }
+
     /// Test 3: huge coordinates (cells a million times farther and larger).
     #[test]
     fn huge_coordinates() {
