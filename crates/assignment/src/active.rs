@@ -130,6 +130,28 @@ mod tests {
     use myriad_cluster_math::DepthSlicing;
 
     #[test]
+    fn a_box_marks_exactly_its_clusters() {
+        // A box away from row 0 and slice 0, clamped at the grid's far corner.
+        let grid = ClusterGrid::new(UVec3::new(4, 3, 3), DepthSlicing::Linear, 1.0, 2.0);
+        let mut m = ActiveClusters::new(&grid);
+        m.mark_box([2, 7], [1, 2], [1, 9]);
+        let mut want = Vec::new();
+        for k in 1..3 {
+            for j in 1..3 {
+                for i in 2..4 {
+                    want.push(grid.cluster_id(i, j, k));
+                }
+            }
+        }
+        want.sort_unstable();
+        let got: Vec<u32> = (0..grid.cluster_count() as u32)
+            .filter(|&c| m.is_active(c))
+            .collect();
+        assert_eq!(got, want);
+        assert_eq!(m.active_count(), want.len());
+    }
+
+    #[test]
     fn marks_clusters_rows_and_boxes() {
         let grid = ClusterGrid::new(UVec3::new(4, 3, 2), DepthSlicing::Linear, 1.0, 2.0);
         let mut m = ActiveClusters::new(&grid);
