@@ -134,6 +134,7 @@ mod tests {
         // A box away from row 0 and slice 0, clamped at the grid's far corner.
         let grid = ClusterGrid::new(UVec3::new(4, 3, 3), DepthSlicing::Linear, 1.0, 2.0);
         let mut m = ActiveClusters::new(&grid);
+        assert_eq!((m.dims(), m.cluster_count()), (grid.dims(), 36));
         m.mark_box([2, 7], [1, 2], [1, 9]);
         let mut want = Vec::new();
         for k in 1..3 {
