@@ -1369,6 +1369,39 @@ mod tests {
         }
     }
 
+    #[test]
+    fn descent_points_away_from_the_closest_part_of_the_volume() {
+        // A 45° spot from the origin down −z with range 1: its rim is the circle of radius
+        // sin 45° at depth cos 45°.
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let spot = ConvexSpot {
+            apex: DVec3::ZERO,
+            axis: DVec3::NEG_Z,
+            range: 1.0,
+            cos_angle: h,
+            sin_angle: h,
+        };
+        let close =
+            |got: Option<DVec3>, want: DVec3| got.is_some_and(|g| (g - want).length() < 1e-12);
+        // Beyond the rim, level with it: straight out from the rim point (h, 0, −h).
+        let beyond_rim = DVec3::new(2.0, 0.0, -h);
+        assert!(
+            close(spot.descent(beyond_rim), DVec3::X),
+            "{:?}",
+            spot.descent(beyond_rim)
+        );
+        // Beside the side: along the side's outward normal.
+        let beside = DVec3::new(1.0, 0.0, -0.2);
+        assert!(close(spot.descent(beside), DVec3::new(h, 0.0, h)));
+        // Past the cap, on the axis: straight down the axis.
+        assert!(close(
+            spot.descent(DVec3::new(0.0, 0.0, -3.0)),
+            DVec3::NEG_Z
+        ));
+        // Inside the volume: no descent.
+        assert_eq!(spot.descent(DVec3::new(0.1, 0.0, -0.5)), None);
+    }
+
     /// Test 3: huge coordinates (cells a million times farther and larger).
     #[test]
     fn huge_coordinates() {
