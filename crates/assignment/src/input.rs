@@ -79,3 +79,18 @@ impl<'a> LightInput<'a> {
         );
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_have_no_spot_columns_and_count_their_lights() {
+        let (x, y, z, r) = ([1.0, 2.0], [0.0; 2], [-5.0; 2], [1.0; 2]);
+        let two = LightInput::points(&x, &y, &z, &r);
+        assert!(two.spot.is_none());
+        assert_eq!((two.len(), two.is_empty()), (2, false));
+        let none = LightInput::points(&[], &[], &[], &[]);
+        assert_eq!((none.len(), none.is_empty()), (0, true));
+    }
+}
