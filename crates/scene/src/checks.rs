@@ -518,6 +518,49 @@ mod tests {
         assert_eq!(problems.len(), 1, "{problems:?}");
     }
 
+    #[test]
+    fn angles_built_in_code_are_checked_in_radians() {
+        // No degrees to check (a camera or light built in code): the radians alone decide.
+        let mut p = camera_parts();
+        // 7 rad has a positive tan(fov / 2) but is not in (0, π); the smallest subnormal is
+        // positive but halves to 0, so tan(fov / 2) is 0 and the projection divides by it.
+        for rad in [7.0, f32::from_bits(1), PI, 0.0, -1.0, f32::NAN] {
+            p.fov_y = Some(Angle::from_rad(rad));
+            let (check, problems) = camera_problems(&p);
+            assert!(check.camera.is_none(), "{rad}");
+            let paths: Vec<&str> = problems.iter().map(|p| p.path.as_str()).collect();
+            assert_eq!(paths, ["camera.fov_y_deg"], "{rad}");
+        }
+        p.fov_y = Some(Angle::from_rad(7.0));
+        assert_eq!(
+            camera_problems(&p).1[0].message,
+            "must be in (0, 180) degrees, got 401.07045659157626 (7.0 rad)"
+        );
+        p.fov_y = Some(Angle::from_rad(PI.next_down()));
+        assert!(camera_problems(&p).0.camera.is_some());
+
+        let mut l = light_parts();
+        for rad in [0.0, -0.0, PI.next_up(), f32::NAN] {
+            l.spot = Some(SpotParts {
+                direction: Some(Vec3::Z),
+                angle: Some(Angle::from_rad(rad)),
+            });
+            let (r, problems) = light_problems(&l);
+            assert!(r.is_none(), "{rad}");
+            let shown: Vec<String> = problems.iter().map(|p| p.to_string()).collect();
+            assert_eq!(shown.len(), 1, "{rad}: {shown:?}");
+            assert!(
+                shown[0].starts_with("lights[5].spot.angle_deg: must be in (0, 180] degrees"),
+                "{shown:?}"
+            );
+        }
+        l.spot = Some(SpotParts {
+            direction: Some(Vec3::Z),
+            angle: Some(Angle::from_rad(PI)),
+        });
+        assert!(light_problems(&l).0.is_some());
+    }
+
     fn grid_problems(
         p: &GridParts,
         range: Option<(f32, f32)>,

@@ -449,6 +449,20 @@ mod tests {
     }
 
     #[test]
+    fn a_scene_built_with_a_bad_camera_is_not_written() {
+        // The camera built in code is checked as a read one is: a 0-pixel-wide camera would be
+        // written to a file that cannot be read back.
+        let mut s = scene();
+        s.camera.width = 0;
+        let paths: Vec<String> = s.problems().into_iter().map(|p| p.path).collect();
+        assert_eq!(paths, ["camera.width"]);
+        assert_eq!(
+            s.to_json_string().unwrap_err().to_string(),
+            "<scene>: camera.width: must be at least 1 pixel, got 0"
+        );
+    }
+
+    #[test]
     fn strict_fails_on_first_bad_light_and_skip_lists_them() {
         // The writer refuses invalid lights, so break light 1 in the text.
         let text = scene()
