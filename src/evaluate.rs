@@ -233,4 +233,20 @@ mod tests {
         let same = compare(&exact, &exact);
         assert_eq!((same.misses, same.false_positives), (0, 0));
     }
+
+    #[test]
+    fn unsorted_reported_lists_are_compared_as_sets() {
+        // A dump may list a cluster's lights in any order: that is no miss. A light listed twice
+        // is one hit and one false positive (a renderer would shade it twice).
+        let exact = lists(&[&[1, 2, 3], &[4]]);
+        let reported = lists(&[&[3, 1, 2], &[4, 4]]);
+        let c = compare(&reported, &exact);
+        assert_eq!(
+            (c.exact_pairs, c.reported_pairs, c.misses, c.false_positives),
+            (4, 5, 0, 1)
+        );
+        // No exact pairs: the ratio is 0, not a division by zero.
+        let c = compare(&lists(&[&[5]]), &lists(&[&[]]));
+        assert_eq!((c.false_positives, c.false_positive_ratio), (1, 0.0));
+    }
 }
