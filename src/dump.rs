@@ -240,6 +240,25 @@ mod tests {
     }
 
     #[test]
+    fn an_empty_lists_offset_is_free() {
+        // Cluster 5 lists lights 0 and 1; cluster 7, empty, has its offset inside that list and
+        // cluster 0, empty, at the end of `indices`: a CSR partition all the same, since an
+        // empty list owns no slot.
+        let mut dump = one_pair();
+        dump.counts[5] = 2;
+        dump.indices = vec![0, 1];
+        dump.offsets[6..].fill(2);
+        dump.offsets[7] = 1;
+        dump.offsets[0] = 2;
+        dump.validate().unwrap();
+        dump.check_against(&grid(), 2).unwrap();
+        // A non-empty list there is an overlap.
+        dump.counts[7] = 1;
+        let e = dump.validate().unwrap_err().to_string();
+        assert_eq!(e, "cluster 7's list (indices[1..2]) overlaps cluster 5's");
+    }
+
+    #[test]
     fn checking_an_inconsistent_dump_is_an_error_not_a_panic() {
         one_pair().check_against(&grid(), 1).unwrap();
         let mut short_edges = one_pair();
