@@ -448,6 +448,11 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
             bad_dump.as_os_str(),
         ]);
         assert_mentions(&stderr(&out), &["skipped", "light 2", "radius"]);
+        // The skipped light is counted among the rejected ones.
+        assert_mentions(
+            &stdout(&out),
+            &["assigned 3 lights (3 visible, 0 culled, 1 rejected)"],
+        );
 
         // The dump names lights by their index in the file: 0, 1 and 3, never 2.
         let dump = read_json(&bad_dump);
