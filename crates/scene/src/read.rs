@@ -491,6 +491,22 @@ mod tests {
     }
 
     #[test]
+    fn duplicate_grid_and_lights_are_reported_and_the_first_is_used() {
+        let text = format!(
+            r#"{{{CAMERA}, {GRID}, "lights": [{{"position": [0, 0, 0], "radius": 1}}],
+            "grid": {{"x": 1, "y": 1, "z": 1, "depth": "linear"}}, "lights": [5, 6]}}"#
+        );
+        let p = parse(text.as_bytes()).unwrap();
+        assert_eq!(paths(&p), ["grid", "lights"]);
+        for problem in &p.scene_problems {
+            assert_eq!(problem.message, "duplicate field (the first one is used)");
+        }
+        assert_eq!(p.grid.unwrap().dims().to_array(), [24, 12, 16]);
+        assert_eq!((p.light_count, p.lights.len()), (1, 1));
+        assert!(p.bad_lights.is_empty());
+    }
+
+    #[test]
     fn depth_modes() {
         for (depth, expected) in [
             (r#""linear""#, Some(DepthSlicing::Linear)),
