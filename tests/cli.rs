@@ -1754,3 +1754,43 @@ fn skipped_invalid_lights_are_counted_in_bench_output() {
         &["1 invalid light(s) skipped", "lights[1].radius"],
     );
 }
+
+#[test]
+fn many_skipped_lights_are_counted_and_the_list_stops_after_ten() {
+    let dir = work_dir("many_skipped");
+    // One good light, then `bad` lights with a negative radius (file indices 1..=bad).
+    let assign = |bad: usize| {
+        let lights: Vec<String> = std::iter::once(r#"{"position": [0, 2, 0], "radius": 2}"#.into())
+            .chain((0..bad).map(|i| format!(r#"{{"position": [{i}, 2, 0], "radius": -1}}"#)))
+            .collect();
+        let scene = write(
+            &dir,
+            &format!("bad_{bad}.json"),
+            &scene_with_lights(&lights.join(", ")),
+        );
+        let dump = dir.join(format!("bad_{bad}.dump.json"));
+        myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            dump.as_os_str(),
+        ])
+    };
+    let out = assign(12);
+    let err = stderr(&out);
+    assert_mentions(
+        &err,
+        &[
+            "12 invalid light(s) skipped",
+            "light 10 skipped",
+            "… and 2 more",
+        ],
+    );
+    assert!(!err.contains("light 11 skipped"), "{err}");
+    assert_mentions(&stdout(&out), &["12 rejected"]);
+    // Exactly ten: all listed, no summary line.
+    let err = stderr(&assign(10));
+    assert_mentions(&err, &["10 invalid light(s) skipped", "light 10 skipped"]);
+    assert!(!err.contains("more"), "{err}");
+}
