@@ -159,7 +159,22 @@ fn check_json(scene: &Path, dump: &Path) -> Value {
         dump.as_os_str(),
         "--json".as_ref(),
     ]);
-    serde_json::from_str(&stdout(&out)).expect("check --json prints one JSON object")
+    let cmp: Value =
+        serde_json::from_str(&stdout(&out)).expect("check --json prints one JSON object");
+    // The ratio is false positives per exact pair, and 0 (not NaN, which JSON cannot hold)
+    // without exact pairs.
+    let (fp, exact) = (
+        u64_field(&cmp, "false_positives"),
+        u64_field(&cmp, "exact_pairs"),
+    );
+    let ratio = cmp["false_positive_ratio"].as_f64();
+    let want = if exact > 0 {
+        fp as f64 / exact as f64
+    } else {
+        0.0
+    };
+    assert_eq!(ratio, Some(want), "{cmp}");
+    cmp
 }
 
 fn read_json(path: &Path) -> Value {
@@ -337,6 +352,25 @@ fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
         assert_eq!(u64_field(&cmp, "misses"), 0, "{context}");
         assert!(u64_field(&cmp, "exact_pairs") > 0, "{context}");
     }
+    // The text report says which grid it checked when it is not the scene's.
+    let check_text = |dump: &Path| {
+        stdout(&myriad_ok(&[
+            "check".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--dump".as_ref(),
+            dump.as_os_str(),
+        ]))
+    };
+    let text = check_text(&dir.join("refined.dump.json"));
+    assert_mentions(
+        &text,
+        &["6x3x4 (coarser than the scene's", "misses                0"],
+    );
+    let full = dir.join("full.dump.json");
+    assign_and_check(&scene, "refined", &full);
+    let text = check_text(&full);
+    assert!(!text.contains("coarser"), "{text}");
     // A grid no coarsening of the scene's reaches is still refused: 20x12x16 halves to
     // 10x6x8, 5x3x4, 2x1x2, 1x1x1, never 6x3x4.
     let other = write(
@@ -501,6 +535,9 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
     assert!(!out.status.success(), "{}", all_output(&out));
     let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert!(u64_field(&cmp, "misses") > 0, "{cmp}");
+    // The miss names light 3 by its index in the file, not by its column (2) among the loaded
+    // lights.
+    assert_eq!(cmp["first_miss"]["light"], 3, "{cmp}");
 
     // Listing the invalid light as well as every right one is no miss, but still wrong: it
     // passed as a false positive (audit g2). The last cluster gains light 2.
@@ -1793,4 +1830,18 @@ fn many_skipped_lights_are_counted_and_the_list_stops_after_ten() {
     let err = stderr(&assign(10));
     assert_mentions(&err, &["10 invalid light(s) skipped", "light 10 skipped"]);
     assert!(!err.contains("more"), "{err}");
+}
+
+#[test]
+fn check_of_a_scene_no_light_touches_has_a_zero_ratio() {
+    // Every light behind the camera: no exact pairs, and the ratio is 0, not 0 / 0.
+    let dir = work_dir("no_pairs");
+    let scene = write(
+        &dir,
+        "behind.json",
+        &scene_with_lights(r#"{"position": [0, 2, 50], "radius": 1}"#),
+    );
+    let cmp = assign_and_check(&scene, "refined", &dir.join("dump.json"));
+    assert_eq!(u64_field(&cmp, "exact_pairs"), 0, "{cmp}");
+    assert_eq!(cmp["false_positive_ratio"], 0.0, "{cmp}");
 }
