@@ -122,7 +122,9 @@ mod tests {
         // A target that cannot be replaced (a folder) is an error, and nothing is left behind.
         let folder = dir.path().join("folder");
         std::fs::create_dir(&folder).unwrap();
-        assert!(replace_file(&folder, b"x").is_err());
+        let e = replace_file(&folder, b"x").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::IsADirectory);
+        assert_eq!(e.to_string(), format!("{} is a folder", folder.display()));
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(left.len(), 2, "{left:?}");
         // The output's mode is a plain file's, not the temporary file's private 0600; an
