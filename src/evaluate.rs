@@ -239,7 +239,7 @@ mod tests {
         // A dump may list a cluster's lights in any order: that is no miss. A light listed twice
         // is one hit and one false positive (a renderer would shade it twice).
         let exact = lists(&[&[1, 2, 3], &[4]]);
-        let reported = lists(&[&[3, 1, 2], &[4, 4]]);
+        let reported = lists(&[&[3, 2, 1], &[4, 4]]);
         let c = compare(&reported, &exact);
         assert_eq!(
             (c.exact_pairs, c.reported_pairs, c.misses, c.false_positives),
