@@ -706,6 +706,13 @@ fn bench_json_reports_every_method_without_misses() {
             "{m}"
         );
         assert_eq!(u64_field(m, "misses"), 0, "{m}");
+        // The throughput is the output's bytes over the median time, in GB/s; the fastest run
+        // took no longer than the median.
+        let bytes = u64_field(m, "bytes") as f64;
+        let median = m["median_us"].as_f64().unwrap();
+        let gb_s = m["effective_gb_s"].as_f64().unwrap();
+        assert!((gb_s - bytes / median / 1e3).abs() <= 1e-9 * gb_s, "{m}");
+        assert!(m["min_us"].as_f64().is_some_and(|t| t <= median), "{m}");
     }
     let exact = &methods[0];
     assert_eq!(exact["false_positive_ratio"].as_f64(), Some(0.0));
