@@ -498,6 +498,30 @@ mod tests {
     }
 
     #[test]
+    fn normalized_short_tex_coords_and_int_indices() {
+        let mut data = Vec::new();
+        for x in [0u16, 65535, 65535, 0] {
+            data.extend_from_slice(&x.to_le_bytes());
+        }
+        for i in [2u32, 1, 0] {
+            data.extend_from_slice(&i.to_le_bytes());
+        }
+        let r = root(
+            20,
+            r#"{"buffer": 0, "byteLength": 8}, {"buffer": 0, "byteOffset": 8, "byteLength": 12}"#,
+            r#"{"bufferView": 0, "componentType": 5123, "normalized": true, "count": 2, "type": "VEC2"},
+               {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}"#,
+        );
+        let buffers = [gltf::buffer::Data(data)];
+        let b = BufferData {
+            root: &r,
+            buffers: &buffers,
+        };
+        assert_eq!(b.tex_coords(0).unwrap(), [Vec2::Y, Vec2::X]);
+        assert_eq!(b.indices(1).unwrap(), [2, 1, 0]);
+    }
+
+    #[test]
     fn broken_accessors_are_errors_not_panics() {
         let data = f32_bytes(&[1.0, f32::INFINITY, 3.0, 0.0]);
         let cases = [
