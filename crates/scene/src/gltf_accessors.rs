@@ -479,46 +479,40 @@ mod tests {
         assert!(b.check_views().is_ok());
     }
 
+    /// Normalised u8 and u16 texture coordinates, and u8 and u32 indices, read the same values.
     #[test]
-    fn normalized_tex_coords_and_small_indices() {
-        let data = vec![0u8, 255, 255, 0, 2, 1, 0, 0];
-        let r = root(
-            8,
-            r#"{"buffer": 0, "byteLength": 4}, {"buffer": 0, "byteOffset": 4, "byteLength": 3}"#,
-            r#"{"bufferView": 0, "componentType": 5121, "normalized": true, "count": 2, "type": "VEC2"},
-               {"bufferView": 1, "componentType": 5121, "count": 3, "type": "SCALAR"}"#,
-        );
-        let buffers = [gltf::buffer::Data(data)];
-        let b = BufferData {
-            root: &r,
-            buffers: &buffers,
-        };
-        assert_eq!(b.tex_coords(0).unwrap(), [Vec2::Y, Vec2::X]);
-        assert_eq!(b.indices(1).unwrap(), [2, 1, 0]);
-    }
-
-    #[test]
-    fn normalized_short_tex_coords_and_int_indices() {
-        let mut data = Vec::new();
+    fn normalized_tex_coords_and_indices_of_each_width() {
+        let mut wide = Vec::new();
         for x in [0u16, 65535, 65535, 0] {
-            data.extend_from_slice(&x.to_le_bytes());
+            wide.extend_from_slice(&x.to_le_bytes());
         }
         for i in [2u32, 1, 0] {
-            data.extend_from_slice(&i.to_le_bytes());
+            wide.extend_from_slice(&i.to_le_bytes());
         }
-        let r = root(
-            20,
-            r#"{"buffer": 0, "byteLength": 8}, {"buffer": 0, "byteOffset": 8, "byteLength": 12}"#,
-            r#"{"bufferView": 0, "componentType": 5123, "normalized": true, "count": 2, "type": "VEC2"},
-               {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}"#,
-        );
-        let buffers = [gltf::buffer::Data(data)];
-        let b = BufferData {
-            root: &r,
-            buffers: &buffers,
-        };
-        assert_eq!(b.tex_coords(0).unwrap(), [Vec2::Y, Vec2::X]);
-        assert_eq!(b.indices(1).unwrap(), [2, 1, 0]);
+        let cases = [
+            (
+                vec![0u8, 255, 255, 0, 2, 1, 0, 0],
+                r#"{"buffer": 0, "byteLength": 4}, {"buffer": 0, "byteOffset": 4, "byteLength": 3}"#,
+                r#"{"bufferView": 0, "componentType": 5121, "normalized": true, "count": 2, "type": "VEC2"},
+                   {"bufferView": 1, "componentType": 5121, "count": 3, "type": "SCALAR"}"#,
+            ),
+            (
+                wide,
+                r#"{"buffer": 0, "byteLength": 8}, {"buffer": 0, "byteOffset": 8, "byteLength": 12}"#,
+                r#"{"bufferView": 0, "componentType": 5123, "normalized": true, "count": 2, "type": "VEC2"},
+                   {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}"#,
+            ),
+        ];
+        for (data, views, accessors) in cases {
+            let r = root(data.len(), views, accessors);
+            let buffers = [gltf::buffer::Data(data)];
+            let b = BufferData {
+                root: &r,
+                buffers: &buffers,
+            };
+            assert_eq!(b.tex_coords(0).unwrap(), [Vec2::Y, Vec2::X], "{accessors}");
+            assert_eq!(b.indices(1).unwrap(), [2, 1, 0], "{accessors}");
+        }
     }
 
     #[test]
