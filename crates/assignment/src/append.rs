@@ -38,6 +38,7 @@
 
 use crate::active::ActiveView;
 use crate::jobs::TaskOutput;
+use crossbeam::utils::CachePadded;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
@@ -107,7 +108,11 @@ pub(crate) struct Parts {
 /// Where each part's lists start in `indices`: `bases[p]` for part `p`, and the total pairs last
 /// (`bases` gets `parts + 1` entries). Returns the total, so the caller can check it against its
 /// budget before anything is written.
-pub(crate) fn part_bases(tasks: &[TaskOutput], parts: Parts, bases: &mut Vec<u64>) -> u64 {
+pub(crate) fn part_bases(
+    tasks: &[CachePadded<TaskOutput>],
+    parts: Parts,
+    bases: &mut Vec<u64>,
+) -> u64 {
     bases.clear();
     let mut total = 0u64;
     for p in 0..parts.count {
@@ -122,7 +127,7 @@ pub(crate) fn part_bases(tasks: &[TaskOutput], parts: Parts, bases: &mut Vec<u64
 /// close, part by part, in parallel over parts when `parallel`. `bases` comes from
 /// [`part_bases`], whose total must fit u32 offsets.
 pub(crate) fn build_lists(
-    tasks: &[TaskOutput],
+    tasks: &[CachePadded<TaskOutput>],
     parts: Parts,
     parallel: bool,
     active: Option<&ActiveView<'_>>,
@@ -186,7 +191,7 @@ impl<'a> Chunk<'a> {
 
 /// Steps 1–4, split recursively over the parts so each gets its own `&mut` slices.
 struct PartJob<'a> {
-    tasks: &'a [TaskOutput],
+    tasks: &'a [CachePadded<TaskOutput>],
     parts: Parts,
     bases: &'a [u64],
     parallel: bool,
@@ -333,7 +338,7 @@ impl AtomicCounters {
     #[allow(clippy::too_many_arguments)] // One frame's tasks, grid size, mask and output.
     pub fn assign(
         &mut self,
-        tasks: &[crate::jobs::TaskOutput],
+        tasks: &[CachePadded<TaskOutput>],
         parts: usize,
         clusters: usize,
         active: Option<&ActiveView<'_>>,
@@ -352,7 +357,7 @@ impl AtomicCounters {
             let (first, end) = (s.first as usize, (s.first + s.len) as usize);
             (first..end).filter(move |&c| flags.is_none_or(|f| f[c]))
         };
-        let count = |task: &crate::jobs::TaskOutput| {
+        let count = |task: &CachePadded<TaskOutput>| {
             for s in frame_spans(task, parts) {
                 for c in clusters_of(s) {
                     counters[c].fetch_add(1, Relaxed);
@@ -383,7 +388,7 @@ impl AtomicCounters {
         );
         out.indices.resize(running as usize, 0);
         let shared = SharedIndices::new(&mut out.indices);
-        let fill = |task: &crate::jobs::TaskOutput| {
+        let fill = |task: &CachePadded<TaskOutput>| {
             for s in frame_spans(task, parts) {
                 for c in clusters_of(s) {
                     let at = counters[c].fetch_add(1, Relaxed);
@@ -404,7 +409,7 @@ impl AtomicCounters {
 }
 
 /// The spans of a task's first `parts` buckets: this frame's.
-fn frame_spans(task: &crate::jobs::TaskOutput, parts: usize) -> impl Iterator<Item = &Span> {
+fn frame_spans(task: &TaskOutput, parts: usize) -> impl Iterator<Item = &Span> {
     task.buckets[..parts].iter().flat_map(|b| &b.spans)
 }
 

@@ -16,6 +16,7 @@ use crate::geometry::{self, ClusterBox, ZRange};
 use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
 use crate::{LightInput, Method};
+use crossbeam::utils::CachePadded;
 use glam::{DVec3, Mat3, Vec3, Vec4};
 use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, SpotCone, spot_bounding_sphere};
@@ -116,7 +117,9 @@ impl ExactFrame {
 /// slices, see `append.rs`), so that each part can later be counted and filled on its own.
 #[derive(Default)]
 pub(crate) struct TaskOutput {
-    pub buckets: Vec<Bucket>,
+    /// One per part, each on cache lines of its own: every span pushed writes its bucket's
+    /// length and pair count, and two tasks' buckets must not share a line (see `assigner.rs`).
+    pub buckets: Vec<CachePadded<Bucket>>,
     /// Scratch of the refinement: two squared gaps per tile column.
     gaps: Vec<f32>,
     /// Scratch of the `cone` method: the slices `[first, last]` kept in each column of a row.
@@ -145,7 +148,7 @@ struct SpotView {
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     crate::profiling::profile_span!("assign task");
     if out.buckets.len() < ctx.parts {
-        out.buckets.resize_with(ctx.parts, Bucket::default);
+        out.buckets.resize_with(ctx.parts, CachePadded::default);
     }
     for bucket in &mut out.buckets[..ctx.parts] {
         bucket.clear();
@@ -354,7 +357,7 @@ fn emit(
     r: f32,
     bx: &ClusterBox,
     spot: &SpotView,
-    buckets: &mut [Bucket],
+    buckets: &mut [CachePadded<Bucket>],
     gaps: &mut [f32],
     cone_slices: &mut [(u32, u32)],
 ) {
@@ -426,7 +429,7 @@ fn emit_cone(
     dc: f32,
     r: f32,
     bx: &ClusterBox,
-    buckets: &mut [Bucket],
+    buckets: &mut [CachePadded<Bucket>],
     slices: &mut [(u32, u32)],
     mut push_row: impl FnMut(&mut Bucket, u32, u32),
 ) {
@@ -558,7 +561,7 @@ fn emit_exact(
     exact: &ExactFrame,
     light: u32,
     bx: &ClusterBox,
-    buckets: &mut [Bucket],
+    buckets: &mut [CachePadded<Bucket>],
 ) {
     let g = light as usize;
     let l = &ctx.lights;
