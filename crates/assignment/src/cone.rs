@@ -142,8 +142,18 @@ impl LightCone {
 
     /// The view depths `[lo, hi]` the ball reaches inside `tile`'s cone, or `None` when it
     /// misses the cone.
-    #[inline]
+    #[cfg(test)]
     pub fn depth_range(&self, tile: &TileCone) -> Option<(f64, f64)> {
+        let (lo, hi) = self.depth_bounds(tile);
+        (lo <= hi).then_some((lo, hi))
+    }
+
+    /// [`Self::depth_range`] without a branch on the outcome: `(lo, hi)` with `lo ≤ hi`, or
+    /// `(∞, −∞)` when the ball misses the cone. A row's tiles are computed in one go so that
+    /// their square roots overlap (their latency was a third of the method's time when each
+    /// tile's walks followed its own test).
+    #[inline(always)]
+    pub fn depth_bounds(&self, tile: &TileCone) -> (f64, f64) {
         let (near, far) = if self.eye_inside {
             (0.0, self.distance + self.radius)
         } else {
@@ -155,23 +165,37 @@ impl LightCone {
             // δ ≤ 0: the centre's direction is inside the tile cone, the nearest direction is
             // itself. Otherwise the cones meet when δ ≤ β < π/2: a negative cosine is past π/2,
             // and below it the sine orders the angles.
-            let (sin, cos) = if sin_delta <= 0.0 {
+            let inside = sin_delta <= 0.0;
+            let missed = !inside && (cos_delta < 0.0 || sin_delta > self.sin_half);
+            let (sin, cos) = if inside {
                 (0.0, 1.0)
-            } else if cos_delta < 0.0 || sin_delta > self.sin_half {
-                return None;
             } else {
                 (sin_delta, cos_delta)
             };
             let base = self.distance * cos;
             let across = self.distance * sin;
             let half_chord = ((self.radius - across).max(0.0) * (self.radius + across)).sqrt();
+            if missed {
+                return (f64::INFINITY, f64::NEG_INFINITY);
+            }
             ((base - half_chord).max(0.0), base + half_chord)
         };
-        Some((
+        (
             near * tile.q_min * (1.0 - DEPTH_MARGIN),
             far * tile.q_max * (1.0 + DEPTH_MARGIN),
-        ))
+        )
     }
+}
+
+/// One tile column of the row being cut: its depth range, then the slices it keeps.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ConeColumn {
+    /// [`LightCone::depth_bounds`] for the column's tile.
+    pub lo: f64,
+    pub hi: f64,
+    /// The box's slices `[first, last]` the range reaches (`first > last`: none).
+    pub first: u32,
+    pub last: u32,
 }
 
 #[cfg(test)]

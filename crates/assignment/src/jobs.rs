@@ -11,7 +11,7 @@
 
 use crate::active::ActiveView;
 use crate::append::{Bucket, Span};
-use crate::cone::{LightCone, TileCone};
+use crate::cone::{ConeColumn, LightCone, TileCone};
 use crate::geometry::{self, ClusterBox, ZRange};
 use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
@@ -122,8 +122,8 @@ pub(crate) struct TaskOutput {
     pub buckets: Vec<CachePadded<Bucket>>,
     /// Scratch of the refinement: two squared gaps per tile column.
     gaps: Vec<f32>,
-    /// Scratch of the `cone` method: the slices `[first, last]` kept in each column of a row.
-    cone_slices: Vec<(u32, u32)>,
+    /// Scratch of the `cone` method: one row of the box, column by column.
+    cone_columns: Vec<ConeColumn>,
     pub rejected: u32,
     pub culled: u32,
 }
@@ -157,7 +157,8 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     out.culled = 0;
     out.gaps.resize(2 * ctx.grid.dims().x as usize, 0.0);
     if ctx.method == Method::Cone {
-        out.cone_slices.resize(ctx.grid.dims().x as usize, (0, 0));
+        out.cone_columns
+            .resize(ctx.grid.dims().x as usize, ConeColumn::default());
     }
     let eye = ctx.camera.position;
     let mut block = Block::new();
@@ -316,7 +317,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 &spots[source],
                 &mut out.buckets[..ctx.parts],
                 &mut out.gaps,
-                &mut out.cone_slices,
+                &mut out.cone_columns,
             );
         }
         block_start += n;
@@ -342,7 +343,7 @@ fn emit_overflowed(ctx: &FrameContext<'_>, light: u32, spot: &SpotView, out: &mu
         spot,
         buckets,
         &mut out.gaps,
-        &mut out.cone_slices,
+        &mut out.cone_columns,
     );
 }
 
@@ -359,7 +360,7 @@ fn emit(
     spot: &SpotView,
     buckets: &mut [CachePadded<Bucket>],
     gaps: &mut [f32],
-    cone_slices: &mut [(u32, u32)],
+    cone_columns: &mut [ConeColumn],
 ) {
     let grid = ctx.grid;
     let push_row = |bucket: &mut Bucket, first: u32, len: u32| {
@@ -379,7 +380,7 @@ fn emit(
     // An infinite radius (an overflowed light) keeps the whole box, as for `refined`.
     let cone = ctx.method == Method::Cone && r.is_finite();
     match ctx.method {
-        _ if cone => emit_cone(ctx, cx, cy, dc, r, bx, buckets, cone_slices, push_row),
+        _ if cone => emit_cone(ctx, cx, cy, dc, r, bx, buckets, cone_columns, push_row),
         Method::Binary | Method::Refined | Method::Cone if !refine => {
             let (len, rows) = (bx.i1 - bx.i0 + 1, bx.j1 - bx.j0 + 1);
             for k in bx.z.k0..=bx.z.k1 {
@@ -418,8 +419,8 @@ fn emit(
     }
 }
 
-/// The `cone` method's box (`cone.rs`): per row of the box, each tile's slices from its cone
-/// test and distance range, then per slice the maximal runs of tiles that keep it.
+/// The `cone` method's box (`cone.rs`): per row of the box, each tile's depth range from its
+/// cone test, then the slices it reaches, then per slice the maximal runs of tiles that keep it.
 #[allow(clippy::too_many_arguments)] // One light's columns, passed by value.
 #[inline(never)]
 fn emit_cone(
@@ -430,7 +431,7 @@ fn emit_cone(
     r: f32,
     bx: &ClusterBox,
     buckets: &mut [CachePadded<Bucket>],
-    slices: &mut [(u32, u32)],
+    columns: &mut [ConeColumn],
     mut push_row: impl FnMut(&mut Bucket, u32, u32),
 ) {
     let grid = ctx.grid;
@@ -438,38 +439,46 @@ fn emit_cone(
     let light = LightCone::new(cx, cy, dc, r);
     let z = &ctx.planes.sets.z_depths;
     let (k0, k1) = (bx.z.k0, bx.z.k1);
-    let columns = (bx.i1 - bx.i0 + 1) as usize;
-    let slices = &mut slices[..columns];
+    let width = bx.i1 - bx.i0 + 1;
+    let columns = &mut columns[..width as usize];
     for j in bx.j0..=bx.j1 {
-        let mut any = false;
-        for (slot, i) in slices.iter_mut().zip(bx.i0..=bx.i1) {
-            let tile = match ctx.tile_cones.get((j * dims.x + i) as usize) {
-                Some(tile) => *tile,
-                None => TileCone::of_tile(ctx.tan_half_fov, dims, i, j),
+        // Every tile's depth range first: arithmetic with no branch on its outcome, so the
+        // tiles' square roots overlap.
+        for (column, i) in columns.iter_mut().zip(bx.i0..=bx.i1) {
+            // Read in place: a copy of the cached cone to the stack, read back in wider loads
+            // than it was stored with, stalled store forwarding on every tile.
+            (column.lo, column.hi) = match ctx.tile_cones.get((j * dims.x + i) as usize) {
+                Some(tile) => light.depth_bounds(tile),
+                None => light.depth_bounds(&TileCone::of_tile(ctx.tan_half_fov, dims, i, j)),
             };
-            // The box's slices `[k0, k1]` that the ball's depth range in the tile reaches (a
-            // closed slice touches it when its far edge is ≥ lo and its near edge ≤ hi), walked
-            // in from both ends: most tiles keep them all, and walks beat searches over a box's
-            // few slices. Empty (`first > last`) when the cones miss.
-            *slot = match light.depth_range(&tile) {
-                Some((lo, hi)) => {
-                    // `first .. end`, exclusive, so that an empty range cannot wrap below 0.
-                    let (mut first, mut end) = (k0, k1 + 1);
-                    while first < end && f64::from(z[first as usize + 1]) < lo {
-                        first += 1;
-                    }
-                    while end > first && f64::from(z[end as usize - 1]) > hi {
-                        end -= 1;
-                    }
-                    if first < end {
-                        (first, end - 1)
-                    } else {
-                        (1, 0)
-                    }
+        }
+        // The box's slices `[k0, k1]` that each range reaches (a closed slice touches it when
+        // its far edge is ≥ lo and its near edge ≤ hi), walked in from both ends: most tiles
+        // keep them all, and walks beat searches over a box's few slices.
+        // The slices every column keeps, `[all_from, all_to]`, are pushed as whole rows.
+        let (mut any, mut all_from, mut all_to) = (false, k0, k1);
+        for column in columns.iter_mut() {
+            // `first .. end`, exclusive, so that an empty range cannot wrap below 0.
+            let (mut first, mut end) = (k0, k1 + 1);
+            if column.lo <= column.hi {
+                while first < end && f64::from(z[first as usize + 1]) < column.lo {
+                    first += 1;
                 }
-                None => (1, 0),
+                while end > first && f64::from(z[end as usize - 1]) > column.hi {
+                    end -= 1;
+                }
+            } else {
+                end = first;
+            }
+            (column.first, column.last) = if first < end {
+                (first, end - 1)
+            } else {
+                (1, 0)
             };
-            any |= slot.0 <= slot.1;
+            any |= first < end;
+            // An empty column's `(1, 0)` empties `[all_from, all_to]`.
+            all_from = all_from.max(column.first);
+            all_to = all_to.min(column.last);
         }
         if !any {
             continue;
@@ -477,13 +486,15 @@ fn emit_cone(
         for k in k0..=k1 {
             let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
             let row_first = grid.cluster_id(bx.i0, j, k);
+            if all_from <= k && k <= all_to {
+                push_row(bucket, row_first, width);
+                continue;
+            }
             let keeps_k = |c: u32| {
-                let (first, last) = slices[(c - row_first) as usize];
-                first <= k && k <= last
+                let column = &columns[(c - row_first) as usize];
+                column.first <= k && k <= column.last
             };
-            for_each_run(row_first, columns as u32, keeps_k, |s, n| {
-                push_row(bucket, s, n)
-            });
+            for_each_run(row_first, width, keeps_k, |s, n| push_row(bucket, s, n));
         }
     }
 }
