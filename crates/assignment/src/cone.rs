@@ -148,7 +148,7 @@ impl LightCone {
         (lo <= hi).then_some((lo, hi))
     }
 
-    /// [`Self::depth_range`] without a branch on the outcome: `(lo, hi)` with `lo ≤ hi`, or
+    /// The depth range (as `depth_range`, the tests' form) without a branch on the outcome: `(lo, hi)` with `lo ≤ hi`, or
     /// `(∞, −∞)` when the ball misses the cone. A row's tiles are computed in one go so that
     /// their square roots overlap (their latency was a third of the method's time when each
     /// tile's walks followed its own test).
