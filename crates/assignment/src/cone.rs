@@ -148,10 +148,10 @@ impl LightCone {
         (lo <= hi).then_some((lo, hi))
     }
 
-    /// The depth range (as `depth_range`, the tests' form) without a branch on the outcome: `(lo, hi)` with `lo ≤ hi`, or
-    /// `(∞, −∞)` when the ball misses the cone. A row's tiles are computed in one go so that
-    /// their square roots overlap (their latency was a third of the method's time when each
-    /// tile's walks followed its own test).
+    /// The depth range (as `depth_range`, the tests' form) without a branch on the outcome:
+    /// `(lo, hi)` with `lo ≤ hi`, or `(∞, −∞)` when the ball misses the cone. A row's tiles are
+    /// computed in one go, so their square roots overlap instead of each waiting behind the
+    /// previous tile's slice walks.
     #[inline(always)]
     pub fn depth_bounds(&self, tile: &TileCone) -> (f64, f64) {
         let (near, far) = if self.eye_inside {
