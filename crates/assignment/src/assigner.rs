@@ -143,9 +143,12 @@ pub struct Assigner {
     /// One output per task, each on cache lines of its own (`CachePadded`, 128 bytes on x86-64:
     /// the adjacent-line prefetcher pairs lines). Tasks of one frame run on different threads
     /// and write their outputs' counters and bucket headers on every light; unpadded, two
-    /// neighbours' 80-byte outputs share a line. Serially the padding measured the same
-    /// (`myriad bench --threads 1`, `paper` 1000, interleaved builds: `binary` 101.2–102.2 →
-    /// 96.6–99.1 µs on a slow host); what it removes is a two-thread effect.
+    /// neighbours' 80-byte outputs share a line, and whether two tasks' bucket arrays do was up
+    /// to the allocator. On the 2-vCPU host it measured the same either way (`myriad bench`,
+    /// `paper` 1000, interleaved builds; one thread: `binary` 101.2–102.2 → 96.6–99.1 µs; two
+    /// threads, four runs each: `binary` 93.7–110.2 → 96.1–109.2 µs, `refined` 138.4–147.2 →
+    /// 131.7–148.2 µs): it is kept because it costs nothing and makes "no line written by two
+    /// threads" hold by construction.
     tasks: Vec<CachePadded<TaskOutput>>,
     /// Where each part's pairs start (see `append::part_bases`).
     part_bases: Vec<u64>,
