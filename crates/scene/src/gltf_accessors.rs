@@ -479,6 +479,63 @@ mod tests {
         assert!(b.check_views().is_ok());
     }
 
+    /// An accessor whose last strided element ends exactly at its view's end is read whole; an
+    /// accessor without a view is `count` zero elements, which its sparse substitutions (here
+    /// with u8 indices) overwrite; `view_bytes` is a view's own bytes; and `check_views` names
+    /// a view that lies outside its buffer even when no accessor reads it.
+    #[test]
+    fn exact_fits_zero_filled_sparse_and_view_checks() {
+        // View 0: two VEC3 16 bytes apart, 28 bytes (the second ends at the view's end).
+        let mut data = f32_bytes(&[1.0, 2.0, 3.0, 0.0, 4.0, 5.0, 6.0]);
+        data.extend_from_slice(&[1, 3, 0, 0]); // view 1: sparse indices 1 and 3 (u8), padding
+        data.extend(f32_bytes(&[7.0, 8.0, 9.0, 10.0, 11.0, 12.0])); // view 2: their values
+        let views = r#"{"buffer": 0, "byteLength": 28, "byteStride": 16},
+                       {"buffer": 0, "byteOffset": 28, "byteLength": 2},
+                       {"buffer": 0, "byteOffset": 32, "byteLength": 24}"#;
+        let accessors = r#"{"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"},
+            {"componentType": 5126, "count": 4, "type": "VEC3",
+             "sparse": {"count": 2, "indices": {"bufferView": 1, "componentType": 5121},
+                        "values": {"bufferView": 2}}}"#;
+        let r = root(data.len(), views, accessors);
+        let buffers = [gltf::buffer::Data(data.clone())];
+        let b = BufferData {
+            root: &r,
+            buffers: &buffers,
+        };
+        assert_eq!(
+            b.vec3(0).unwrap(),
+            [Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 5.0, 6.0)]
+        );
+        assert_eq!(
+            b.vec3(1).unwrap(),
+            [
+                Vec3::ZERO,
+                Vec3::new(7.0, 8.0, 9.0),
+                Vec3::ZERO,
+                Vec3::new(10.0, 11.0, 12.0)
+            ]
+        );
+        assert_eq!(b.view_bytes(1).unwrap(), &data[28..30]);
+        assert_eq!(b.view_bytes(2).unwrap(), &data[32..56]);
+        assert!(b.check_views().is_ok());
+        // A fourth view past the buffer's end, read by no accessor.
+        let beyond = format!(r#"{views}, {{"buffer": 0, "byteOffset": 40, "byteLength": 17}}"#);
+        let r = root(data.len(), &beyond, accessors);
+        let b = BufferData {
+            root: &r,
+            buffers: &buffers,
+        };
+        let e = b.check_views().unwrap_err();
+        assert!(
+            e.starts_with("bufferViews[3]") && e.contains("outside buffer 0"),
+            "{e}"
+        );
+        assert!(
+            b.vec3(1).is_ok(),
+            "the accessors do not read the broken view"
+        );
+    }
+
     /// Normalised u8 and u16 texture coordinates, and u8 and u32 indices, read the same values.
     #[test]
     fn normalized_tex_coords_and_indices_of_each_width() {
