@@ -459,6 +459,62 @@ mod tests {
         );
     }
 
+    /// The f64 cull of overflowing lights tests all six planes: a sphere past any one of them by a
+    /// millionth of its radius or more is rejected, one reaching into it is kept, and so is one
+    /// that only touches a plane (within 1e-9 of the extent past it: the documented tangency
+    /// padding).
+    #[test]
+    fn may_touch_frustum_f64_tests_every_plane_and_keeps_tangency() {
+        use glam::Vec3;
+        // View space is world space: the eye at the origin looking down −z with +y up. The
+        // slopes (about 1.75 across, 0.7 up) differ, and neither is 0, 1 or 2, so each side
+        // plane's normal has its own length.
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 250, 100, 1.0, 50.0);
+        let (tx, ty) = camera.tan_half_fov_f64();
+        let (sx, sy) = ((1.0 + tx * tx).sqrt(), (1.0 + ty * ty).sqrt());
+        let z_depths = [1.0f32, 5.0, 50.0];
+        let (r, d) = (0.5f64, 10.0f64);
+        // The centre of a sphere of radius `r` whose signed distance past each plane is `s·r`.
+        let past = |s: f64| {
+            [
+                ("right", DVec3::new(tx * d + s * r * sx, 0.0, -d)),
+                ("left", DVec3::new(-tx * d - s * r * sx, 0.0, -d)),
+                ("top", DVec3::new(0.0, ty * d + s * r * sy, -d)),
+                ("bottom", DVec3::new(0.0, -ty * d - s * r * sy, -d)),
+                ("near", DVec3::new(0.0, 0.0, -(1.0 - s * r))),
+                ("far", DVec3::new(0.0, 0.0, -(50.0 + s * r))),
+            ]
+        };
+        for (s, want) in [
+            (1.1, false),
+            (1.0 + 1e-6, false),
+            (1.0 + 1e-9, true),
+            (1.0 - 1e-6, true),
+            (0.9, true),
+        ] {
+            for (plane, centre) in past(s) {
+                assert_eq!(
+                    may_touch_frustum_f64(&camera, &z_depths, centre, r),
+                    want,
+                    "{plane} plane, centre {centre} ({s} radii past it)"
+                );
+            }
+        }
+        // Well inside, and far outside everything.
+        assert!(may_touch_frustum_f64(
+            &camera,
+            &z_depths,
+            DVec3::new(1.0, -1.0, -20.0),
+            r
+        ));
+        assert!(!may_touch_frustum_f64(
+            &camera,
+            &z_depths,
+            DVec3::new(0.0, 0.0, 20.0),
+            r
+        ));
+    }
+
     #[test]
     fn band_radius_is_the_widest_cross_section() {
         assert_eq!(band_radius(5.0, 2.0, 4.0, 6.0), 2.0);
