@@ -515,6 +515,69 @@ mod tests {
         ));
     }
 
+    /// The spot cone's sphere test is conservative and tight to its padding on each of its three
+    /// sides: behind the apex, past the range and outside the angle. A sphere reaching a tenth of
+    /// its radius across a side is kept, one a millionth of its radius past it too (inside the
+    /// [`PAD`] slack, here about 1e-4), and one past it by a thousandth of its radius (5e-4) or
+    /// more is rejected.
+    #[test]
+    fn cone_may_touch_sphere_is_tight_on_every_side() {
+        use glam::Vec3;
+        let apex = Vec3::new(1.0, 2.0, -3.0);
+        let axis = Vec3::new(0.6, 0.0, -0.8);
+        // A unit vector across the axis.
+        let side = Vec3::new(0.8, 0.0, 0.6);
+        let angle = 0.5f32;
+        let (sin, cos) = angle.sin_cos();
+        let (range, r) = (10.0f32, 0.5f32);
+        // The centre of a sphere whose distance past each side is `s·r` (within the angle for the
+        // first two, on the axis for the angle's side).
+        let past = |s: f32| {
+            let along = 4.0;
+            // Past the slanted side at `along`: `across·cos − along·sin = s·r`.
+            let across = (s * r + along * sin) / cos;
+            [
+                ("behind the apex", apex - axis * (s * r)),
+                ("past the range", apex + axis * (range + s * r)),
+                ("outside the angle", apex + axis * along + side * across),
+            ]
+        };
+        for (s, want) in [
+            (1.01, false),
+            (1.001, false),
+            (1.0 + 1e-6, true),
+            (0.9, true),
+            (0.0, true),
+        ] {
+            for (what, centre) in past(s) {
+                assert_eq!(
+                    cone_may_touch_sphere(apex, axis, (cos, sin), range, centre, r),
+                    want,
+                    "{what}: centre {centre} ({s} radii past it)"
+                );
+            }
+        }
+        // Every magnitude widens the slack, the radius and the range included: with them
+        // dominating, a sphere past the apex (past the range) by 0.75 of `PAD` × the magnitudes
+        // in play is kept, and one past it by 1.25 of that is rejected.
+        for (what, range, r, side) in [
+            ("a huge sphere behind the apex", 1.0f32, 1.0e3f32, -1.0f32),
+            ("a sphere past a long range", 1.0e3, 1.0, 1.0),
+            ("a huge sphere past a long range", 1.0e3, 1.0e3, 1.0),
+        ] {
+            let reach = if side < 0.0 { r } else { range + r };
+            let magnitudes = reach + range + r;
+            for (k, want) in [(0.75, true), (1.25, false)] {
+                let centre = Vec3::X * side * (reach + k * PAD * magnitudes);
+                assert_eq!(
+                    cone_may_touch_sphere(Vec3::ZERO, Vec3::X, (cos, sin), range, centre, r),
+                    want,
+                    "{what}: centre {centre}, {k} of the slack past it"
+                );
+            }
+        }
+    }
+
     #[test]
     fn band_radius_is_the_widest_cross_section() {
         assert_eq!(band_radius(5.0, 2.0, 4.0, 6.0), 2.0);
