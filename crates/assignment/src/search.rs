@@ -339,6 +339,23 @@ mod tests {
             for &a in &probes {
                 for &b in probes.iter().step_by(7) {
                     let (lo, hi) = (a.min(b), a.max(b));
+                    // The closed-form guesses land within one plane of the partition points.
+                    let (g0, g1) = fp.columns_guess(lo, hi);
+                    let tiles = sets.x_slopes.len() - 1;
+                    let first = sets.x_slopes[1..].partition_point(|&e| e < lo);
+                    let after = sets.x_slopes[..tiles].partition_point(|&e| e <= hi);
+                    assert!(
+                        (g0 as usize).abs_diff(first) <= 1 && (g1 as usize).abs_diff(after) <= 1,
+                        "x [{lo}, {hi}]: guess ({g0}, {g1}), partition points ({first}, {after})"
+                    );
+                    let (g0, g1) = fp.rows_guess(lo, hi);
+                    let rows = sets.y_slopes.len() - 1;
+                    let first = sets.y_slopes[1..].partition_point(|&e| e > hi);
+                    let after = sets.y_slopes[..rows].partition_point(|&e| e >= lo);
+                    assert!(
+                        (g0 as usize).abs_diff(first) <= 1 && (g1 as usize).abs_diff(after) <= 1,
+                        "y [{lo}, {hi}]: guess ({g0}, {g1}), partition points ({first}, {after})"
+                    );
                     assert_eq!(
                         fp.columns(lo, hi),
                         bisect_columns(&sets.x_slopes, lo, hi),
@@ -358,9 +375,16 @@ mod tests {
                 .collect();
             depths
                 .extend((0..300).map(|_| near * (far / near).powf(rng.random_range(-0.1f32..1.1))));
-            // The approximate log must keep guesses close: count fix-up steps.
+            // The approximate log must keep guesses close: within one plane of the partition
+            // point.
             for d in depths {
                 let slices = dims.z;
+                let guess = fp.slice_guess(d) as usize;
+                let edges_below = sets.z_depths.partition_point(|&e| e <= d);
+                assert!(
+                    guess.abs_diff(edges_below) <= 1,
+                    "depth {d} in {grid:?}: guess {guess}, partition point {edges_below}"
+                );
                 let want = (sets.z_depths.partition_point(|&e| e <= d) as u32).clamp(1, slices) - 1;
                 assert_eq!(fp.slice_of(d), want, "depth {d} in {grid:?}");
                 let first = sets.z_depths[1..]
