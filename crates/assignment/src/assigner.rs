@@ -533,3 +533,23 @@ fn plan_tasks(lights: usize, method: Method) -> usize {
     let by_work = lights.div_ceil(LIGHTS_PER_TASK).max(1);
     (4 * threads).min(by_work).max(1)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The names the command line and the reports use: each method's own, shown by `Display`,
+    /// and parsed back by `from_name` (and nothing else is).
+    #[test]
+    fn method_names_display_and_parse_back() {
+        let names = Method::ALL.map(Method::name);
+        assert_eq!(names, ["exact", "linear", "binary", "refined", "cone"]);
+        for method in Method::ALL {
+            assert_eq!(method.to_string(), method.name());
+            assert_eq!(Method::from_name(method.name()), Some(method));
+        }
+        for name in ["", "Binary", "binary ", "exact1", "all"] {
+            assert_eq!(Method::from_name(name), None, "{name:?}");
+        }
+    }
+}
