@@ -1,4 +1,5 @@
-//! Small frames after idle run their tasks on the calling thread; the lists do not change.
+//! Small frames after idle run their tasks on the calling thread, whether it is a worker of the
+//! pool or not; the lists do not change.
 //! (The decision itself is unit-tested in `pacing.rs`; this checks the assigner acts on it. The
 //! limits are set so that "small" does not depend on how fast this build or machine is.)
 
@@ -25,7 +26,14 @@ fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
         .num_threads(2)
         .build()
         .unwrap();
-    for method in [Method::Binary, Method::Refined] {
+    // From a worker (`install`), and from outside the pool, where a parallel frame first moves
+    // onto a worker: a serial one must not.
+    for (method, on_pool) in [
+        (Method::Binary, true),
+        (Method::Refined, true),
+        (Method::Binary, false),
+        (Method::Refined, false),
+    ] {
         let input = lights.input(false);
         // Any frame is small (under a second of work); 5 ms apart is idle.
         let limits = PacingLimits {
@@ -34,7 +42,12 @@ fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
         };
         let mut assigner = Assigner::new().with_parallelism(Parallelism::PacedWith(limits));
         let mut frame = |lists: &mut LightLists| {
-            pool.install(|| assigner.assign(method, &input, &scene.camera, &scene.grid, lists))
+            let mut assign = || assigner.assign(method, &input, &scene.camera, &scene.grid, lists);
+            if on_pool {
+                pool.install(assign)
+            } else {
+                assign()
+            }
         };
         let mut first = LightLists::new();
         let stats = frame(&mut first);
@@ -58,10 +71,12 @@ fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
                 break;
             }
         }
-        let serial = serial.expect("a small frame after 5 ms idle should run serially");
+        let serial = serial.unwrap_or_else(|| {
+            panic!("{method}, on the pool {on_pool}: a small frame after 5 ms idle runs serially")
+        });
         assert!(
             serial == first,
-            "{method}: serial and parallel lists differ"
+            "{method}, on the pool {on_pool}: serial and parallel lists differ"
         );
     }
 }
