@@ -91,6 +91,9 @@ fn parallel_tasks_agree_with_a_single_serial_task() {
             &mut large,
         );
         assert_eq!(s.tasks, 1);
+        // Below `SERIAL_LIGHTS` the one task runs on the calling thread, even on a first frame
+        // (which the pacing would run on the pool).
+        assert!(!s.parallel, "{method}: one task, yet on the pool");
         assert!(b.tasks > 1 || rayon::current_num_threads() == 1);
         assert_eq!(b.pairs, 100 * s.pairs);
         for c in 0..small.cluster_count() {
