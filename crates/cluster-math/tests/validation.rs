@@ -131,6 +131,14 @@ fn camera_problems_are_named() {
             "finite",
         ),
         (Camera { near: 0.0, ..good }, "0 < near < far"),
+        // An empty depth range (near == far) is refused too, not only a reversed one.
+        (
+            Camera {
+                near: 100.0,
+                ..good
+            },
+            "0 < near < far",
+        ),
         // Depth from the depth buffer would be infinite (audit g3).
         (
             Camera {
