@@ -294,6 +294,88 @@ mod tests {
         }
     }
 
+    /// The frustum slopes are the projection's: a view point at `(tx·d, ty·d, −d)` from
+    /// [`Camera::tan_half_fov`] lands on the top right corner of clip space, through
+    /// `clip_from_view` and, moved to world space, through `clip_from_world`; the f64 slopes
+    /// ([`Camera::tan_half_fov_f64`], what the oracle's cells use) are the same numbers; and a
+    /// 2:1 target with a 60° vertical field of view has `ty = tan 30°`, `tx = 2·ty`.
+    #[test]
+    fn frustum_slopes_match_the_projection_and_aspect() {
+        let c = cam(Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 1.0, -5.0), Vec3::Y);
+        assert_eq!(c.aspect(), 2.0);
+        let t = c.tan_half_fov();
+        let ty = 30f64.to_radians().tan();
+        assert!(
+            (t.y as f64 - ty).abs() < 1e-6 && (t.x as f64 - 2.0 * ty).abs() < 1e-6,
+            "{t}"
+        );
+        let (tx64, ty64) = c.tan_half_fov_f64();
+        assert!((tx64 - 2.0 * ty).abs() < 1e-7 && (ty64 - ty).abs() < 1e-7);
+        assert!((tx64 - t.x as f64).abs() < 1e-6 && (ty64 - t.y as f64).abs() < 1e-6);
+        let world_from_view = c.view_rotation().transpose();
+        for (sx, sy) in [(1.0f32, 1.0f32), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+            for depth in [0.5f32, 20.0] {
+                let view = Vec3::new(sx * t.x * depth, sy * t.y * depth, -depth);
+                let ndc = c.clip_from_view().project_point3(view);
+                assert!(
+                    (ndc.truncate() - Vec2::new(sx, sy)).length() < 1e-5,
+                    "{ndc}"
+                );
+                let world = c.position + world_from_view * view;
+                let ndc_world = c.clip_from_world().project_point3(world);
+                assert!((ndc_world - ndc).length() < 1e-4, "{ndc_world} vs {ndc}");
+            }
+        }
+    }
+
+    /// `up` only picks the roll: a camera looking down −Z with `up = +X` (rolled 90°) has world
+    /// +X as screen up, and an `up` a hair (1e-4 rad) off the view direction still decides the
+    /// basis, at any length of `up` — only a truly parallel, zero or non-finite one falls back.
+    #[test]
+    fn up_sets_the_roll_at_any_length() {
+        let rolled = cam(Vec3::ZERO, Vec3::NEG_Z, Vec3::X);
+        let (r, u, f) = rolled.basis_f64();
+        assert!((u - DVec3::X).length() < 1e-12, "{u:?}");
+        assert!((r - DVec3::NEG_Y).length() < 1e-12, "{r:?}");
+        assert!((f - DVec3::NEG_Z).length() < 1e-12, "{f:?}");
+        // Nearly parallel to the view direction, tilted towards +X: screen up is +X.
+        let hint = Vec3::new(1e-4, 0.0, -1.0);
+        let unit = cam(Vec3::ZERO, Vec3::NEG_Z, hint).basis_f64();
+        assert!((unit.1 - DVec3::X).length() < 1e-6, "{:?}", unit.1);
+        for scale in [1e-3f32, 1e3] {
+            let scaled = cam(Vec3::ZERO, Vec3::NEG_Z, hint * scale).basis_f64();
+            for (a, b) in [(scaled.0, unit.0), (scaled.1, unit.1), (scaled.2, unit.2)] {
+                assert!(
+                    (a - b).length() < 1e-9,
+                    "up scaled by {scale}: {a:?} vs {b:?}"
+                );
+            }
+        }
+    }
+
+    /// With no usable `up` the fallback is the world axis least aligned with the view direction,
+    /// +Y before +Z before +X on ties: looking along (1, 3, 2) that is +X (|cos| 1/√14 against
+    /// 2/√14 for +Z and 3/√14 for +Y), so right is `forward × X`; along (1, 1, 1), all tied,
+    /// it is +Y.
+    #[test]
+    fn fallback_up_is_the_least_aligned_world_axis() {
+        for (target, axis) in [
+            (Vec3::new(1.0, 3.0, 2.0), DVec3::X),
+            (Vec3::new(-2.0, 3.0, 1.0), DVec3::Z),
+            (Vec3::new(3.0, 1.0, -2.0), DVec3::Y),
+            (Vec3::new(1.0, 1.0, 1.0), DVec3::Y),
+        ] {
+            for up in [Vec3::ZERO, target, Vec3::splat(f32::NAN)] {
+                let (r, u, f) = cam(Vec3::ZERO, target, up).basis_f64();
+                let forward = target.as_dvec3().normalize();
+                assert!((f - forward).length() < 1e-12, "{f:?}");
+                let right = forward.cross(axis).normalize();
+                assert!((r - right).length() < 1e-12, "{target} up {up}: {r:?}");
+                assert!((u - right.cross(forward)).length() < 1e-12, "{u:?}");
+            }
+        }
+    }
+
     #[test]
     fn camera_relative_transform_keeps_precision_far_from_origin() {
         let origin = Vec3::new(1.0e6, -2.0e6, 3.0e6);
