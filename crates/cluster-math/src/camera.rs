@@ -328,6 +328,35 @@ mod tests {
         }
     }
 
+    /// A turned camera's view transform maps the world axes to its own: looking along +X with
+    /// `up = +Y`, world +X is view −Z (ahead), +Y stays +Y and +Z is view +X (right) — in f32 and
+    /// f64, as a point transform, as `view_from_world` and as the rotation matrices themselves.
+    /// (A camera looking down −Z with `up = +Y` has the identity rotation, so it cannot tell.)
+    #[test]
+    fn a_turned_camera_maps_the_world_axes_to_its_own() {
+        let eye = Vec3::new(1.0, 2.0, 3.0);
+        let c = cam(eye, eye + Vec3::X * 4.0, Vec3::Y);
+        for (world, view) in [
+            (Vec3::X, Vec3::NEG_Z),
+            (Vec3::Y, Vec3::Y),
+            (Vec3::Z, Vec3::X),
+        ] {
+            let p = eye + world * 5.0;
+            let v = c.view_from_world_point(p);
+            assert!((v - view * 5.0).length() < 1e-5, "{world}: {v}");
+            let v64 = c.view_from_world_point_f64(p.as_dvec3());
+            assert!(
+                (v64 - view.as_dvec3() * 5.0).length() < 1e-12,
+                "{world}: {v64}"
+            );
+            let m = c.view_from_world().transform_point3(p);
+            assert!((m - view * 5.0).length() < 1e-5, "{world}: {m}");
+            assert!((c.view_rotation() * world - view).length() < 1e-6);
+            let r64 = c.view_rotation_f64() * world.as_dvec3();
+            assert!((r64 - view.as_dvec3()).length() < 1e-12, "{world}: {r64}");
+        }
+    }
+
     /// `up` only picks the roll: a camera looking down −Z with `up = +X` (rolled 90°) has world
     /// +X as screen up, and an `up` a hair (1e-4 rad) off the view direction still decides the
     /// basis, at any length of `up` — only a truly parallel, zero or non-finite one falls back.
