@@ -415,6 +415,73 @@ mod tests {
         assert_eq!(full.first_miss, Some(miss(&scene.grid, cluster, light)));
     }
 
+    /// With several misses the tallies stay apart (a removed true pair is a miss, never a false
+    /// positive, and leaves the exact pair count alone), and the miss named is the one in the
+    /// lowest cluster, lowest light first — by the sampled check (whose parallel tally meets the
+    /// clusters in any order) and by the full one.
+    #[test]
+    fn several_misses_name_the_lowest_cluster_and_keep_false_positives_apart() {
+        let (scene, lists) = scene_and_lists(3000);
+        let oracle = OracleLights::new(&scene.lights, &scene.camera);
+        let clusters = scene.grid.cluster_count() as u32;
+        // The lowest and the highest cluster with two lights or more the oracle says touch it.
+        let mut exact = Vec::new();
+        let touched: Vec<(u32, Vec<u32>)> = (0..clusters)
+            .filter_map(|c| {
+                let t = scene.grid.cluster_coords(c);
+                let cell = Cell::of_cluster(&scene.camera, &scene.grid, t.x, t.y, t.z);
+                oracle.touching(&cell, &mut exact);
+                (exact.len() >= 2).then(|| (c, exact.clone()))
+            })
+            .collect();
+        let (low, low_lights) = touched.first().cloned().expect("a cluster with two lights");
+        let (high, high_lights) = touched.last().cloned().unwrap();
+        assert!(low < high, "{low} {high}");
+        // Two lights out of the high cluster, one (its highest) out of the low one.
+        let low_light = *low_lights.last().unwrap();
+        let mut broken = without(&lists, high as usize, high_lights[1]);
+        broken = without(&broken, high as usize, high_lights[0]);
+        broken = without(&broken, low as usize, low_light);
+        assert_eq!(broken.pair_count() + 3, lists.pair_count());
+        let every: Vec<u32> = (0..clusters).collect();
+        let ok = check_clusters(&oracle, &scene.camera, &scene.grid, &lists, &every);
+        let bad = check_clusters(&oracle, &scene.camera, &scene.grid, &broken, &every);
+        assert!(ok.false_positives > 0 && ok.misses == 0, "{ok:?}");
+        assert_eq!(bad.misses, 3, "{bad:?}");
+        assert_eq!(
+            (bad.exact_pairs, bad.reported_pairs + 3, bad.false_positives),
+            (ok.exact_pairs, ok.reported_pairs, ok.false_positives)
+        );
+        assert_eq!(bad.first_miss, Some(miss(&scene.grid, low, low_light)));
+        // The high cluster sampled with others that miss nothing: its lower light.
+        let mut sample: Vec<u32> = [0, high / 2, high - 1]
+            .into_iter()
+            .filter(|&c| c != low)
+            .collect();
+        sample.push(high);
+        let some = check_clusters(&oracle, &scene.camera, &scene.grid, &broken, &sample);
+        assert_eq!(
+            some.first_miss,
+            Some(miss(&scene.grid, high, high_lights[0]))
+        );
+        assert_eq!((some.misses, some.mode), (2, "sampled"));
+        let full = check_all(&scene.lights, &scene.camera, &scene.grid, &broken);
+        let full_ok = check_all(&scene.lights, &scene.camera, &scene.grid, &lists);
+        assert_eq!(full.misses, 3);
+        assert_eq!(full.false_positives, full_ok.false_positives);
+        assert_eq!(full.first_miss, Some(miss(&scene.grid, low, low_light)));
+    }
+
+    /// Each seed draws its own sample: the first 64 seeds give 64 different ones (a seed mix that
+    /// dropped or forced bits would give two seeds the same clusters).
+    #[test]
+    fn different_seeds_draw_different_samples() {
+        let samples: std::collections::HashSet<Vec<u32>> = (0..64)
+            .map(|seed| sample_clusters(4608, 20, seed))
+            .collect();
+        assert_eq!(samples.len(), 64);
+    }
+
     #[test]
     fn independent_lists_equal_the_exact_methods() {
         let (scene, _) = scene_and_lists(2000);
