@@ -2,7 +2,7 @@
 //!
 //! The clusters are split into *parts*: groups of consecutive depth slices, so each part is a
 //! contiguous range of cluster ids and, after the prefix sum, a contiguous range of the output.
-//! Every span is one row of one slice, so it lies inside a single part, and the tasks already
+//! Every span holds rows of one slice, so it lies inside a single part, and the tasks already
 //! bucket their spans by part while emitting them — adding up each bucket's pairs as they go
 //! ([`Bucket::push`]). So where every part's lists start in the output is known as soon as the
 //! tasks are done (a prefix sum over parts × tasks, [`part_bases`]), and each part is then built
@@ -42,12 +42,63 @@ use crossbeam::utils::CachePadded;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
-/// A run of clusters `first .. first + len` (one row of a light's box) touched by `light`.
+/// A run of `len` clusters from `first`, repeated on `rows` consecutive rows of one slice (each
+/// [`Parts::row_stride`] clusters after the last), all touched by `light`: one row of a light's
+/// box, or its whole box in one slice.
+///
+/// Whole boxes travel as one span, not one per row, because the spans are the data that crosses
+/// between threads — written by the task of a light range, read by the part of a slice range.
+/// `binary` on `paper` 1000 pushes 6,458 rows as 1,448 spans, and with 2 threads its frame took
+/// 56–66 µs instead of 71–77 µs (`myriad bench --threads 2`, interleaved builds; `refined`, whose
+/// rows are cut one by one, unchanged). The price is a rows loop per span in the append: serially
+/// `uniform` 100k `binary` went 5.3–5.7 → 5.7–6.0 ms. Folding `refined`'s equal neighbouring rows
+/// into one span too made it 20% slower. `len` and `rows` are 16 bits each, so a span stays
+/// 12 bytes; the rare longer ones are pushed in pieces ([`Bucket::push`],
+/// [`Bucket::push_rows`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Span {
     pub light: u32,
     pub first: u32,
-    pub len: u32,
+    /// Clusters per row, in `1..=SPAN_MAX`.
+    len: u16,
+    /// Rows, in `1..=SPAN_MAX`.
+    rows: u16,
+}
+
+/// The longest row and the most rows one span holds.
+pub(crate) const SPAN_MAX: u32 = u16::MAX as u32;
+
+impl Span {
+    /// `rows` rows of `len` clusters from `first`; both in `1..=SPAN_MAX`.
+    #[inline]
+    fn new(light: u32, first: u32, len: u32, rows: u32) -> Self {
+        debug_assert!((1..=SPAN_MAX).contains(&len) && (1..=SPAN_MAX).contains(&rows));
+        Self {
+            light,
+            first,
+            len: len as u16,
+            rows: rows as u16,
+        }
+    }
+
+    /// Clusters per row.
+    #[inline]
+    pub fn len(&self) -> u32 {
+        self.len.into()
+    }
+
+    /// Rows.
+    #[inline]
+    pub fn rows(&self) -> u32 {
+        self.rows.into()
+    }
+
+    /// The first cluster of each row, `stride` apart.
+    #[inline]
+    pub fn row_starts(&self, stride: u32) -> impl Iterator<Item = u32> + use<> {
+        let (first, rows) = (self.first, self.rows());
+        (0..rows).map(move |r| first + r * stride)
+    }
 }
 
 /// One task's spans in one part, and the pairs they hold.
@@ -65,31 +116,74 @@ impl Bucket {
         self.pairs = 0;
     }
 
-    /// Adds `span`. Under a mask only its active clusters count, and a span without any is
-    /// dropped here: no later pass visits it.
+    /// Adds the row `first .. first + len` of `light` (`len ≥ 1`). Under a mask only its
+    /// active clusters count, and a piece without any is dropped here: no later pass visits it.
     #[inline]
-    pub fn push(&mut self, span: Span, active: Option<&ActiveView<'_>>) {
+    pub fn push(&mut self, light: u32, first: u32, len: u32, active: Option<&ActiveView<'_>>) {
+        if len > SPAN_MAX {
+            self.push_long(light, first, len, active);
+            return;
+        }
         let pairs = match active {
-            None => span.len,
-            Some(a) => a.count(span.first, span.len),
+            None => len,
+            Some(a) => a.count(first, len),
         };
         if pairs > 0 {
             self.pairs += pairs as u64;
-            self.spans.push(span);
+            self.spans.push(Span::new(light, first, len, 1));
         }
     }
 
-    /// Adds `rows` spans of `len` clusters, the first starting at cluster `first` and each next
-    /// one `stride` further — a light's whole box in one slice, unmasked.
+    /// [`Self::push`] of a row longer than a span holds, in pieces.
+    #[cold]
+    #[inline(never)]
+    fn push_long(&mut self, light: u32, first: u32, len: u32, active: Option<&ActiveView<'_>>) {
+        let end = first + len;
+        let mut at = first;
+        while at < end {
+            let piece = (end - at).min(SPAN_MAX);
+            let pairs = match active {
+                None => piece,
+                Some(a) => a.count(at, piece),
+            };
+            if pairs > 0 {
+                self.pairs += pairs as u64;
+                self.spans.push(Span::new(light, at, piece, 1));
+            }
+            at += piece;
+        }
+    }
+
+    /// Adds `rows` rows of `len` clusters (both ≥ 1), the first starting at cluster `first` and
+    /// each next one `stride` further — a light's whole box in one slice, unmasked. `stride`
+    /// must be the frame's [`Parts::row_stride`].
     #[inline]
     pub fn push_rows(&mut self, light: u32, first: u32, len: u32, rows: u32, stride: u32) {
+        if (len | rows) <= SPAN_MAX {
+            self.pairs += rows as u64 * len as u64;
+            self.spans.push(Span::new(light, first, len, rows));
+            return;
+        }
+        self.push_rows_long(light, first, len, rows, stride);
+    }
+
+    /// [`Self::push_rows`] of rows longer, or more of them, than a span holds, in pieces.
+    #[cold]
+    #[inline(never)]
+    fn push_rows_long(&mut self, light: u32, first: u32, len: u32, rows: u32, stride: u32) {
+        if len > SPAN_MAX {
+            for r in 0..rows {
+                self.push_long(light, first + r * stride, len, None);
+            }
+            return;
+        }
         self.pairs += rows as u64 * len as u64;
-        for r in 0..rows {
-            self.spans.push(Span {
-                light,
-                first: first + r * stride,
-                len,
-            });
+        let mut done = 0;
+        while done < rows {
+            let piece = (rows - done).min(SPAN_MAX);
+            self.spans
+                .push(Span::new(light, first + done * stride, len, piece));
+            done += piece;
         }
     }
 }
@@ -103,6 +197,9 @@ pub(crate) struct Parts {
     pub clusters: usize,
     /// log₂ of the slices per part: slice `k` lies in part `k >> slice_shift`.
     pub slice_shift: u32,
+    /// Clusters from one row of a slice to the next (the grid's tiles across): a [`Span`]'s
+    /// rows are this far apart.
+    pub row_stride: u32,
 }
 
 /// Where each part's lists start in `indices`: `bases[p]` for part `p`, and the total pairs last
@@ -246,13 +343,25 @@ impl PartJob<'_> {
         // 1. Count, as a difference array closed by the scan.
         counts.fill(0);
         let len = counts.len();
+        let stride = self.parts.row_stride;
         for spans in buckets() {
             for s in spans {
-                let start = s.first as usize - first_cluster;
-                counts[start] = counts[start].wrapping_add(1);
-                let end = start + s.len as usize;
-                if end < len {
-                    counts[end] = counts[end].wrapping_sub(1);
+                let run = s.len() as usize;
+                let mut start = s.first as usize - first_cluster;
+                let mut rows = s.rows();
+                // A loop that tests at its end: with a separate path for one-row spans, or a
+                // `for` over the rows, `uniform` 100k's append ran 8–19% more instructions.
+                loop {
+                    counts[start] = counts[start].wrapping_add(1);
+                    let end = start + run;
+                    if end < len {
+                        counts[end] = counts[end].wrapping_sub(1);
+                    }
+                    rows -= 1;
+                    if rows == 0 {
+                        break;
+                    }
+                    start += stride as usize;
                 }
             }
         }
@@ -289,10 +398,19 @@ impl PartJob<'_> {
             None => {
                 for spans in buckets() {
                     for s in spans {
-                        let start = s.first as usize - first_cluster;
-                        for cursor in &mut offsets[start..start + s.len as usize] {
-                            indices[*cursor as usize] = s.light;
-                            *cursor += 1;
+                        let (light, run) = (s.light, s.len() as usize);
+                        let mut start = s.first as usize - first_cluster;
+                        let mut rows = s.rows();
+                        loop {
+                            for cursor in &mut offsets[start..start + run] {
+                                indices[*cursor as usize] = light;
+                                *cursor += 1;
+                            }
+                            rows -= 1;
+                            if rows == 0 {
+                                break;
+                            }
+                            start += stride as usize;
                         }
                     }
                 }
@@ -300,13 +418,16 @@ impl PartJob<'_> {
             Some(flags) => {
                 for spans in buckets() {
                     for s in spans {
-                        let (first, len) = (s.first as usize, s.len as usize);
-                        let start = first - first_cluster;
-                        let on = &flags[first..first + len];
-                        for (cursor, &on) in offsets[start..start + len].iter_mut().zip(on) {
-                            if on {
-                                indices[*cursor as usize] = s.light;
-                                *cursor += 1;
+                        let len = s.len() as usize;
+                        for first in s.row_starts(stride) {
+                            let first = first as usize;
+                            let start = first - first_cluster;
+                            let on = &flags[first..first + len];
+                            for (cursor, &on) in offsets[start..start + len].iter_mut().zip(on) {
+                                if on {
+                                    indices[*cursor as usize] = s.light;
+                                    *cursor += 1;
+                                }
                             }
                         }
                     }
@@ -340,6 +461,7 @@ impl AtomicCounters {
         &mut self,
         tasks: &[CachePadded<TaskOutput>],
         parts: usize,
+        row_stride: u32,
         clusters: usize,
         active: Option<&ActiveView<'_>>,
         parallel: bool,
@@ -354,8 +476,10 @@ impl AtomicCounters {
         let flags = active.map(|a| a.flags);
         // The clusters of a span that take its light: all of them, or the active ones.
         let clusters_of = move |s: &Span| {
-            let (first, end) = (s.first as usize, (s.first + s.len) as usize);
-            (first..end).filter(move |&c| flags.is_none_or(|f| f[c]))
+            let len = s.len() as usize;
+            s.row_starts(row_stride)
+                .flat_map(move |first| first as usize..first as usize + len)
+                .filter(move |&c| flags.is_none_or(|f| f[c]))
         };
         let count = |task: &CachePadded<TaskOutput>| {
             for s in frame_spans(task, parts) {

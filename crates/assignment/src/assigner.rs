@@ -446,9 +446,17 @@ impl Assigner {
                 total as usize
             }
             AppendStrategy::AtomicCounters => {
-                let (parts, active) = (parts.count, view.as_ref());
-                self.atomic
-                    .assign(work, parts, clusters, active, parallel, budget, out)?
+                let (stride, active) = (parts.row_stride, view.as_ref());
+                self.atomic.assign(
+                    work,
+                    parts.count,
+                    stride,
+                    clusters,
+                    active,
+                    parallel,
+                    budget,
+                    out,
+                )?
             }
         };
         for task in work {
@@ -496,6 +504,7 @@ fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
         count: slices.div_ceil(slices_per_part),
         clusters: slices_per_part * per_slice,
         slice_shift: slices_per_part.trailing_zeros(),
+        row_stride: grid.dims().x,
     }
 }
 

@@ -10,7 +10,7 @@
 //!    cone test for spot lights, or each candidate cluster checked by the f64 oracle (`exact`).
 
 use crate::active::ActiveView;
-use crate::append::{Bucket, Span};
+use crate::append::Bucket;
 use crate::cone::{ConeColumn, LightCone, TileCone};
 use crate::geometry::{self, ClusterBox, ZRange};
 use crate::phases::{BLOCK, Block};
@@ -367,7 +367,7 @@ fn emit(
         if spot.active {
             push_spot_row(ctx, spot, bucket, light, first, len);
         } else {
-            bucket.push(Span { light, first, len }, ctx.active.as_ref());
+            bucket.push(light, first, len, ctx.active.as_ref());
         }
     };
     // Only boxes at least two tiles wide and two tall are refined: that is where the corner
@@ -537,7 +537,7 @@ fn push_filtered(
     keep: impl FnMut(u32) -> bool,
 ) {
     for_each_run(first, len, keep, |first, len| {
-        bucket.push(Span { light, first, len }, ctx.active.as_ref());
+        bucket.push(light, first, len, ctx.active.as_ref());
     });
 }
 

@@ -235,13 +235,18 @@ fn one_light_covering_everything() {
     }
 }
 
-/// Grids 70 000 tiles wide and 70 000 tall (past any 16-bit tile index; one slice: 70k clusters,
-/// checked cluster by cluster against the oracle): one light covering everything plus random
-/// ones lose nothing.
+/// Grids 70 000 tiles wide and 70 000 tall (past any 16-bit tile index, and past the rows and
+/// the row length one span of the append holds; one slice: 70k–210k clusters, checked cluster by
+/// cluster against the oracle): one light covering everything plus random ones lose nothing.
+/// The 3-wide grid's box is split into spans of rows 3 clusters apart.
 #[test]
 fn grids_wider_and_taller_than_16_bits() {
     let cam = camera(1536, 768);
-    for dims in [UVec3::new(70_000, 1, 1), UVec3::new(1, 70_000, 1)] {
+    for dims in [
+        UVec3::new(70_000, 1, 1),
+        UVec3::new(1, 70_000, 1),
+        UVec3::new(3, 70_000, 1),
+    ] {
         let grid = ClusterGrid::new(dims, DepthSlicing::Log, 0.1, 100.0);
         let mut lights = random_lights(&cam, 40, 17);
         lights.push(cam.position, 500.0);
