@@ -183,6 +183,19 @@ pub(crate) fn cluster_box(
     Some(ClusterBox { z, i0, i1, j0, j1 })
 }
 
+/// `max` of two numbers that are never NaN, as one `maxss` (`f32::max` adds a NaN test and a
+/// blend); every input of [`refine_slice`] is finite.
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// `min` of two numbers that are never NaN, as one `minss`.
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// Refinement of one slice `k` of a light's box: calls `row(j, i0, i1)` for every row of the slice
 /// the sphere (shrunk to the slab) can touch, with the tightened x tile span. `gaps` is scratch of
 /// at least twice the box's columns.
@@ -213,8 +226,8 @@ pub(crate) fn refine_slice(
     mut row: impl FnMut(u32, u32, u32),
 ) {
     let sets = planes.sets;
-    let ka = sets.z_depths[k as usize].max(b.z.da);
-    let kb = sets.z_depths[k as usize + 1].min(b.z.db);
+    let ka = fmax(sets.z_depths[k as usize], b.z.da);
+    let kb = fmin(sets.z_depths[k as usize + 1], b.z.db);
     if !(ka <= kb) {
         return;
     }
@@ -225,14 +238,14 @@ pub(crate) fn refine_slice(
     // the slab's disc reaches that corner nothing can be cut: every row whole, no per-row work.
     let row_gap = |j: u32| {
         let (top, bottom) = (sets.y_slopes[j as usize], sets.y_slopes[j as usize + 1]);
-        let y_lo = (bottom * ka).min(bottom * kb);
-        let y_hi = (top * ka).max(top * kb);
-        (y_lo - cy).max(cy - y_hi).max(0.0)
+        let y_lo = fmin(bottom * ka, bottom * kb);
+        let y_hi = fmax(top * ka, top * kb);
+        fmax(fmax(y_lo - cy, cy - y_hi), 0.0)
     };
-    let dy = row_gap(b.j0).max(row_gap(b.j1));
-    let gap_first = cx - (xs[1] * ka).max(xs[1] * kb);
-    let gap_last = (xs[columns - 1] * ka).min(xs[columns - 1] * kb) - cx;
-    let dx = gap_first.max(gap_last).max(0.0);
+    let dy = fmax(row_gap(b.j0), row_gap(b.j1));
+    let gap_first = cx - fmax(xs[1] * ka, xs[1] * kb);
+    let gap_last = fmin(xs[columns - 1] * ka, xs[columns - 1] * kb) - cx;
+    let dx = fmax(fmax(gap_first, gap_last), 0.0);
     if dy <= rk && dx * dx <= (rk - dy) * (rk + dy) {
         for j in b.j0..=b.j1 {
             row(j, b.i0, b.i1);
@@ -244,8 +257,8 @@ pub(crate) fn refine_slice(
     // Squared gap of each column wholly left (right) of the centre, −∞ for the others.
     for (c, (l, r)) in left.iter_mut().zip(right.iter_mut()).enumerate() {
         let (s0, s1) = (xs[c], xs[c + 1]);
-        let gap_left = cx - (s1 * ka).max(s1 * kb);
-        let gap_right = (s0 * ka).min(s0 * kb) - cx;
+        let gap_left = cx - fmax(s1 * ka, s1 * kb);
+        let gap_right = fmin(s0 * ka, s0 * kb) - cx;
         *l = if gap_left > 0.0 {
             gap_left * gap_left
         } else {
@@ -260,9 +273,9 @@ pub(crate) fn refine_slice(
     for j in b.j0..=b.j1 {
         let top = sets.y_slopes[j as usize];
         let bottom = sets.y_slopes[j as usize + 1];
-        let y_lo = (bottom * ka).min(bottom * kb);
-        let y_hi = (top * ka).max(top * kb);
-        let dy = (y_lo - cy).max(cy - y_hi).max(0.0);
+        let y_lo = fmin(bottom * ka, bottom * kb);
+        let y_hi = fmax(top * ka, top * kb);
+        let dy = fmax(fmax(y_lo - cy, cy - y_hi), 0.0);
         if dy > rk {
             continue;
         }
