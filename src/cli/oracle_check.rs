@@ -135,7 +135,7 @@ impl OracleLights {
     pub(crate) fn new(lights: &Lights, camera: &Camera) -> Self {
         let view = OracleView::new(camera);
         let spots_present = lights.has_spots();
-        let mut sorted: Vec<ViewLight> = (0..lights.len())
+        let valid: Vec<ViewLight> = (0..lights.len())
             .into_par_iter()
             .filter_map(|l| {
                 let position = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
@@ -157,17 +157,34 @@ impl OracleLights {
                 })
             })
             .collect();
-        sorted.par_sort_unstable_by(|a, b| (-a.centre.z).total_cmp(&-b.centre.z));
+        Self::from_view_lights(valid)
+    }
+
+    /// `lights` sorted by depth, with their depths and largest radius (the tests build
+    /// [`ViewLight`]s in f64 directly, to place them exactly).
+    fn from_view_lights(mut lights: Vec<ViewLight>) -> Self {
+        lights.par_sort_unstable_by(|a, b| (-a.centre.z).total_cmp(&-b.centre.z));
         Self {
-            depths: sorted.iter().map(|l| -l.centre.z).collect(),
-            max_radius: sorted.iter().map(|l| l.radius).fold(0.0, f64::max),
-            lights: sorted,
+            depths: lights.iter().map(|l| -l.centre.z).collect(),
+            max_radius: lights.iter().map(|l| l.radius).fold(0.0, f64::max),
+            lights,
         }
     }
 
     /// The input indices of every light the oracle says touches `cell`, ascending.
     fn touching(&self, cell: &Cell, out: &mut Vec<u32>) {
         out.clear();
+        out.extend(
+            self.candidates(cell)
+                .filter(|light| light.volume.intersects_cell(cell))
+                .map(|light| light.index),
+        );
+        out.sort_unstable();
+    }
+
+    /// The lights that pass the cheap filters for `cell`, in depth order: every light the oracle
+    /// says touches it, and some it does not.
+    fn candidates<'a>(&'a self, cell: &Cell) -> impl Iterator<Item = &'a ViewLight> + 'a {
         // The cell is where four walls through the eye and two depth planes hold it; a ball whose
         // centre lies farther than its radius outside any one of them misses the cell. Outward
         // unit normals of the walls (left, right, bottom, top): inside ⇔ `n·p ≤ 0`.
@@ -177,28 +194,35 @@ impl OracleLights {
             DVec3::new(0.0, -1.0, -cell.y_slopes[0]).normalize(),
             DVec3::new(0.0, 1.0, cell.y_slopes[1]).normalize(),
         ];
-        // Slack far above the oracle's own tolerance bands (1e-12 of the local scale for spots,
-        // 64 ulps for balls) and the rounding here, so these filters only drop lights the oracle
-        // rejects too.
+        // Slack far above the oracle's own tolerance bands and the rounding here, so these
+        // filters only drop lights the oracle rejects too. The oracle accepts a spot whose apex
+        // lies up to 64 ulps of a scale beyond its range from the cell, and rounds a ball's
+        // distance to a few ulps of one; that scale takes in the cell's corners out to the
+        // light's depth plus twice its range, and a corner lies `spread` times its depth from the
+        // eye, `spread` passing 1e8 as the field of view nears 180°. So the slack grows with those
+        // corners as well as with the light. (Scaled by the light alone it fell short: at a field
+        // of view of π less one f32 ulp on a 1920×200 target, in the cell of x slopes
+        // [−1.3e8, 0] and depths [1, 3.16], the oracle accepts a spot of range 1e-15 whose apex
+        // is 3.8e-6 outside the wall of slope 0 at depth 2.08, a band of 64 ulps of its 2.7e8
+        // corner, and the light's slack of 3.1e-6 dropped it; another 5.7e-6 beyond the far
+        // plane fell out of the depth window.)
         let slack = |scale: f64| 1e-6 * (1.0 + scale);
         let [near, far] = cell.depths;
+        let spread = (1.0
+            + cell.x_slopes[0].abs().max(cell.x_slopes[1].abs()).powi(2)
+            + cell.y_slopes[0].abs().max(cell.y_slopes[1].abs()).powi(2))
+        .sqrt();
         // Depth window: the centre's depth is within the radius of the cell's depth range.
-        let window = self.max_radius + slack(far + self.max_radius);
+        let window = self.max_radius + slack(spread * far + self.max_radius);
         let lo = self.depths.partition_point(|&d| d < near - window);
         let hi = self.depths.partition_point(|&d| d <= far + window);
-        for light in &self.lights[lo..hi] {
+        self.lights[lo..hi].iter().filter(move |light| {
             let c = light.centre;
-            let reach = light.radius + slack(c.abs().element_sum() + light.radius);
             let depth = -c.z;
-            if depth < near - reach || depth > far + reach || walls.iter().any(|n| n.dot(c) > reach)
-            {
-                continue;
-            }
-            if light.volume.intersects_cell(cell) {
-                out.push(light.index);
-            }
-        }
-        out.sort_unstable();
+            let corners = spread * far.min(depth + 2.0 * light.radius).max(0.0);
+            let reach = light.radius + slack(c.abs().element_sum() + light.radius + corners);
+            !(depth < near - reach || depth > far + reach || walls.iter().any(|n| n.dot(c) > reach))
+        })
     }
 }
 
@@ -333,6 +357,7 @@ pub(crate) fn check_clusters(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use myriad::cluster_math::oracle::{SpotVolume, distance_to_cell};
     use myriad::render::RenderScene;
 
     /// A small default scene (no GPU needed) and its refined lists.
@@ -517,6 +542,279 @@ mod tests {
                 && error.contains("coarser grid"),
             "{error}"
         );
+    }
+
+    /// A light built in f64, as [`OracleLights::new`] would read it.
+    fn view_light(volume: LightVolume, index: u32) -> ViewLight {
+        let (centre, radius) = volume.bounding_ball();
+        ViewLight {
+            volume,
+            centre,
+            radius,
+            index,
+        }
+    }
+
+    /// The largest `t` in `[lo, hi)` that `accepts` while the next f64 above it does not, for
+    /// `accepts(lo)` and not `accepts(hi)`, `0 ≤ lo < hi`: bisection on the bits, which order
+    /// non-negative f64s as their values.
+    fn last_accepted(lo: f64, hi: f64, accepts: impl Fn(f64) -> bool) -> f64 {
+        let (mut lo, mut hi) = (lo.to_bits(), hi.to_bits());
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if accepts(f64::from_bits(mid)) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        f64::from_bits(lo)
+    }
+
+    /// Cells of real grids, a list per `(camera, grid)`: narrow, usual and wide fields of view;
+    /// slices about 0.05, 1, 1e3 and 1e5 deep and out to 1.5e7; corner, edge and inner tiles. And
+    /// a field of view of π less one f32 ulp, whose tiles' slopes reach 1e8 to 5e10.
+    fn boundary_cells() -> Vec<Vec<Cell>> {
+        use myriad::cluster_math::DepthSlicing;
+        use myriad::cluster_math::glam::UVec3;
+        let camera = |fov, width, height| {
+            Camera::new(
+                Vec3::ZERO,
+                Vec3::NEG_Z,
+                Vec3::Y,
+                fov,
+                width,
+                height,
+                0.1,
+                100.0,
+            )
+        };
+        let cameras = [
+            camera(2.0, 800, 800),
+            camera(60.0, 1920, 1080),
+            camera(150.0, 2560, 1080),
+        ];
+        let grids = [
+            ClusterGrid::new(UVec3::new(16, 9, 16), DepthSlicing::Log, 0.05, 50.0),
+            ClusterGrid::new(UVec3::new(7, 5, 10), DepthSlicing::Log, 1.0, 1e5),
+            ClusterGrid::new(UVec3::new(6, 3, 40), DepthSlicing::Log, 0.5, 1.5e7),
+        ];
+        let mut sets = Vec::new();
+        for camera in &cameras {
+            for grid in &grids {
+                let d = grid.dims();
+                let (x, y, z) = (d.x - 1, d.y - 1, d.z - 1);
+                let clusters = [
+                    (0, 0, 0),
+                    (x, y, z),
+                    (x / 2, y / 2, z / 2),
+                    (x / 2, y, 0),
+                    (0, y / 2, z),
+                ];
+                sets.push(
+                    clusters
+                        .map(|(i, j, k)| Cell::of_cluster(camera, grid, i, j, k))
+                        .to_vec(),
+                );
+            }
+        }
+        let grid = ClusterGrid::new(UVec3::new(2, 1, 4), DepthSlicing::Log, 1.0, 100.0);
+        for (width, height) in [(1920, 200), (4096, 1)] {
+            let camera = Camera {
+                fov_y: f32::from_bits(std::f32::consts::PI.to_bits() - 1),
+                ..camera(60.0, width, height)
+            };
+            let clusters = [(0, 0, 0), (1, 0, 0), (0, 0, 3), (1, 0, 3)];
+            sets.push(
+                clusters
+                    .map(|(i, j, k)| Cell::of_cluster(&camera, &grid, i, j, k))
+                    .to_vec(),
+            );
+        }
+        sets
+    }
+
+    /// Radii of the placed lights, in units of their cell's near depth: tiny, small, comparable
+    /// and large.
+    const RADII: [f64; 4] = [1e-15, 1e-4, 0.5, 40.0];
+
+    /// Lights placed around one cell, each with the index of its radius in [`RADII`].
+    struct Placed {
+        /// `(radius, light the oracle accepts, the same light one f64 farther out, which it
+        /// rejects)`.
+        boundary: Vec<(usize, ViewLight, ViewLight)>,
+        /// `(radius, light)`: more than twice its radius outside one of the six faces.
+        outside: Vec<(usize, ViewLight)>,
+    }
+
+    /// Balls and spots (a narrow one aimed at the cell, a wide one tilted off the aim; both
+    /// reach the cell with their cap) of each radius of [`RADII`], moved out from points on the
+    /// cell's six faces, three edges and two corners along the outward normal to the last f64
+    /// offset the oracle accepts; and the same more than twice their radius out of each face.
+    fn place(cell: &Cell, index: &mut u32) -> Placed {
+        let point = |u: f64, v: f64, w: f64| {
+            let d = cell.depths[0] + (cell.depths[1] - cell.depths[0]) * w;
+            let sx = cell.x_slopes[0] + (cell.x_slopes[1] - cell.x_slopes[0]) * u;
+            let sy = cell.y_slopes[0] + (cell.y_slopes[1] - cell.y_slopes[0]) * v;
+            DVec3::new(sx * d, sy * d, -d)
+        };
+        // Outward unit normals: left, right, bottom, top, near, far.
+        let normals = [
+            -DVec3::new(1.0, 0.0, cell.x_slopes[0]).normalize(),
+            DVec3::new(1.0, 0.0, cell.x_slopes[1]).normalize(),
+            -DVec3::new(0.0, 1.0, cell.y_slopes[0]).normalize(),
+            DVec3::new(0.0, 1.0, cell.y_slopes[1]).normalize(),
+            DVec3::Z,
+            DVec3::NEG_Z,
+        ];
+        let out = |faces: &[usize]| faces.iter().map(|&f| normals[f]).sum::<DVec3>().normalize();
+        // (point, outward direction, whether it is a face's normal).
+        let sites = [
+            (point(0.0, 0.5, 0.5), out(&[0]), true),
+            (point(1.0, 0.5, 0.5), out(&[1]), true),
+            (point(0.5, 0.0, 0.5), out(&[2]), true),
+            (point(0.5, 1.0, 0.5), out(&[3]), true),
+            (point(0.5, 0.5, 0.0), out(&[4]), true),
+            (point(0.5, 0.5, 1.0), out(&[5]), true),
+            // The depth planes' normals at their edges: the eye's side of a wide cell.
+            (point(0.0, 0.5, 0.0), out(&[4]), true),
+            (point(1.0, 0.5, 1.0), out(&[5]), true),
+            (point(0.0, 0.5, 0.0), out(&[0, 4]), false),
+            (point(0.5, 1.0, 1.0), out(&[3, 5]), false),
+            (point(1.0, 0.0, 0.5), out(&[1, 2]), false),
+            (point(0.0, 0.0, 0.0), out(&[0, 2, 4]), false),
+            (point(1.0, 1.0, 1.0), out(&[1, 3, 5]), false),
+        ];
+        let extent = cell
+            .corners()
+            .iter()
+            .map(|c| c.length())
+            .fold(0.0, f64::max);
+        let mut placed = Placed {
+            boundary: Vec::new(),
+            outside: Vec::new(),
+        };
+        let mut light = |volume| {
+            *index += 1;
+            view_light(volume, *index)
+        };
+        for (p, n, face) in sites {
+            let tilted = -n * 0.5f64.cos() + n.any_orthonormal_vector() * 0.5f64.sin();
+            for (class, radius) in RADII.map(|r| r * cell.depths[0]).into_iter().enumerate() {
+                for (angle, aim) in [(None, -n), (Some(0.25), -n), (Some(1.3), tilted)] {
+                    let at = |t: f64| {
+                        let centre = p + n * t;
+                        match angle {
+                            None => LightVolume::Ball { centre, radius },
+                            Some(angle) => LightVolume::Spot(SpotVolume {
+                                apex: centre,
+                                direction: aim,
+                                range: radius,
+                                angle,
+                            }),
+                        }
+                    };
+                    let accepts = |t: f64| at(t).intersects_cell(cell);
+                    let far_out = 3.0 * radius + 1e-3 * (1.0 + p.length());
+                    assert!(
+                        accepts(0.0) && !accepts(far_out),
+                        "{cell:?} {p} {n} {radius}"
+                    );
+                    let t = last_accepted(0.0, far_out, accepts);
+                    placed
+                        .boundary
+                        .push((class, light(at(t)), light(at(t.next_up()))));
+                    if face {
+                        // Past the slack, which grows with the cell's corners.
+                        let margin = 1e-4 * (1.0 + extent + radius);
+                        placed
+                            .outside
+                            .push((class, light(at(2.0 * radius + margin))));
+                    }
+                }
+            }
+        }
+        placed
+    }
+
+    /// The prefilter in front of the oracle ([`OracleLights::candidates`]: four walls, two depth
+    /// planes and a depth window, each widened by a slack) may only drop lights the oracle
+    /// rejects, and its slack is what keeps the lights on the oracle's boundary, where the
+    /// rounding of its own dot products and the oracle's tolerance band for spots (64 ulps of a
+    /// scale that takes in the cell's corners) decide. So: balls and spots placed to the last f64
+    /// the oracle accepts outside cells' faces, edges and corners, of radii 1e-15 to 40 times
+    /// the depth, in cells 0.05 to 1.5e7 deep and of fields of view up to π less one f32 ulp
+    /// (where the band outgrew a slack scaled by the light alone, and the prefilter dropped
+    /// spots the oracle accepts). Each light alone (the depth window then is its own radius), all
+    /// of a camera's lights and those of each radius together: every cell lists exactly the
+    /// lights the oracle accepts. And the prefilter does its job: no light well outside a face
+    /// reaches the oracle.
+    #[test]
+    fn the_prefilter_keeps_every_light_on_the_oracles_boundary() {
+        let mut index = 0;
+        let mut out = Vec::new();
+        let (mut boundary, mut beyond_ball, mut outside, mut dropped) = (0, 0, 0, 0);
+        for cells in boundary_cells() {
+            let placed: Vec<Placed> = cells.iter().map(|cell| place(cell, &mut index)).collect();
+            // Each light alone.
+            for (cell, placed) in cells.iter().zip(&placed) {
+                for &(_, on, beyond) in &placed.boundary {
+                    assert!(
+                        on.volume.intersects_cell(cell) && !beyond.volume.intersects_cell(cell)
+                    );
+                    for (light, listed) in [(on, vec![on.index]), (beyond, vec![])] {
+                        OracleLights::from_view_lights(vec![light]).touching(cell, &mut out);
+                        assert_eq!(out, listed, "{light:?} {cell:?}");
+                    }
+                    // Where the oracle accepts a light whose bounding ball misses the cell.
+                    let (centre, radius) = on.volume.bounding_ball();
+                    if distance_to_cell(centre, cell) > radius {
+                        beyond_ball += 1;
+                    }
+                }
+                for &(_, light) in &placed.outside {
+                    assert!(!light.volume.intersects_cell(cell));
+                    let one = OracleLights::from_view_lights(vec![light]);
+                    assert_eq!(one.candidates(cell).count(), 0, "{light:?} {cell:?}");
+                }
+                boundary += placed.boundary.len();
+                outside += placed.outside.len();
+            }
+            // Together: all of them, and those of each radius (a narrower depth window).
+            for class in (0..RADII.len()).map(Some).chain([None]) {
+                let of_class = |c: usize| class.is_none_or(|k| k == c);
+                let lights: Vec<ViewLight> = placed
+                    .iter()
+                    .flat_map(|p| {
+                        let on_boundary = p.boundary.iter().filter(|l| of_class(l.0));
+                        let outside = p.outside.iter().filter(|l| of_class(l.0));
+                        on_boundary
+                            .flat_map(|&(_, on, beyond)| [on, beyond])
+                            .chain(outside.map(|&(_, light)| light))
+                    })
+                    .collect();
+                let oracle = OracleLights::from_view_lights(lights.clone());
+                for (cell, placed) in cells.iter().zip(&placed) {
+                    let mut exact: Vec<u32> = lights
+                        .iter()
+                        .filter(|l| l.volume.intersects_cell(cell))
+                        .map(|l| l.index)
+                        .collect();
+                    exact.sort_unstable();
+                    oracle.touching(cell, &mut out);
+                    assert_eq!(out, exact, "{cell:?}");
+                    let kept: Vec<u32> = oracle.candidates(cell).map(|l| l.index).collect();
+                    for (_, light) in &placed.outside {
+                        assert!(!kept.contains(&light.index), "{light:?} {cell:?}");
+                    }
+                    dropped += lights.len() - kept.len();
+                }
+            }
+        }
+        // 53 cells, 156 lights on the boundary and 96 well outside each.
+        assert_eq!((boundary, outside), (53 * 156, 53 * 96));
+        assert!(beyond_ball > 1000, "{beyond_ball}");
+        assert!(dropped > 100_000, "{dropped}");
     }
 
     #[test]
