@@ -12,7 +12,7 @@ mod common;
 
 use common::*;
 use glam::{UVec3, Vec3};
-use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
+use myriad_assignment::{AppendStrategy, AssignStats, Assigner, LightLists, Method, SERIAL_LIGHTS};
 use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 use rand::{Rng, SeedableRng};
@@ -267,13 +267,99 @@ fn grids_wider_and_taller_than_16_bits() {
     }
 }
 
+/// Rows longer than a span holds on several rows and slices of a 70 000 × 2 × 2 grid: the covering
+/// light's box (70 000 clusters × 2 rows per slice) is pushed as pieces row by row, and under a
+/// mask (or refined, or as a spot) each 70 000-cluster row is pushed in pieces whose inactive
+/// clusters do not count. Every method, both append strategies, masked and not: no oracle light
+/// is lost, the covering light is in every cluster, the strategies agree, and the masked lists
+/// are the full lists on the active clusters (and empty elsewhere).
+#[test]
+fn rows_longer_than_16_bits_on_several_rows_and_slices() {
+    let cam = camera(1536, 768);
+    let grid = ClusterGrid::new(UVec3::new(70_000, 2, 2), DepthSlicing::Log, 0.1, 100.0);
+    let mut lights = random_lights(&cam, 12, 23);
+    lights.push(cam.position, 500.0);
+    let big = (lights.len() - 1) as u32;
+    let truth = brute_force(&lights, false, &cam, &grid);
+    // Half the clusters at random, and none past cluster 65 535 of the second row of slice 0:
+    // that row's last piece has no active cluster.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(29);
+    let mut mask = myriad_assignment::ActiveClusters::new(&grid);
+    for c in 0..grid.cluster_count() as u32 {
+        let v = grid.cluster_coords(c);
+        if rng.random_bool(0.5) && !(v.y == 1 && v.z == 0 && v.x >= 65_535) {
+            mask.mark(c);
+        }
+    }
+    let input = lights.input(false);
+    // The same lights followed by enough behind the eye to split the frame into tasks, and the
+    // clusters into one part per slice: the lists must not change.
+    let mut padded = lights.clone();
+    for i in 0..2 * SERIAL_LIGHTS {
+        padded.push(world_of(&cam, Vec3::new(i as f32, 0.0, 50.0)), 1.0);
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap();
+    for method in [Method::Binary, Method::Refined, Method::Cone, Method::Exact] {
+        let (lists, stats) = assign(method, &lights, &cam, &grid);
+        assert_conservative(method.name(), &lists, &truth, "70 000 × 2 × 2");
+        assert!(
+            (0..grid.cluster_count()).all(|c| lists.lights_of(c).contains(&big)),
+            "{method}: the covering light is in every cluster"
+        );
+        let mut split = LightLists::new();
+        let split_stats = pool.install(|| {
+            Assigner::new().assign(method, &padded.input(false), &cam, &grid, &mut split)
+        });
+        assert!(split_stats.tasks > 1, "{method}: {split_stats:?}");
+        assert!(split == lists, "{method}: tasks and parts change the lists");
+        for strategy in [
+            AppendStrategy::PartitionedByDepth,
+            AppendStrategy::AtomicCounters,
+        ] {
+            let mut assigner = Assigner::new().with_append_strategy(strategy);
+            let mut full = LightLists::new();
+            assigner.assign(method, &input, &cam, &grid, &mut full);
+            assert!(
+                full == lists,
+                "{method} {strategy:?}: the strategies differ"
+            );
+            let mut masked = LightLists::new();
+            let masked_stats =
+                assigner.assign_active(method, &input, &cam, &grid, Some(&mask), &mut masked);
+            masked.assert_well_formed(lights.len());
+            let mut pairs = 0u64;
+            for c in 0..grid.cluster_count() {
+                if mask.is_active(c as u32) {
+                    assert_eq!(
+                        masked.lights_of(c),
+                        lists.lights_of(c),
+                        "{method} {strategy:?}: active cluster {c}"
+                    );
+                    pairs += lists.counts[c] as u64;
+                } else {
+                    assert!(
+                        masked.lights_of(c).is_empty(),
+                        "{method} {strategy:?}: inactive cluster {c} has lights"
+                    );
+                }
+            }
+            assert!(pairs < stats.pairs, "{method}: the mask drops pairs");
+            assert_eq!(masked_stats.pairs, pairs, "{method} {strategy:?}");
+            assert_eq!(masked.pair_count() as u64, pairs, "{method} {strategy:?}");
+        }
+    }
+}
+
 /// A grid with more tiles than the `cone` method keeps cones for (2^18): each tile's cone is
 /// made where it is needed, and the lists still cover the oracle.
 #[test]
 fn cone_method_past_its_cached_tiles() {
     let cam = camera(1920, 1080);
     let grid = ClusterGrid::new(UVec3::new(730, 360, 2), DepthSlicing::Log, 0.1, 100.0);
-    let mut lights = random_lights(&cam, 20, 23);
+    let mut lights = random_lights(&cam, 12, 23);
     lights.push(cam.position, 0.5);
     let truth = brute_force(&lights, false, &cam, &grid);
     let (lists, _) = assign(Method::Cone, &lights, &cam, &grid);
