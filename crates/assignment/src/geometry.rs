@@ -472,6 +472,213 @@ mod tests {
         );
     }
 
+    /// The clusters `(j, i)` of slice `k` of box `b` that `refine_slice`'s definition keeps:
+    /// `dy ≤ R_k` and `dx² ≤ (R_k − dy)(R_k + dy)`, tested cluster by cluster.
+    #[allow(clippy::too_many_arguments)]
+    fn kept_by_definition(
+        cx: f32,
+        cy: f32,
+        dc: f32,
+        r: f32,
+        b: &ClusterBox,
+        k: u32,
+        sets: &myriad_cluster_math::PlaneSets,
+    ) -> Vec<(u32, u32)> {
+        let ka = sets.z_depths[k as usize].max(b.z.da);
+        let kb = sets.z_depths[k as usize + 1].min(b.z.db);
+        let mut want = Vec::new();
+        if ka <= kb {
+            let rk = band_radius(dc, r, ka, kb);
+            for j in b.j0..=b.j1 {
+                let (top, bottom) = (sets.y_slopes[j as usize], sets.y_slopes[j as usize + 1]);
+                let dy = ((bottom * ka).min(bottom * kb) - cy)
+                    .max(cy - (top * ka).max(top * kb))
+                    .max(0.0);
+                for i in b.i0..=b.i1 {
+                    let (s0, s1) = (sets.x_slopes[i as usize], sets.x_slopes[i as usize + 1]);
+                    let dx = (cx - (s1 * ka).max(s1 * kb))
+                        .max((s0 * ka).min(s0 * kb) - cx)
+                        .max(0.0);
+                    if dy <= rk && dx * dx <= (rk - dy) * (rk + dy) {
+                        want.push((j, i));
+                    }
+                }
+            }
+        }
+        want
+    }
+
+    /// A 25 × 11 × 16 grid (odd, so the middle row and column contain the view axis strictly)
+    /// and its plane sets.
+    fn odd_grid() -> (
+        myriad_cluster_math::ClusterGrid,
+        myriad_cluster_math::PlaneSets,
+    ) {
+        use glam::{UVec3, Vec3};
+        use myriad_cluster_math::{ClusterGrid, DepthSlicing, PlaneSets};
+        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, 0.1, 60.0);
+        let grid = ClusterGrid::new(UVec3::new(25, 11, 16), DepthSlicing::Log, 0.1, 60.0);
+        let sets = PlaneSets::new(&cam, &grid);
+        (grid, sets)
+    }
+
+    /// The whole grid's columns and rows over the depth band `[dc − r, dc + r]`.
+    fn whole_box(grid: &myriad_cluster_math::ClusterGrid, dc: f32, r: f32) -> ClusterBox {
+        let d = grid.dims();
+        ClusterBox {
+            z: ZRange {
+                da: dc - r,
+                db: dc + r,
+                k0: 0,
+                k1: d.z - 1,
+            },
+            i0: 0,
+            i1: d.x - 1,
+            j0: 0,
+            j1: d.y - 1,
+        }
+    }
+
+    /// Ties are kept: a column exactly `R_k` from the centre (`dx² = R_k²` on the row through
+    /// the centre, where `dy = 0`) satisfies `dx² ≤ R_k² − dy²` and must not be cut, from the
+    /// left or the right, while the columns beyond it are. (Cutting on `≥` instead of `>` passed
+    /// every random draw.)
+    #[test]
+    fn refine_slice_keeps_a_column_exactly_r_k_away() {
+        let (grid, sets) = odd_grid();
+        let planes = FramePlanes::new(&sets, &grid);
+        let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
+        let (mid_row, columns) = (grid.dims().y / 2, grid.dims().x);
+        let mut ties = 0;
+        for k in [4u32, 9, 13] {
+            let (z0, z1) = (sets.z_depths[k as usize], sets.z_depths[k as usize + 1]);
+            // The sphere lies inside the slice: its slab is its own band and `R_k = r`, a power of
+            // two, so most edges plus `r` are exact.
+            let (dc, r) = (
+                0.5 * (z0 + z1),
+                2f32.powi((0.125 * (z1 - z0)).log2().floor() as i32),
+            );
+            let b = whole_box(&grid, dc, r);
+            let (ka, kb) = (z0.max(b.z.da), z1.min(b.z.db));
+            assert_eq!(band_radius(dc, r, ka, kb), r);
+            for c in 1..columns - 1 {
+                for left in [true, false] {
+                    // The centre `r` right of column `c`'s right edge, or `r` left of its left
+                    // edge, nudged by ulps until the f32 gap is exactly `r`.
+                    let (s0, s1) = (sets.x_slopes[c as usize], sets.x_slopes[c as usize + 1]);
+                    let edge = if left {
+                        (s1 * ka).max(s1 * kb)
+                    } else {
+                        (s0 * ka).min(s0 * kb)
+                    };
+                    let gap = |cx: f32| if left { cx - edge } else { edge - cx };
+                    let guess = if left { edge + r } else { edge - r };
+                    let Some(cx) = (0..8)
+                        .flat_map(|n| {
+                            let (mut up, mut down) = (guess, guess);
+                            for _ in 0..n {
+                                (up, down) = (up.next_up(), down.next_down());
+                            }
+                            [up, down]
+                        })
+                        .find(|&cx| gap(cx) == r)
+                    else {
+                        continue;
+                    };
+                    let mut got = Vec::new();
+                    refine_slice(cx, 0.0, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
+                        got.extend((i0..=i1).map(|i| (j, i)))
+                    });
+                    let context = format!("slice {k}, column {c}, left {left}, cx {cx}");
+                    assert_eq!(
+                        got,
+                        kept_by_definition(cx, 0.0, dc, r, &b, k, &sets),
+                        "{context}"
+                    );
+                    let mid: Vec<u32> = got
+                        .iter()
+                        .filter(|&&(j, _)| j == mid_row)
+                        .map(|&(_, i)| i)
+                        .collect();
+                    let end = if left { mid.first() } else { mid.last() };
+                    assert_eq!(end, Some(&c), "{context}: the row through the centre");
+                    ties += 1;
+                }
+            }
+        }
+        assert!(ties > 120, "only {ties} exact ties found");
+    }
+
+    /// A slab the sphere only touches (its far point exactly on the slice's near edge, so
+    /// `ka = kb` and `R_k = 0`) keeps the cluster the touching point lies in: `dy = R_k = 0`
+    /// satisfies `dy ≤ R_k`.
+    #[test]
+    fn refine_slice_keeps_the_point_where_a_sphere_touches_a_slice() {
+        let (grid, sets) = odd_grid();
+        let planes = FramePlanes::new(&sets, &grid);
+        let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
+        let d = grid.dims();
+        for k in 1..d.z {
+            let z = sets.z_depths[k as usize];
+            // Powers of two below the slice's depth: `dc + r` and `z − dc` are exact.
+            let r = 2f32.powi((z * 0.25).log2().floor() as i32);
+            let dc = z - r;
+            assert!(dc + r == z && z - dc == r, "slice {k}");
+            let b = whole_box(&grid, dc, r);
+            let mut got = Vec::new();
+            refine_slice(0.0, 0.0, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
+                got.extend((i0..=i1).map(|i| (j, i)))
+            });
+            assert_eq!(
+                got,
+                vec![(d.y / 2, d.x / 2)],
+                "slice {k}: the touching point's cluster"
+            );
+            assert_eq!(got, kept_by_definition(0.0, 0.0, dc, r, &b, k, &sets));
+        }
+    }
+
+    /// The definition holds at every scale of the scene (near plane, depths and radii from 1e-3
+    /// to 1e3 of the first test's): slopes times depths are not confused with sums anywhere,
+    /// whole-slice shortcut included (the slabs nearer than depth 1 are where they differ).
+    #[test]
+    fn refine_slice_keeps_the_clusters_of_its_definition_at_every_scale() {
+        use glam::{UVec3, Vec3};
+        use myriad_cluster_math::{ClusterGrid, DepthSlicing, PlaneSets};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let mut cut = 0usize;
+        for scale in [1e-3f32, 1e-2, 0.1, 10.0, 1e3] {
+            let (near, far) = (0.1 * scale, 60.0 * scale);
+            let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, near, far);
+            let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, near, far);
+            let sets = PlaneSets::new(&cam, &grid);
+            let planes = FramePlanes::new(&sets, &grid);
+            let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
+            for _ in 0..400 {
+                let dc = rng.random_range(0.5..50.0f32) * scale;
+                let (cx, cy) = (rng.random_range(-dc..dc), rng.random_range(-dc..dc) * 0.5);
+                let r = 10f32.powf(rng.random_range(-1.0..1.0)) * scale;
+                let Some(b) = cluster_box(cx, cy, dc, r, &planes) else {
+                    continue;
+                };
+                for k in b.z.k0..=b.z.k1 {
+                    let mut got = Vec::new();
+                    refine_slice(cx, cy, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
+                        got.extend((i0..=i1).map(|i| (j, i)))
+                    });
+                    let want = kept_by_definition(cx, cy, dc, r, &b, k, &sets);
+                    assert_eq!(
+                        got, want,
+                        "scale {scale}: light ({cx}, {cy}, {dc}, r {r}), slice {k}, box {b:?}"
+                    );
+                    cut += ((b.i1 - b.i0 + 1) * (b.j1 - b.j0 + 1)) as usize - got.len();
+                }
+            }
+        }
+        assert!(cut > 1000, "only {cut} clusters cut");
+    }
+
     /// The f64 cull of overflowing lights tests all six planes: a sphere past any one of them by a
     /// millionth of its radius or more is rejected, one reaching into it is kept, and so is one
     /// that only touches a plane (within 1e-9 of the extent past it: the documented tangency
