@@ -432,29 +432,7 @@ mod tests {
                 refine_slice(cx, cy, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
                     got.extend((i0..=i1).map(|i| (j, i)))
                 });
-                let ka = sets.z_depths[k as usize].max(b.z.da);
-                let kb = sets.z_depths[k as usize + 1].min(b.z.db);
-                let mut want = Vec::new();
-                if ka <= kb {
-                    let rk = band_radius(dc, r, ka, kb);
-                    for j in b.j0..=b.j1 {
-                        let (top, bottom) =
-                            (sets.y_slopes[j as usize], sets.y_slopes[j as usize + 1]);
-                        let y_lo = (bottom * ka).min(bottom * kb);
-                        let y_hi = (top * ka).max(top * kb);
-                        let dy = (y_lo - cy).max(cy - y_hi).max(0.0);
-                        for i in b.i0..=b.i1 {
-                            let (s0, s1) =
-                                (sets.x_slopes[i as usize], sets.x_slopes[i as usize + 1]);
-                            let left = cx - (s1 * ka).max(s1 * kb);
-                            let right = (s0 * ka).min(s0 * kb) - cx;
-                            let dx = left.max(right).max(0.0);
-                            if dy <= rk && dx * dx <= (rk - dy) * (rk + dy) {
-                                want.push((j, i));
-                            }
-                        }
-                    }
-                }
+                let want = kept_by_definition(cx, cy, dc, r, &b, k, &sets);
                 assert_eq!(
                     got, want,
                     "light ({cx}, {cy}, {dc}, r {r}), slice {k}, box {b:?}"
