@@ -409,21 +409,40 @@ mod tests {
     /// nor fewer clusters than that.
     #[test]
     fn refine_slice_keeps_exactly_the_clusters_of_its_definition() {
+        use rand::SeedableRng;
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let (kept, cut, whole_slices) = refine_matches_definition(1.0, 3000, &mut rng);
+        // The draw must exercise both the cuts and the whole-slice shortcut.
+        assert!(
+            cut > 1000 && kept > cut && whole_slices > 100,
+            "kept {kept}, cut {cut}, slices kept whole {whole_slices}"
+        );
+    }
+
+    /// Draws `draws` lights in a 70° 1536×768 view with a 24×12×16 log grid, every length (near,
+    /// far, depths, radii) times `scale`, and checks every slice of each light's box:
+    /// `refine_slice` keeps exactly [`kept_by_definition`]'s clusters. Returns the clusters kept,
+    /// the clusters cut and the slices kept whole.
+    fn refine_matches_definition(
+        scale: f32,
+        draws: usize,
+        rng: &mut rand_pcg::Pcg64,
+    ) -> (usize, usize, usize) {
         use crate::search::FramePlanes;
         use glam::{UVec3, Vec3};
-        use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, PlaneSets};
-        use rand::{Rng, SeedableRng};
-        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, 0.1, 60.0);
-        let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 60.0);
+        use myriad_cluster_math::{ClusterGrid, DepthSlicing, PlaneSets};
+        use rand::Rng;
+        let (near, far) = (0.1 * scale, 60.0 * scale);
+        let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, near, far);
+        let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, near, far);
         let sets = PlaneSets::new(&cam, &grid);
         let planes = FramePlanes::new(&sets, &grid);
         let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
         let (mut kept, mut cut, mut whole_slices) = (0usize, 0usize, 0usize);
-        for _ in 0..3000 {
-            let dc = rng.random_range(0.5..50.0f32);
+        for _ in 0..draws {
+            let dc = rng.random_range(0.5..50.0f32) * scale;
             let (cx, cy) = (rng.random_range(-dc..dc), rng.random_range(-dc..dc) * 0.5);
-            let r = 10f32.powf(rng.random_range(-1.0..1.0));
+            let r = 10f32.powf(rng.random_range(-1.0..1.0)) * scale;
             let Some(b) = cluster_box(cx, cy, dc, r, &planes) else {
                 continue;
             };
@@ -435,7 +454,7 @@ mod tests {
                 let want = kept_by_definition(cx, cy, dc, r, &b, k, &sets);
                 assert_eq!(
                     got, want,
-                    "light ({cx}, {cy}, {dc}, r {r}), slice {k}, box {b:?}"
+                    "scale {scale}: light ({cx}, {cy}, {dc}, r {r}), slice {k}, box {b:?}"
                 );
                 let area = ((b.i1 - b.i0 + 1) * (b.j1 - b.j0 + 1)) as usize;
                 kept += got.len();
@@ -443,11 +462,7 @@ mod tests {
                 whole_slices += (got.len() == area) as usize;
             }
         }
-        // The draw must exercise both the cuts and the whole-slice shortcut.
-        assert!(
-            cut > 1000 && kept > cut && whole_slices > 100,
-            "kept {kept}, cut {cut}, slices kept whole {whole_slices}"
-        );
+        (kept, cut, whole_slices)
     }
 
     /// The clusters `(j, i)` of slice `k` of box `b` that `refine_slice`'s definition keeps:
@@ -621,38 +636,11 @@ mod tests {
     /// whole-slice shortcut included (the slabs nearer than depth 1 are where they differ).
     #[test]
     fn refine_slice_keeps_the_clusters_of_its_definition_at_every_scale() {
-        use glam::{UVec3, Vec3};
-        use myriad_cluster_math::{ClusterGrid, DepthSlicing, PlaneSets};
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
         let mut cut = 0usize;
         for scale in [1e-3f32, 1e-2, 0.1, 10.0, 1e3] {
-            let (near, far) = (0.1 * scale, 60.0 * scale);
-            let cam = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, near, far);
-            let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, near, far);
-            let sets = PlaneSets::new(&cam, &grid);
-            let planes = FramePlanes::new(&sets, &grid);
-            let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
-            for _ in 0..400 {
-                let dc = rng.random_range(0.5..50.0f32) * scale;
-                let (cx, cy) = (rng.random_range(-dc..dc), rng.random_range(-dc..dc) * 0.5);
-                let r = 10f32.powf(rng.random_range(-1.0..1.0)) * scale;
-                let Some(b) = cluster_box(cx, cy, dc, r, &planes) else {
-                    continue;
-                };
-                for k in b.z.k0..=b.z.k1 {
-                    let mut got = Vec::new();
-                    refine_slice(cx, cy, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
-                        got.extend((i0..=i1).map(|i| (j, i)))
-                    });
-                    let want = kept_by_definition(cx, cy, dc, r, &b, k, &sets);
-                    assert_eq!(
-                        got, want,
-                        "scale {scale}: light ({cx}, {cy}, {dc}, r {r}), slice {k}, box {b:?}"
-                    );
-                    cut += ((b.i1 - b.i0 + 1) * (b.j1 - b.j0 + 1)) as usize - got.len();
-                }
-            }
+            cut += refine_matches_definition(scale, 400, &mut rng).1;
         }
         assert!(cut > 1000, "only {cut} clusters cut");
     }
