@@ -1319,6 +1319,8 @@ fn render_takes_scene_files_presets_and_sizes() {
         "64x32",
         "--runs",
         "1",
+        "--skips",
+        "cull,active,depth,variants,tune",
         "--out",
         out_dir.to_str().unwrap(),
     ]);
@@ -1328,8 +1330,28 @@ fn render_takes_scene_files_presets_and_sizes() {
             "preset paper (200 lights, seed 1)",
             "64x32",
             "grid 24x12x16",
+            "tuned: depth prepass",
         ],
     );
+    // Tuned, the column reports the timed choice, and its frames ran it: with the prepass off,
+    // no clusters were masked and no depth range fitted.
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
+            .unwrap();
+    let skipping = &stats["with_skips"];
+    assert_eq!(
+        skipping["savings"],
+        serde_json::json!(["cull", "active", "depth", "variants", "tune"])
+    );
+    let decision = &skipping["prepass_decision"];
+    assert_eq!(decision["frames_per_side"], 3);
+    for side in ["with_seconds", "without_seconds"] {
+        assert!(decision[side].as_f64().unwrap() > 0.0, "{decision}");
+    }
+    let on = decision["use_prepass"].as_bool().unwrap();
+    assert_eq!(skipping["active_clusters"].is_u64(), on, "{skipping}");
+    assert_eq!(skipping["fitted_depth_range"].is_array(), on, "{skipping}");
+    assert!(skipping["max_image_difference"].as_u64().unwrap() <= 1);
     // A scene file fixes its own lights; a preset has no model cameras.
     let out = myriad_fails(&[
         "render",

@@ -4,7 +4,7 @@
 
 use myriad::assignment::Method;
 use myriad::gpu::GpuContext;
-use myriad::render::{RenderScene, Shading, Skips, Viewer};
+use myriad::render::{FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer};
 use myriad::scene::{ClusterGrid, Lights, atrium};
 
 fn max_difference(a: &[u8], b: &[u8]) -> u8 {
@@ -194,4 +194,61 @@ fn a_plain_frame_in_between_invalidates_the_reuse_cache() {
         .frame_with_skips(&scene, Method::Binary, Skips::ALL)
         .unwrap();
     assert!(!other.reused, "lists of another method reused");
+}
+
+#[test]
+fn tuned_frames_probe_both_sides_hold_the_choice_and_leave_the_image_unchanged() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    let mut plain = Viewer::new(ctx.clone(), &scene).unwrap();
+    let (expected, _) = render(&mut plain, &scene, Skips::NONE);
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer.set_prepass_tuner(TunerSettings {
+        probe_frames: 2,
+        hold_frames: 3,
+        margin: 0.05,
+    });
+    let mut plans = vec![];
+    for _ in 0..(4 + 3 + 4) {
+        let (image, frame) = render(&mut viewer, &scene, Skips::TUNED);
+        let tuning = frame.tuning.expect("a tuned frame says what it ran");
+        // The frame ran its plan: masked and fitted with the prepass, neither without.
+        assert_eq!(frame.active_clusters.is_some(), tuning.plan.use_prepass);
+        assert_eq!(frame.prepass_seconds > 0.0, tuning.plan.use_prepass);
+        assert!(
+            max_difference(&image, &expected) <= 1,
+            "{:?} changed the image",
+            tuning.plan
+        );
+        plans.push(tuning.plan);
+    }
+    let probe = |use_prepass| FramePlan {
+        use_prepass,
+        probe: true,
+    };
+    // Four probe frames, without first; then the choice held three frames, unmeasured; then a
+    // new probe.
+    assert_eq!(
+        plans[..4],
+        [probe(false), probe(true), probe(false), probe(true)]
+    );
+    let decision = viewer.prepass_decision().expect("decided");
+    assert!(decision.with_seconds > 0.0 && decision.without_seconds > 0.0);
+    let held: Vec<_> = plans[4..7].iter().collect();
+    assert!(
+        held.iter()
+            .all(|p| !p.probe && p.use_prepass == held[0].use_prepass),
+        "{plans:?}"
+    );
+    assert!(plans[7..].iter().all(|p| p.probe), "{plans:?}");
+    // Without a saving that needs the prepass there is nothing to tune.
+    let cull_only = Skips {
+        cull: true,
+        tune_prepass: true,
+        ..Skips::NONE
+    };
+    let (_, frame) = render(&mut viewer, &scene, cull_only);
+    assert!(frame.tuning.is_none());
 }

@@ -61,8 +61,9 @@ pub struct Args {
     #[arg(long, value_parser = super::at_least_one, default_value_t = 5)]
     runs: usize,
     /// Savings for the `clustered+skips` column: "none" (no such column), "all", or a comma
-    /// list of cull, active, depth, reuse, variants (see `myriad skips`) [default: all but
-    /// reuse, which would turn the repeated frames of a still scene into no work at all].
+    /// list of cull, active, depth, reuse, variants (see `myriad skips`), and "tune" to keep
+    /// active and depth only if timed frames show that their depth prepass pays [default: all
+    /// but reuse, which would turn the repeated frames of a still scene into no work at all].
     #[arg(long)]
     skips: Option<Skips>,
 }
@@ -630,6 +631,15 @@ fn print_table(s: &Stats) {
         }
         if let Some([n, f]) = w.fitted_depth_range {
             notes.push(format!("depth range fitted to [{n:.3}, {f:.3}]"));
+        }
+        if let Some(d) = w.prepass_decision {
+            notes.push(format!(
+                "tuned: depth prepass {} (frames {:.2} ms with it, {:.2} ms without, medians of {} probes each)",
+                if d.use_prepass { "on" } else { "off" },
+                d.with_seconds * 1e3,
+                d.without_seconds * 1e3,
+                d.frames_per_side
+            ));
         }
         notes.push(format!(
             "largest difference from the clustered image {}/255",

@@ -7,7 +7,7 @@ use super::progress::Progress;
 use super::render::{FrameSamples, StrategyResult, timed_frames};
 use anyhow::{Context, Result};
 use myriad::assignment::Method;
-use myriad::render::{RenderScene, SkipFrame, Skips, Viewer, pixel_stats};
+use myriad::render::{PrepassDecision, RenderScene, SkipFrame, Skips, Viewer, pixel_stats};
 use serde::Serialize;
 
 /// Name of the column in the table and of the strategy in `stats.json`.
@@ -31,8 +31,15 @@ pub struct WithSkips {
     pub prepass_ms: f64,
     /// Depth buffer → fitted range and active clusters, on the CPU.
     pub mask_ms: f64,
+    /// With `tune`: the tuner's choice the timed frames ran (its probes are the warm-up).
+    pub prepass_decision: Option<PrepassDecision>,
     /// Largest channel difference (of 255) from the plain clustered image.
     pub max_image_difference: u8,
+}
+
+/// Frames the tuner may take to decide: its probes, plus one for a frame that did not count.
+fn tuning_frames(viewer: &Viewer) -> usize {
+    2 * viewer.prepass_tuner_settings().probe_frames + 1
 }
 
 /// Times `runs` frames with `skips` (after one untimed frame, which also builds the pipeline
@@ -46,6 +53,19 @@ pub fn measure(
     clustered_image: &[u8],
     progress: &Progress,
 ) -> Result<WithSkips> {
+    // Tuned: the probes first, untimed, so the timed frames all run the choice they settle on.
+    if skips.tune_prepass {
+        for _ in 0..tuning_frames(viewer) {
+            if viewer.prepass_decision().is_some() {
+                break;
+            }
+            viewer.frame_with_skips(scene, method, skips)?;
+            viewer.ctx.wait_idle()?;
+        }
+        viewer
+            .prepass_decision()
+            .context("the prepass tuner decided within its probe frames")?;
+    }
     let mut samples = FrameSamples::default();
     let (mut prepass, mut mask) = (vec![], vec![]);
     let mut assigned: Option<SkipFrame> = None;
@@ -102,9 +122,13 @@ pub fn measure(
         lights_assigned: assigned.lights_assigned,
         active_clusters: assigned.active_clusters,
         clusters: frame.grid.cluster_count(),
-        fitted_depth_range: skips
-            .fitted_depth
+        // Tuned off, the frames ran without the prepass, so without fitting.
+        fitted_depth_range: (skips.fitted_depth && frame.tuning.is_none_or(|t| t.plan.use_prepass))
             .then(|| [frame.grid.near(), frame.grid.far()]),
+        prepass_decision: skips
+            .tune_prepass
+            .then(|| viewer.prepass_decision())
+            .flatten(),
         prepass_ms: median(prepass),
         mask_ms: median(mask),
         max_image_difference,

@@ -23,6 +23,7 @@
 //! `depth_buffer.rs`.
 
 use super::depth_buffer::{fitted_grid, mark_active};
+use super::prepass_tuner::{PrepassDecision, PrepassTuner, TunedFrame, TunerSettings};
 use super::setup::RenderScene;
 use super::viewer::{Viewer, cluster_lists, light_columns};
 use crate::light_input;
@@ -46,6 +47,9 @@ pub struct Skips {
     pub reuse_unchanged: bool,
     /// No spot code without spots, no forward pass without blended geometry.
     pub feature_variants: bool,
+    /// Apply `active_clusters` and `fitted_depth` only while timed frames show that their depth
+    /// prepass pays ([`PrepassTuner`]); without either, nothing to decide.
+    pub tune_prepass: bool,
 }
 
 impl Skips {
@@ -56,14 +60,16 @@ impl Skips {
         fitted_depth: false,
         reuse_unchanged: false,
         feature_variants: false,
+        tune_prepass: false,
     };
-    /// Every saving on.
+    /// Every saving on, always (no tuning).
     pub const ALL: Skips = Skips {
         cull: true,
         active_clusters: true,
         fitted_depth: true,
         reuse_unchanged: true,
         feature_variants: true,
+        tune_prepass: false,
     };
 
     /// The savings that leave a frame's work the same when nothing moved: every one but
@@ -75,8 +81,18 @@ impl Skips {
         ..Skips::ALL
     };
 
+    /// [`PER_FRAME`](Self::PER_FRAME) with the prepass savings tuned: what to run where the
+    /// GPU is not known in advance.
+    pub const TUNED: Skips = Skips {
+        tune_prepass: true,
+        ..Skips::PER_FRAME
+    };
+
     /// The name of each saving in [`Skips::from_str`](std::str::FromStr), with its switch.
     pub const NAMES: [&'static str; 5] = ["cull", "active", "depth", "reuse", "variants"];
+    /// The name of [`tune_prepass`](Self::tune_prepass) in the same lists: a policy over two
+    /// savings rather than a saving, so not in [`NAMES`](Self::NAMES).
+    pub const TUNE: &'static str = "tune";
 
     fn switch(&mut self, name: &str) -> Option<&mut bool> {
         Some(match name {
@@ -85,21 +101,34 @@ impl Skips {
             "depth" => &mut self.fitted_depth,
             "reuse" => &mut self.reuse_unchanged,
             "variants" => &mut self.feature_variants,
+            Skips::TUNE => &mut self.tune_prepass,
             _ => return None,
         })
     }
 
-    /// The names of the savings switched on, in [`Skips::NAMES`] order.
+    /// The names of the savings switched on, in [`Skips::NAMES`] order, then
+    /// [`Skips::TUNE`] when tuned.
     pub fn names(self) -> Vec<&'static str> {
         let mut copy = self;
         Skips::NAMES
             .into_iter()
+            .chain([Skips::TUNE])
             .filter(|name| copy.switch(name).is_some_and(|on| *on))
             .collect()
     }
 
     fn needs_prepass(self) -> bool {
         self.active_clusters || self.fitted_depth
+    }
+
+    /// These savings without the two that need the prepass (and without tuning them).
+    fn without_prepass(self) -> Skips {
+        Skips {
+            active_clusters: false,
+            fitted_depth: false,
+            tune_prepass: false,
+            ..self
+        }
     }
 }
 
@@ -122,8 +151,10 @@ impl std::str::FromStr for Skips {
                 None => {
                     return Err(format!(
                         "unknown saving {name:?} in {text:?}: expected \"all\", \"none\" or a \
-                         comma-separated list of {}",
-                        Skips::NAMES.join(", ")
+                         comma-separated list of {} (and {:?} to apply active and depth only \
+                         where they pay)",
+                        Skips::NAMES.join(", "),
+                        Skips::TUNE
                     ));
                 }
             }
@@ -160,6 +191,9 @@ pub struct SkipFrame {
     pub grid: ClusterGrid,
     /// Active clusters, when masked.
     pub active_clusters: Option<usize>,
+    /// With [`Skips::tune_prepass`]: what the tuner planned for this frame and its choice after
+    /// it.
+    pub tuning: Option<TunedFrame>,
 }
 
 /// What the last frame left for the next one.
@@ -183,6 +217,7 @@ pub struct SkipState {
     visible: Lights,
     mask: Option<ActiveClusters>,
     cache: Option<Cache>,
+    tuner: PrepassTuner,
 }
 
 impl Viewer {
@@ -199,12 +234,66 @@ impl Viewer {
             ..self.settings
         };
         let mut state = std::mem::take(&mut self.skip_state);
-        let result = self.skipping_frame(scene, method, skips, settings, &mut state);
+        let result = if skips.tune_prepass && skips.needs_prepass() {
+            self.tuned_frame(scene, method, skips, settings, &mut state)
+        } else {
+            self.skipping_frame(scene, method, skips, settings, &mut state)
+        };
         self.skip_state = state;
         if result.is_ok() {
             crate::profiling::frame_mark();
         }
         result
+    }
+
+    /// Starts the prepass tuner of [`Skips::tune_prepass`] over with `settings` (the default:
+    /// [`TunerSettings::default`]).
+    pub fn set_prepass_tuner(&mut self, settings: TunerSettings) {
+        self.skip_state.tuner = PrepassTuner::new(settings);
+    }
+
+    /// The settings the prepass tuner runs with.
+    pub fn prepass_tuner_settings(&self) -> TunerSettings {
+        self.skip_state.tuner.settings()
+    }
+
+    /// The prepass tuner's choice in force (`None` before its first probe ends).
+    pub fn prepass_decision(&self) -> Option<PrepassDecision> {
+        self.skip_state.tuner.decision()
+    }
+
+    /// A frame with the prepass savings applied as the tuner plans. A probe frame waits for the
+    /// GPU, so its time is the whole frame's: cull, prepass and read-back, mask, assignment,
+    /// upload and every pass.
+    fn tuned_frame(
+        &mut self,
+        scene: &RenderScene,
+        method: Method,
+        skips: Skips,
+        settings: ShadingSettings,
+        state: &mut SkipState,
+    ) -> Result<SkipFrame> {
+        let plan = state.tuner.plan();
+        let applied = if plan.use_prepass {
+            skips
+        } else {
+            skips.without_prepass()
+        };
+        let start = Instant::now();
+        let mut frame = self.skipping_frame(scene, method, applied, settings, state)?;
+        // A reused frame ran neither side's work: it times nothing, and the probe waits.
+        let ran = !frame.reused && !frame.appearance_only;
+        if plan.probe && ran {
+            self.ctx.wait_idle()?;
+            state.tuner.record(plan, start.elapsed().as_secs_f64());
+        } else if !plan.probe {
+            state.tuner.record(plan, 0.0);
+        }
+        frame.tuning = Some(TunedFrame {
+            plan,
+            decision: state.tuner.decision(),
+        });
+        Ok(frame)
     }
 
     fn skipping_frame(
@@ -229,6 +318,7 @@ impl Viewer {
             report: FrameReport::default(),
             grid: scene.grid,
             active_clusters: None,
+            tuning: None,
         };
         // 4. Dirty tracking.
         if let Some(cache) = state.cache.as_ref().filter(|c| {
@@ -429,6 +519,12 @@ mod tests {
         assert_eq!(per_frame.names(), ["cull", "active", "depth", "variants"]);
         assert_eq!(Skips::ALL.names(), Skips::NAMES);
         assert!(Skips::NONE.names().is_empty());
+        let tuned: Skips = "cull,active,depth,variants,tune".parse().unwrap();
+        assert_eq!(tuned, Skips::TUNED);
+        assert_eq!(
+            tuned.names(),
+            ["cull", "active", "depth", "variants", "tune"]
+        );
         let reuse: Skips = "reuse".parse().unwrap();
         assert_eq!(
             reuse,
