@@ -502,3 +502,203 @@ fn a_scene_scaled_down_to_the_smallest_near_keeps_its_lists() {
         }
     }
 }
+
+/// World position (rounded to f32) of a view-space point given in f64.
+fn world_of_f64(camera: &Camera, view: glam::DVec3) -> Vec3 {
+    let (r, u, f) = camera.basis_f64();
+    (camera.position.as_dvec3() + r * view.x + u * view.y - f * view.z).as_vec3()
+}
+
+/// The smallest positive f32 in `(lo, hi]` for which `touches` holds, by bisecting the bit
+/// patterns (which order positive floats): `touches(hi)` must hold and `touches(lo)` must not.
+fn first_touching_f32(lo: f32, hi: f32, touches: impl Fn(f32) -> bool) -> f32 {
+    let (mut lo, mut hi) = (lo.to_bits(), hi.to_bits());
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if touches(f32::from_bits(mid)) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    f32::from_bits(hi)
+}
+
+/// Lights placed at the oracle's own boundary, to the last f32, around random clusters of extreme
+/// views: a ball grown from a point outside until it first touches the cluster (radius bisected
+/// over its f32 bit patterns), a ball of fixed radius slid in from outside to the last f32 world
+/// position that still touches it, and spots aimed past the cluster whose range or half angle is
+/// bisected the same way. Each touches its cluster by the oracle's own verdict on the very f32
+/// inputs the methods get, by the least a light can, so every method's padding is tested at zero
+/// slack — at fields of view from 0.5° to 179°, an eye 10⁶ from the origin, a 10¹¹ depth ratio.
+#[test]
+fn lights_at_the_oracles_boundary_to_the_last_f32() {
+    use glam::DVec3;
+    use myriad_cluster_math::oracle::{Cell, OracleView};
+    let views = [
+        // (eye, forward, fov°, width, height, near, far, dims, slicing)
+        (
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            60.0,
+            320,
+            180,
+            0.1,
+            100.0,
+            UVec3::new(6, 4, 6),
+            1,
+        ),
+        (
+            Vec3::new(3.0, -2.0, 1.0),
+            Vec3::X,
+            179.0,
+            1000,
+            100,
+            0.01,
+            1e4,
+            UVec3::new(9, 3, 5),
+            0,
+        ),
+        (
+            Vec3::new(-5.0, 1.0, 2.0),
+            Vec3::new(0.2, 0.1, -1.0),
+            0.5,
+            100,
+            1000,
+            1.0,
+            1e3,
+            UVec3::new(3, 9, 6),
+            2,
+        ),
+        (
+            Vec3::new(1.0e6, -2.0e5, 4.0e5),
+            Vec3::new(-0.3, 0.2, 0.9),
+            75.0,
+            640,
+            360,
+            0.01,
+            1e5,
+            UVec3::new(7, 5, 8),
+            1,
+        ),
+        (
+            Vec3::new(2.0, 3.0, 4.0),
+            Vec3::new(0.5, -0.7, 0.5),
+            90.0,
+            256,
+            256,
+            1e-4,
+            1e7,
+            UVec3::new(5, 5, 9),
+            1,
+        ),
+        (
+            Vec3::new(0.0, 50.0, 0.0),
+            Vec3::NEG_Y,
+            120.0,
+            300,
+            200,
+            0.5,
+            500.0,
+            UVec3::new(6, 4, 7),
+            0,
+        ),
+    ];
+    let mut rng = rand::rngs::StdRng::seed_from_u64(0xB0DA);
+    for (eye, forward, fov, w, h, near, far, dims, slicing) in views {
+        let step = (eye.length() * 1e-3).max(1.0);
+        let camera = Camera::new(eye, eye + forward * step, Vec3::Y, fov, w, h, near, far);
+        let grid = ClusterGrid::new(dims, slicing_of(slicing, near, far), near, far);
+        let oracle = OracleView::new(&camera);
+        let touches = |cell: &Cell, p: Vec3, r: f32, spot: Option<(Vec3, f32)>| {
+            oracle
+                .light(p, r, spot)
+                .is_some_and(|v| v.intersects_cell(cell))
+        };
+        let mut lights = Columns::default();
+        for _ in 0..24 {
+            let (i, j, k) = (
+                rng.random_range(0..dims.x),
+                rng.random_range(0..dims.y),
+                rng.random_range(0..dims.z),
+            );
+            let cell = Cell::of_cluster(&camera, &grid, i, j, k);
+            let corners = cell.corners();
+            let centre = corners.iter().sum::<DVec3>() / 8.0;
+            let size = corners
+                .iter()
+                .map(|c| c.distance(centre))
+                .fold(0.0, f64::max);
+            let dir = random_dir(&mut rng).as_dvec3();
+            // A point outside: from the cell's centre past its farthest corner.
+            let outside = |scale: f64| world_of_f64(&camera, centre + dir * size * scale);
+            let start = outside(rng.random_range(1.2..4.0));
+            if touches(&cell, start, f32::MIN_POSITIVE, None) {
+                continue; // rounding put the point back inside a very thin cell
+            }
+            let reach = (start.as_dvec3() - camera.position.as_dvec3()).length() as f32
+                + (size * 8.0) as f32
+                + 1.0;
+            // 1. Grown: the smallest f32 radius that touches.
+            let r =
+                first_touching_f32(f32::MIN_POSITIVE, reach, |r| touches(&cell, start, r, None));
+            lights.push(start, r);
+            // 2. Slid: radius a random fraction of the cell, centre moved in from outside along
+            // `dir` to the last f32 world position that touches (a parameter bisected in f64,
+            // each probe rounded to f32 as an engine would hand it over).
+            let radius = (size * 10f64.powf(rng.random_range(-4.0..0.5))) as f32;
+            let at = |t: f64| world_of_f64(&camera, centre + dir * t);
+            let (mut inside, mut out) = (0.0f64, size * 4.0 + radius as f64 * 2.0);
+            if touches(&cell, at(inside), radius, None) && !touches(&cell, at(out), radius, None) {
+                for _ in 0..200 {
+                    let mid = 0.5 * (inside + out);
+                    if mid <= inside || mid >= out {
+                        break;
+                    }
+                    if touches(&cell, at(mid), radius, None) {
+                        inside = mid;
+                    } else {
+                        out = mid;
+                    }
+                }
+                lights.push(at(inside), radius);
+            }
+            // 3. A spot at `start` aimed at the cell's centre, its range grown until it touches.
+            let to_cell = (world_of_f64(&camera, centre) - start).normalize_or_zero();
+            if to_cell != Vec3::ZERO {
+                let angle = rng.random_range(0.01f32..1.5);
+                let spot = Some((to_cell, angle));
+                if touches(&cell, start, reach, spot) {
+                    let range = first_touching_f32(f32::MIN_POSITIVE, reach, |r| {
+                        touches(&cell, start, r, spot)
+                    });
+                    lights.push_spot(start, range, to_cell, angle);
+                }
+                // 4. Aimed away from the cell (a random axis at least 60° off it), with a range
+                // that reaches it: the half angle grown until the cone first touches.
+                let axis = random_dir(&mut rng);
+                if axis.dot(to_cell) < 0.5 && !touches(&cell, start, reach, Some((axis, 1e-30))) {
+                    let half_pi = std::f32::consts::FRAC_PI_2;
+                    if touches(&cell, start, reach, Some((axis, half_pi))) {
+                        let angle = first_touching_f32(1e-30, half_pi, |a| {
+                            touches(&cell, start, reach, Some((axis, a)))
+                        });
+                        lights.push_spot(start, reach, axis, angle);
+                    }
+                }
+            }
+        }
+        assert!(
+            lights.len() >= 60,
+            "only {} boundary lights placed",
+            lights.len()
+        );
+        let scene = Scene {
+            camera,
+            grid,
+            lights,
+        };
+        let context = format!("boundary lights, fov {fov}, eye {eye}, near {near}, far {far}");
+        check(&scene, true, &context);
+    }
+}
