@@ -42,6 +42,11 @@
 //!   `ClusterGrid::MIN_NEAR` (1e-12), and a scene scaled down to it keeps its lists exactly
 //!   (`a_scene_scaled_down_to_the_smallest_near_keeps_its_lists`).
 //!
+//! * **At the boundary.** Lights bisected, over f32 inputs, to the least contact the oracle
+//!   accepts (`lights_at_the_oracles_boundary_to_the_last_f32`): every method lists them. With
+//!   `RADIUS_PAD` at 0 `linear` misses one at the first view; at 1e-7 (40× below the shipped pad)
+//!   none is missed here — the shipped pad's room is for the parameter box's worst cases.
+//!
 //! Any case the suite ever finds to miss is added below as a fixed regression case.
 
 mod common;
