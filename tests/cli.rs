@@ -1100,9 +1100,30 @@ fn frames_compares_sequential_and_pipelined_loops() {
     for l in loops {
         assert_eq!(l["frames"], 4);
         assert!(l["assign_ms"].as_f64().unwrap() > 0.0);
-        assert!(l["upload_bytes"].as_f64().unwrap() > 3000.0 * 48.0);
         assert!(l["frame_ms"].as_f64().unwrap() > 0.0);
+        // Culled by default: some of the orbiting lights are outside the view.
+        let uploaded = l["lights_uploaded"].as_f64().unwrap();
+        assert!(uploaded > 0.0 && uploaded < 3000.0, "{uploaded}");
+        assert!(l["cull_ms"].as_f64().unwrap() > 0.0);
+        assert!(l["upload_bytes"].as_f64().unwrap() > uploaded * 48.0);
     }
+    let out = myriad_ok(&[
+        "frames",
+        "--lights",
+        "3000",
+        "--size",
+        "64x32",
+        "--frames",
+        "2",
+        "--no-cull",
+    ]);
+    assert_mentions(
+        &stdout(&out),
+        &[
+            "every light assigned and uploaded",
+            "lights assigned and uploaded",
+        ],
+    );
     let out = myriad_fails(&["frames", "--frames", "1"]);
     assert_mentions(&out, &["--frames", "at least 2"]);
 }

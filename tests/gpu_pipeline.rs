@@ -1,11 +1,18 @@
 //! The pipelined frame loop (assignment on a worker thread, uploads through the staging ring)
-//! renders exactly the frames the sequential loop renders, and moving lights change the image.
+//! renders exactly the frames the sequential loop renders, and moving lights change the image;
+//! culling the lights before assignment and upload sends fewer and changes no image.
 
 use myriad::assignment::Method;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer, read_rgba8};
-use myriad::render::{GpuStage, RenderScene, run_frames};
+use myriad::render::{GpuStage, LoopReport, RenderScene, run_frames};
 
-fn frames(ctx: &GpuContext, scene: &RenderScene, pipelined: bool, count: usize) -> Vec<Vec<u8>> {
+fn frames(
+    ctx: &GpuContext,
+    scene: &RenderScene,
+    pipelined: bool,
+    cull: bool,
+    count: usize,
+) -> (Vec<Vec<u8>>, LoopReport) {
     let mut renderer = Renderer::new(ctx, HEADLESS_FORMAT);
     let gpu_scene = renderer.upload_scene(ctx, &scene.geometry).unwrap();
     let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height).unwrap();
@@ -23,6 +30,7 @@ fn frames(ctx: &GpuContext, scene: &RenderScene, pipelined: bool, count: usize) 
         Method::Refined,
         count,
         pipelined,
+        cull,
         |_, gpu| {
             images.push(read_rgba8(gpu.ctx, &gpu.target.texture)?);
             Ok(())
@@ -36,7 +44,15 @@ fn frames(ctx: &GpuContext, scene: &RenderScene, pipelined: bool, count: usize) 
             .iter()
             .all(|f| f.pairs > 0 && f.upload_bytes > 0)
     );
-    images
+    (images, report)
+}
+
+fn max_difference(a: &[u8], b: &[u8]) -> u8 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
 }
 
 #[test]
@@ -45,8 +61,8 @@ fn pipelined_frames_equal_sequential_frames() {
         return;
     };
     let scene = RenderScene::default_scene(3000, 160, 80).unwrap();
-    let sequential = frames(&ctx, &scene, false, 5);
-    let pipelined = frames(&ctx, &scene, true, 5);
+    let (sequential, _) = frames(&ctx, &scene, false, false, 5);
+    let (pipelined, _) = frames(&ctx, &scene, true, false, 5);
     for (n, (a, b)) in sequential.iter().zip(&pipelined).enumerate() {
         assert!(
             a == b,
@@ -57,4 +73,36 @@ fn pipelined_frames_equal_sequential_frames() {
         sequential[0] != sequential[4],
         "the lights move, so frames differ"
     );
+}
+
+#[test]
+fn culled_frames_upload_fewer_lights_and_look_the_same() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(3000, 160, 80).unwrap();
+    let (all, every) = frames(&ctx, &scene, false, false, 4);
+    let (culled, sequential) = frames(&ctx, &scene, false, true, 4);
+    let (culled_pipelined, pipelined) = frames(&ctx, &scene, true, true, 4);
+    assert!(!every.culled && sequential.culled && pipelined.culled);
+    for n in 0..4 {
+        assert!(
+            culled[n] == culled_pipelined[n],
+            "culled frame {n} differs between the loops"
+        );
+        let d = max_difference(&all[n], &culled[n]);
+        assert!(d <= 1, "culling changed frame {n} by {d}/255");
+        let (a, c) = (&every.frames[n], &sequential.frames[n]);
+        assert_eq!(a.lights_uploaded, scene.lights.len());
+        assert!(
+            c.lights_uploaded < a.lights_uploaded && c.upload_bytes < a.upload_bytes,
+            "frame {n}: {} of {} lights, {} of {} bytes uploaded",
+            c.lights_uploaded,
+            a.lights_uploaded,
+            c.upload_bytes,
+            a.upload_bytes
+        );
+        assert_eq!(c.lights_uploaded, pipelined.frames[n].lights_uploaded);
+        assert!(c.cull_seconds > 0.0 && a.cull_seconds == 0.0);
+    }
 }

@@ -24,6 +24,9 @@ pub struct Args {
     /// Assignment method.
     #[arg(long, default_value = "refined")]
     method: String,
+    /// Assign and upload every light, not only those the frustum cull keeps.
+    #[arg(long)]
+    no_cull: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -36,6 +39,8 @@ struct Summary {
     frame_ms: f64,
     stage_sum_ms: f64,
     animate_ms: f64,
+    cull_ms: f64,
+    lights_uploaded: f64,
     assign_ms: f64,
     upload_ms: f64,
     upload_bytes: f64,
@@ -63,6 +68,8 @@ fn summary(r: &LoopReport) -> Summary {
         frame_ms: r.steady_frame_seconds().unwrap_or(0.0) * 1e3,
         stage_sum_ms: ms(&|f| f.sum_seconds()),
         animate_ms: ms(&|f| f.animate_seconds),
+        cull_ms: ms(&|f| f.cull_seconds),
+        lights_uploaded: steady.mean(|f| f.lights_uploaded as f64),
         assign_ms: ms(&|f| f.assign_seconds),
         upload_ms: ms(&|f| f.upload_seconds),
         upload_bytes: steady.mean(|f| f.upload_bytes as f64),
@@ -100,6 +107,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             method,
             args.frames,
             pipelined,
+            !args.no_cull,
             |_, _| Ok(()),
         )?;
         results.push(summary(&report));
@@ -109,10 +117,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     println!(
-        "{} — {} lights orbiting, {width}x{height}, method {}, {} frames per loop, GPU: {}",
+        "{} — {} lights orbiting, {width}x{height}, method {}, {}, {} frames per loop, GPU: {}",
         scene.name,
         scene.lights.len(),
         method.name(),
+        if args.no_cull {
+            "every light assigned and uploaded"
+        } else {
+            "frustum-culled before assignment and upload"
+        },
         args.frames,
         ctx.describe()
     );
@@ -124,6 +137,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
         println!("{name:<34} {:>12} {:>12}", f(&results[0]), f(&results[1]));
     };
     row("animate lights (CPU)", &|s| format!("{:.3}", s.animate_ms));
+    row("cull + gather (CPU)", &|s| format!("{:.3}", s.cull_ms));
+    row("lights assigned and uploaded", &|s| {
+        format!("{:.0}", s.lights_uploaded)
+    });
     row("light assignment (CPU)", &|s| format!("{:.3}", s.assign_ms));
     row("upload: convert + stage (CPU)", &|s| {
         format!("{:.3}", s.upload_ms)

@@ -56,9 +56,15 @@ fn every_rendered_frame_is_marked_once() {
     };
     for pipelined in [false, true] {
         let drawn = marks(|| {
-            run_frames(&mut gpu, &scene, Method::Refined, 3, pipelined, |_, _| {
-                Ok(())
-            })
+            run_frames(
+                &mut gpu,
+                &scene,
+                Method::Refined,
+                3,
+                pipelined,
+                true,
+                |_, _| Ok(()),
+            )
             .unwrap();
         });
         assert_eq!(drawn, 3, "run_frames, pipelined: {pipelined}");

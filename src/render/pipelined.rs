@@ -1,16 +1,20 @@
 //! The frame loop, two ways, so one measurement can show what pipelining buys:
 //!
-//! * **sequential** — per frame, on one thread: animate the lights, assign, upload, render, wait
-//!   for the GPU;
-//! * **pipelined** — a worker thread animates and assigns frame N+1 while the main thread uploads
-//!   and renders frame N. The two talk over crossbeam channels: the worker sends finished
+//! * **sequential** — per frame, on one thread: animate the lights, cull, assign, upload, render,
+//!   wait for the GPU;
+//! * **pipelined** — a worker thread animates, culls and assigns frame N+1 while the main thread
+//!   uploads and renders frame N. The two talk over crossbeam channels: the worker sends finished
 //!   frames (lights + lists) on a bounded channel, the main thread sends the buffers back once
 //!   the GPU has copied them, so after the first frames nothing is allocated and at most
 //!   [`FRAMES_IN_FLIGHT`] frames exist at once. The GPU side uploads through the renderer's
 //!   staging ring.
 //!
 //! Both produce the same frames (the lights at frame N depend only on N), so the images match;
-//! `tests/gpu_pipeline.rs` checks that. The per-stage times are what each stage took; the
+//! `tests/gpu_pipeline.rs` checks that. With `cull` (the scene systems' frustum cull,
+//! [`cull_lights`]) only the lights that may touch the view are gathered, assigned and uploaded:
+//! the ECS-style frame of ARCHITECTURE.md, animate → cull → assign → upload. The assignment
+//! drops an outside light in its first test anyway; what the cull saves is the upload (at 100k
+//! orbiting lights in the atrium, a quarter of the bytes) and the GPU's copies of it. The per-stage times are what each stage took; the
 //! frame time is the wall time from one frame end to the next (the first frame, which builds
 //! pipelines and buffers, left out).
 
@@ -24,7 +28,7 @@ use myriad_gpu::{
     FrameDesc, GpuContext, GpuScene, HeadlessTarget, PassTimes, Renderer, ShadingSettings,
 };
 use myriad_scene::Lights;
-use myriad_scene::systems::{Orbits, animate_orbits};
+use myriad_scene::systems::{Orbits, Visibility, animate_orbits, cull_lights};
 use std::time::Instant;
 
 /// Frames the worker may be ahead of the renderer (buffer sets in circulation).
@@ -39,6 +43,10 @@ const FRAME_DT: f64 = 1.0 / 60.0;
 pub struct StageTimes {
     /// CPU: animating the lights.
     pub animate_seconds: f64,
+    /// CPU: frustum cull and gather of the visible lights (0 without `cull`).
+    pub cull_seconds: f64,
+    /// Lights assigned and uploaded (the visible ones with `cull`).
+    pub lights_uploaded: usize,
     /// CPU: light assignment.
     pub assign_seconds: f64,
     /// CPU: converting and staging lights and lists.
@@ -59,6 +67,7 @@ impl StageTimes {
     /// Sum of the stages (what a frame costs when nothing overlaps).
     pub fn sum_seconds(&self) -> f64 {
         self.animate_seconds
+            + self.cull_seconds
             + self.assign_seconds
             + self.upload_seconds
             + self.encode_seconds
@@ -71,6 +80,8 @@ impl StageTimes {
 pub struct LoopReport {
     /// Whether assignment ran on the worker.
     pub pipelined: bool,
+    /// Whether lights were culled before assignment and upload.
+    pub culled: bool,
     /// Per frame.
     pub frames: Vec<StageTimes>,
     /// Wall seconds for all frames.
@@ -102,10 +113,25 @@ impl LoopReport {
 struct FrameWork {
     index: usize,
     lights: Lights,
+    /// The visible lights, gathered (with `cull`).
+    visible: Lights,
+    culled: bool,
     lists: LightLists,
     stats: AssignStats,
     animate_seconds: f64,
+    cull_seconds: f64,
     assign_seconds: f64,
+}
+
+impl FrameWork {
+    /// The lights the lists index: what the frame assigns and uploads.
+    fn assigned(&self) -> &Lights {
+        if self.culled {
+            &self.visible
+        } else {
+            &self.lights
+        }
+    }
 }
 
 /// Animates lights and assigns them: the CPU half of a frame, owned by whichever thread runs it.
@@ -114,10 +140,12 @@ struct CpuStage<'a> {
     orbits: Orbits,
     assigner: Assigner,
     method: Method,
+    /// `Some` to cull: the cull's output, reused frame to frame.
+    visibility: Option<Visibility>,
 }
 
 impl<'a> CpuStage<'a> {
-    fn new(scene: &'a RenderScene, method: Method) -> Self {
+    fn new(scene: &'a RenderScene, method: Method, cull: bool) -> Self {
         let center = scene.camera.target;
         let orbits = Orbits::around(center, &scene.lights.x, &scene.lights.z, [0.1, 0.5], 7);
         Self {
@@ -125,6 +153,7 @@ impl<'a> CpuStage<'a> {
             orbits,
             assigner: Assigner::new(),
             method,
+            visibility: cull.then(Visibility::new),
         }
     }
 
@@ -147,10 +176,24 @@ impl<'a> CpuStage<'a> {
             &mut lights.z,
         );
         work.animate_seconds = start.elapsed().as_secs_f64();
+        work.culled = self.visibility.is_some();
+        work.cull_seconds = 0.0;
+        if let Some(visibility) = &mut self.visibility {
+            let start = Instant::now();
+            cull_lights(&self.scene.camera, work.lights.slices(), visibility);
+            work.lights
+                .gather_into(&visibility.indices, &mut work.visible);
+            work.cull_seconds = start.elapsed().as_secs_f64();
+        }
         let start = Instant::now();
+        let assigned = if work.culled {
+            &work.visible
+        } else {
+            &work.lights
+        };
         work.stats = self.assigner.assign(
             self.method,
-            &light_input(&work.lights),
+            &light_input(assigned),
             &self.scene.camera,
             &self.scene.grid,
             &mut work.lists,
@@ -163,9 +206,12 @@ fn empty_work() -> FrameWork {
     FrameWork {
         index: 0,
         lights: Lights::new(),
+        visible: Lights::new(),
+        culled: false,
         lists: LightLists::new(),
         stats: AssignStats::default(),
         animate_seconds: 0.0,
+        cull_seconds: 0.0,
         assign_seconds: 0.0,
     }
 }
@@ -193,7 +239,7 @@ impl GpuStage<'_> {
             ..FrameDesc::clustered(
                 &scene.camera,
                 &grid,
-                light_columns(&work.lights),
+                light_columns(work.assigned()),
                 cluster_lists(&work.lists),
             )
         };
@@ -209,6 +255,8 @@ impl GpuStage<'_> {
         let gpu_wait_seconds = start.elapsed().as_secs_f64();
         Ok(StageTimes {
             animate_seconds: work.animate_seconds,
+            cull_seconds: work.cull_seconds,
+            lights_uploaded: work.assigned().len(),
             assign_seconds: work.assign_seconds,
             upload_seconds: report.upload_seconds,
             upload_bytes: report.upload_bytes,
@@ -220,8 +268,9 @@ impl GpuStage<'_> {
     }
 }
 
-/// Runs `frames` frames of `scene` with its lights orbiting the camera's target. `on_frame`
-/// sees each finished frame's index (the target holds its image), e.g. to read it back.
+/// Runs `frames` frames of `scene` with its lights orbiting the camera's target, frustum-culled
+/// before assignment and upload when `cull`. `on_frame` sees each finished frame's index (the
+/// target holds its image), e.g. to read it back.
 ///
 /// The sequential loop assigns on the rayon pool current where it is called. The pipelined
 /// loop's CPU stage runs on its own thread, whose assignment uses rayon's **global** pool: rayon
@@ -234,15 +283,17 @@ pub fn run_frames(
     method: Method,
     frames: usize,
     pipelined: bool,
+    cull: bool,
     mut on_frame: impl FnMut(usize, &GpuStage<'_>) -> Result<()>,
 ) -> Result<LoopReport> {
     let mut report = LoopReport {
         pipelined,
+        culled: cull,
         ..Default::default()
     };
     let start = Instant::now();
     if !pipelined {
-        let mut cpu = CpuStage::new(scene, method);
+        let mut cpu = CpuStage::new(scene, method, cull);
         let mut work = empty_work();
         for index in 0..frames {
             cpu.run(index, &mut work);
@@ -264,7 +315,7 @@ pub fn run_frames(
             std::thread::Builder::new()
                 .name("cpu stage".into())
                 .spawn_scoped(s, move || {
-                    let mut cpu = CpuStage::new(scene, method);
+                    let mut cpu = CpuStage::new(scene, method, cull);
                     for index in 0..frames {
                         // The renderer hung up (an error): stop.
                         let Ok(mut work) = free_rx.recv() else { return };
@@ -304,7 +355,7 @@ mod tests {
     #[test]
     fn the_cpu_stage_rewrites_only_the_animated_columns() {
         let scene = RenderScene::default_scene(2000, 64, 32).unwrap();
-        let mut cpu = CpuStage::new(&scene, Method::Refined);
+        let mut cpu = CpuStage::new(&scene, Method::Refined, false);
         let mut work = empty_work();
         cpu.run(4, &mut work);
         work.lights.intensity[7] = -1.0;
@@ -326,7 +377,7 @@ mod tests {
     #[test]
     fn lights_keep_moving_past_two_to_the_24_frames() {
         let scene = RenderScene::default_scene(2000, 64, 32).unwrap();
-        let mut cpu = CpuStage::new(&scene, Method::Refined);
+        let mut cpu = CpuStage::new(&scene, Method::Refined, false);
         let (mut a, mut b) = (empty_work(), empty_work());
         let frame = (1 << 24) + 1;
         cpu.run(frame, &mut a);

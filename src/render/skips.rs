@@ -340,7 +340,7 @@ impl Viewer {
             };
             if appearance {
                 if skips.cull {
-                    gather(lights, &state.visibility.indices, &mut state.visible);
+                    lights.gather_into(&state.visibility.indices, &mut state.visible);
                 }
                 frame.appearance_only = true;
             } else {
@@ -373,7 +373,7 @@ impl Viewer {
         let start = Instant::now();
         if skips.cull {
             cull_lights(&scene.camera, lights.slices(), &mut state.visibility);
-            gather(lights, &state.visibility.indices, &mut state.visible);
+            lights.gather_into(&state.visibility.indices, &mut state.visible);
             frame.lights_assigned = state.visible.len();
         }
         frame.cull_seconds = start.elapsed().as_secs_f64();
@@ -479,31 +479,6 @@ fn geometry_dirty(a: &Lights, b: &Lights) -> bool {
 /// Whether colours or intensities differ (only the upload depends on them).
 fn appearance_dirty(a: &Lights, b: &Lights) -> bool {
     a.r != b.r || a.g != b.g || a.b != b.b || a.intensity != b.intensity
-}
-
-/// The rows `indices` of `lights`, column by column, into `out` (reusing its storage).
-fn gather(lights: &Lights, indices: &[u32], out: &mut Lights) {
-    let pick = |src: &Vec<f32>, dst: &mut Vec<f32>| {
-        dst.clear();
-        if !src.is_empty() {
-            dst.extend(indices.iter().map(|&i| src[i as usize]));
-        }
-    };
-    pick(&lights.x, &mut out.x);
-    pick(&lights.y, &mut out.y);
-    pick(&lights.z, &mut out.z);
-    pick(&lights.radius, &mut out.radius);
-    pick(&lights.r, &mut out.r);
-    pick(&lights.g, &mut out.g);
-    pick(&lights.b, &mut out.b);
-    pick(&lights.intensity, &mut out.intensity);
-    pick(&lights.spot_dir_x, &mut out.spot_dir_x);
-    pick(&lights.spot_dir_y, &mut out.spot_dir_y);
-    pick(&lights.spot_dir_z, &mut out.spot_dir_z);
-    pick(&lights.spot_angle, &mut out.spot_angle);
-    out.source_index.clear();
-    out.source_index
-        .extend(indices.iter().map(|&i| lights.source_index[i as usize]));
 }
 
 #[cfg(test)]

@@ -217,6 +217,38 @@ impl Lights {
         self.source_index.clear();
     }
 
+    /// The lights at `indices` (each below [`Lights::len`]), in that order, into `out`, reusing
+    /// its storage: the visible subset a frame uploads, say. Spot columns come along when
+    /// present.
+    pub fn gather_into(&self, indices: &[u32], out: &mut Lights) {
+        for (src, dst) in self.columns().into_iter().zip(out.columns_mut()) {
+            dst.clear();
+            if !src.is_empty() {
+                dst.extend(indices.iter().map(|&i| src[i as usize]));
+            }
+        }
+        out.source_index.clear();
+        out.source_index
+            .extend(indices.iter().map(|&i| self.source_index[i as usize]));
+    }
+
+    fn columns(&self) -> [&Vec<f32>; 12] {
+        [
+            &self.x,
+            &self.y,
+            &self.z,
+            &self.radius,
+            &self.r,
+            &self.g,
+            &self.b,
+            &self.intensity,
+            &self.spot_dir_x,
+            &self.spot_dir_y,
+            &self.spot_dir_z,
+            &self.spot_angle,
+        ]
+    }
+
     fn columns_mut(&mut self) -> [&mut Vec<f32>; 12] {
         [
             &mut self.x,
@@ -381,6 +413,39 @@ mod tests {
         assert!(lights.problems().is_empty());
         lights.clear();
         assert!(lights.is_empty() && !lights.has_spots() && lights.source_index.is_empty());
+    }
+
+    #[test]
+    fn gather_into_picks_rows_in_order_and_reuses_the_output() {
+        let mut lights = Lights::new();
+        for i in 0..5 {
+            let light = LightRecord::point(Vec3::new(i as f32, 1.0, 2.0), 0.5 + i as f32)
+                .with_intensity(10.0 * i as f32)
+                .with_source_index(100 + i);
+            lights.push(if i == 3 {
+                light.with_spot(Vec3::Y, 0.4)
+            } else {
+                light
+            });
+        }
+        // Stale content of a larger earlier frame must not survive.
+        let mut out: Lights = (0..9)
+            .map(|i| LightRecord::point(Vec3::splat(i as f32), 9.0))
+            .collect();
+        lights.gather_into(&[1, 3, 4], &mut out);
+        assert_eq!(out.len(), 3);
+        assert!(out.problems().is_empty(), "{:?}", out.problems());
+        assert_eq!(out.get(0), lights.get(1));
+        assert_eq!(out.get(1), lights.get(3));
+        assert!(out.is_spot(1) && !out.is_spot(2));
+        assert_eq!(out.get(2), lights.get(4));
+        // Point lights only: no spot columns appear; no indices: no lights.
+        let points: Lights = lights.iter().filter(|l| l.spot.is_none()).collect();
+        points.gather_into(&[0, 2], &mut out);
+        assert!(!out.has_spots() && out.len() == 2);
+        assert_eq!(out.get(1), points.get(2));
+        points.gather_into(&[], &mut out);
+        assert!(out.is_empty() && out.source_index.is_empty());
     }
 
     #[test]
