@@ -220,12 +220,22 @@ impl Lights {
     /// The lights at `indices` (each below [`Lights::len`]), in that order, into `out`, reusing
     /// its storage: the visible subset a frame uploads, say. Spot columns come along when
     /// present.
+    ///
+    /// From [`crate::systems::PARALLEL_MIN`] rows the columns are gathered in parallel, one
+    /// job per column: at 73k of 100k lights one thread took 2.5 ms for the twelve.
     pub fn gather_into(&self, indices: &[u32], out: &mut Lights) {
-        for (src, dst) in self.columns().into_iter().zip(out.columns_mut()) {
+        use rayon::prelude::*;
+        let gather = |(src, dst): (&Vec<f32>, &mut Vec<f32>)| {
             dst.clear();
             if !src.is_empty() {
                 dst.extend(indices.iter().map(|&i| src[i as usize]));
             }
+        };
+        let (src, dst) = (self.columns(), out.columns_mut());
+        if indices.len() >= crate::systems::PARALLEL_MIN {
+            src.into_par_iter().zip(dst).for_each(gather);
+        } else {
+            src.into_iter().zip(dst).for_each(gather);
         }
         out.source_index.clear();
         out.source_index
@@ -446,6 +456,27 @@ mod tests {
         assert_eq!(out.get(1), points.get(2));
         points.gather_into(&[], &mut out);
         assert!(out.is_empty() && out.source_index.is_empty());
+        // Enough rows for the parallel path: the same rows, in order.
+        let n = 3 * crate::systems::PARALLEL_MIN;
+        let many: Lights = (0..n)
+            .map(|i| {
+                let light = LightRecord::point(Vec3::new(i as f32, 0.0, -1.0), 1.0)
+                    .with_source_index(i as u32);
+                if i % 7 == 0 {
+                    light.with_spot(Vec3::NEG_Z, 0.3)
+                } else {
+                    light
+                }
+            })
+            .collect();
+        let odd: Vec<u32> = (1..n as u32).step_by(2).collect();
+        many.gather_into(&odd, &mut out);
+        assert_eq!(out.len(), odd.len());
+        assert!(
+            odd.iter()
+                .enumerate()
+                .all(|(k, &i)| out.get(k) == many.get(i as usize))
+        );
     }
 
     #[test]
