@@ -9,6 +9,8 @@
 //! * `cull` — `cull_lights` with point lights only and with 30% spot cones (mask + compacted
 //!   index list);
 //! * `to_view` — `lights_to_view` of the visible lights;
+//! * `gather` — `Lights::gather_into` of the visible lights (every column), what the frame loop
+//!   uploads after its cull;
 //! * `frame` — all three chained, what a frame costs before assignment.
 //!
 //! Outputs are reused across iterations (steady state: no allocation). Throughput is lights
@@ -112,6 +114,25 @@ fn systems(c: &mut Criterion) {
         });
     }
     view.finish();
+
+    let mut gather = c.benchmark_group("gather");
+    gather
+        .sample_size(20)
+        .measurement_time(Duration::from_secs(2));
+    for n in COUNTS {
+        let lights = surface_lights(&surfaces, n, 0.3);
+        let mut vis = Visibility::new();
+        let visible = cull_lights(&camera, lights.slices(), &mut vis);
+        let mut out = Lights::new();
+        gather.throughput(Throughput::Elements(visible as u64));
+        gather.bench_function(BenchmarkId::new("visible", n), |b| {
+            b.iter(|| {
+                lights.gather_into(&vis.indices, &mut out);
+                black_box(out.len())
+            })
+        });
+    }
+    gather.finish();
 
     let mut frame_group = c.benchmark_group("frame");
     frame_group
