@@ -233,6 +233,45 @@ mod tests {
         }
     }
 
+    /// The tile cone is tight as well: its half-angle is the widest angle from its axis to the
+    /// tile's four edges plus [`ANGLE_MARGIN`] (measured here, not with `angle_between`), and its
+    /// axis lies inside the tile. (Holding the tile alone let every half-angle grow to 1 rad.)
+    #[test]
+    fn tile_cones_are_tight_around_their_tiles() {
+        for (fov, dims) in [
+            ((0.6f64, 0.35f64), UVec3::new(24, 12, 16)),
+            ((1e-3, 1e-3), UVec3::new(128, 128, 1)),
+            ((114.6, 11.46), UVec3::new(7, 5, 1)),
+        ] {
+            for j in 0..dims.y {
+                for i in 0..dims.x {
+                    let tile = TileCone::of_tile(fov, dims, i, j);
+                    let cell = Cell::of_tile(fov, dims.x, dims.y, i, j, [1.0, 1.0]);
+                    let [x0, x1] = cell.x_slopes;
+                    let [y0, y1] = cell.y_slopes;
+                    let widest = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
+                        .map(|(x, y)| {
+                            let e = DVec3::new(x, y, -1.0);
+                            tile.axis.cross(e).length().atan2(tile.axis.dot(e))
+                        })
+                        .into_iter()
+                        .fold(0.0, f64::max);
+                    let half = tile.sin_half.atan2(tile.cos_half);
+                    assert!(
+                        (half - widest - ANGLE_MARGIN).abs() <= 1e-12,
+                        "tile ({i}, {j}) of {dims}: half-angle {half}, widest edge {widest}"
+                    );
+                    let (sx, sy) = (-tile.axis.x / tile.axis.z, -tile.axis.y / tile.axis.z);
+                    assert!(
+                        x0 < sx && sx < x1 && y0 < sy && sy < y1,
+                        "tile ({i}, {j}) of {dims}: axis {}",
+                        tile.axis
+                    );
+                }
+            }
+        }
+    }
+
     /// A ball that meets a cell of the tile has that cell's depths inside the ball's depth range
     /// for the tile (the range is what keeps slices), and a ball far off the tile misses it.
     #[test]
@@ -295,5 +334,115 @@ mod tests {
         let (lo, hi) = around.depth_range(&centre_tile).unwrap();
         assert_eq!(lo, 0.0);
         assert!(hi >= 1.0);
+    }
+
+    /// The depth ranges are the spherical slicing's, not merely wide enough: against the same
+    /// steps written with the angles themselves (`atan2`, `asin`, δ = max(γ − α, 0)), each
+    /// range agrees to 1e-10 of the light's extent and a miss is a miss. (Covering the oracle's
+    /// contacts alone let a range grow: a half chord of `r + across`, a δ too small.)
+    #[test]
+    fn depth_ranges_are_the_spherical_slicings() {
+        let fov = (0.7f64, 0.4f64);
+        let dims = UVec3::new(8, 6, 1);
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut met, mut missed) = (0, 0);
+        for _ in 0..20_000 {
+            let (cx, cy, dc) = (
+                (next() * 12.0 - 6.0) as f32,
+                (next() * 8.0 - 4.0) as f32,
+                (next() * 16.0 - 2.0) as f32,
+            );
+            let r = (next() * next() * 4.0 + 1e-3) as f32;
+            let (i, j) = ((next() * 8.0) as u32, (next() * 6.0) as u32);
+            let tile = TileCone::of_tile(fov, dims, i, j);
+            let got = LightCone::new(cx, cy, dc, r).depth_range(&tile);
+            let centre = DVec3::new(cx.into(), cy.into(), -f64::from(dc));
+            let (l, r) = (centre.length(), f64::from(r));
+            let scaled = |near: f64, far: f64| {
+                (
+                    near * tile.q_min * (1.0 - DEPTH_MARGIN),
+                    far * tile.q_max * (1.0 + DEPTH_MARGIN),
+                )
+            };
+            let want = if l <= r {
+                Some(scaled(0.0, l + r))
+            } else {
+                let gamma = angle_between(centre, tile.axis);
+                let (alpha, beta) = (tile.sin_half.atan2(tile.cos_half), (r / l).asin());
+                let delta = (gamma - alpha).max(0.0);
+                // Grazing contacts (δ ≈ β) are too sensitive for a comparison at 1e-10.
+                if (delta - beta).abs() < 1e-3 {
+                    continue;
+                }
+                (delta <= beta).then(|| {
+                    let half_chord = (r * r - (l * delta.sin()).powi(2)).sqrt();
+                    let base = l * delta.cos();
+                    scaled((base - half_chord).max(0.0), base + half_chord)
+                })
+            };
+            let context = format!("light ({cx}, {cy}, {dc}, r {r}), tile ({i}, {j})");
+            match (got, want) {
+                (Some((lo, hi)), Some((want_lo, want_hi))) => {
+                    let tolerance = 1e-10 * (l + r);
+                    assert!(
+                        (lo - want_lo).abs() <= tolerance && (hi - want_hi).abs() <= tolerance,
+                        "{context}: {lo}..{hi}, want {want_lo}..{want_hi}"
+                    );
+                    met += 1;
+                }
+                (None, None) => missed += 1,
+                _ => panic!("{context}: {got:?}, want {want:?}"),
+            }
+        }
+        assert!(met > 1500 && missed > 2000, "{met} met, {missed} missed");
+    }
+
+    /// Each range is widened by [`DEPTH_MARGIN`] beyond the exact depths (the tile's `q` and the
+    /// range each add one), and by no more than a few margins: a light in front of the tile (its centre's direction inside the tile's
+    /// cone) reaches from `(L − r)·q` at the tile's outermost corner to `(L + r)·q` at its
+    /// slope nearest 0, and an eye inside the ball from 0.
+    #[test]
+    fn depth_ranges_are_widened_by_their_margin() {
+        let fov = (0.7f64, 0.4f64);
+        let dims = UVec3::new(8, 6, 1);
+        let q = |x: f64, y: f64| 1.0 / (1.0 + x * x + y * y).sqrt();
+        let widened = |got: f64, exact: f64, sign: f64| {
+            // `got = exact·(1 + sign·m)` with m between one and three margins.
+            let m = sign * (got / exact - 1.0);
+            (DEPTH_MARGIN..=3.0 * DEPTH_MARGIN).contains(&m)
+        };
+        for (i, j) in [(0, 0), (3, 2), (4, 3), (7, 5), (2, 4)] {
+            let tile = TileCone::of_tile(fov, dims, i, j);
+            let cell = Cell::of_tile(fov, dims.x, dims.y, i, j, [1.0, 1.0]);
+            let [x0, x1] = cell.x_slopes;
+            let [y0, y1] = cell.y_slopes;
+            let q_min = q(x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
+            let q_max = q(0f64.clamp(x0, x1), 0f64.clamp(y0, y1));
+            for (depth, r) in [(5.0f32, 1.0f32), (20.0, 0.25), (3.0, 2.5), (0.5, 1.5)] {
+                // The centre on the middle of the tile's slopes.
+                let (sx, sy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+                let (cx, cy) = (
+                    (sx * f64::from(depth)) as f32,
+                    (sy * f64::from(depth)) as f32,
+                );
+                let light = LightCone::new(cx, cy, depth, r);
+                let l = DVec3::new(cx.into(), cy.into(), depth.into()).length();
+                let r = f64::from(r);
+                let (lo, hi) = light.depth_range(&tile).unwrap();
+                let context = format!("tile ({i}, {j}), light at depth {depth}, r {r}: {lo}..{hi}");
+                if l > r {
+                    assert!(widened(lo, (l - r) * q_min, -1.0), "near end, {context}");
+                } else {
+                    assert_eq!(lo, 0.0, "{context}");
+                }
+                assert!(widened(hi, (l + r) * q_max, 1.0), "far end, {context}");
+            }
+        }
     }
 }
