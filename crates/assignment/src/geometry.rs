@@ -403,6 +403,58 @@ mod tests {
         );
     }
 
+    /// The slopes are tight as well as conservative: unpadded, they point within 1e-5 rad of the
+    /// exact (f64) tangents wherever the eye is at least 1.1 r from the centre and the tangent
+    /// clearly points forward (depth above 1e-3 of its direction), and they are dropped (±∞)
+    /// closer than 1.1 r, as documented. (Containment alone let a wrong term loosen a bound,
+    /// and the 1.1 r threshold move.)
+    #[test]
+    fn tangent_slopes_are_the_exact_tangents_from_1_1_radii_out() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let (mut checked, mut dropped) = (0, 0);
+        for _ in 0..100_000 {
+            let r = 10f32.powf(rng.random_range(-4.0..4.0));
+            // Distance from the eye: 0.6–1000 radii, plenty of them close to 1.1 r.
+            let l = r * 10f32.powf(rng.random_range(-0.2..3.0));
+            let a = rng.random_range(-std::f32::consts::PI..std::f32::consts::PI);
+            let (c, dc) = (l * a.sin(), l * a.cos());
+            let (lo, hi) = tangent_slopes(c, dc, r);
+            let (c64, dc64, r64) = (c as f64, dc as f64, r as f64);
+            let l64 = (c64 * c64 + dc64 * dc64).sqrt();
+            let context = format!("c {c}, dc {dc}, r {r}: [{lo}, {hi}]");
+            if l64 < 1.1 * r64 * (1.0 - 1e-6) {
+                assert_eq!((lo, hi), (f32::NEG_INFINITY, f32::INFINITY), "{context}");
+                dropped += 1;
+                continue;
+            }
+            if l64 < 1.1 * r64 * (1.0 + 1e-6) {
+                continue;
+            }
+            let h = ((l64 - r64) * (l64 + r64)).sqrt();
+            // `(num, den) / L²` is the unit direction of a tangent: `den / L²` its depth.
+            let (num_max, den_max) = (c64 * h + dc64 * r64, dc64 * h - c64 * r64);
+            let (num_min, den_min) = (c64 * h - dc64 * r64, dc64 * h + c64 * r64);
+            for (got, num, den, unbounded) in [
+                (hi, num_max, den_max, f32::INFINITY),
+                (lo, num_min, den_min, f32::NEG_INFINITY),
+            ] {
+                let depth = den / (l64 * l64);
+                if depth > 1e-3 {
+                    let error = ((got as f64).atan() - (num / den).atan()).abs();
+                    assert!(error <= 1e-5, "{error} rad off the tangent: {context}");
+                    checked += 1;
+                } else if depth < -1e-3 {
+                    assert_eq!(got, unbounded, "backward tangent: {context}");
+                }
+            }
+        }
+        assert!(
+            checked > 80_000 && dropped > 5000,
+            "{checked} checked, {dropped} dropped"
+        );
+    }
+
     /// `refine_slice` keeps exactly the clusters of its definition, tested cluster by cluster:
     /// `dy ≤ R_k` and `dx² ≤ (R_k − dy)(R_k + dy)`, with `dx`, `dy` the column's and row's gaps
     /// over the slab. Walking the cut runs (and the whole-slice shortcut) must neither keep more
