@@ -645,6 +645,52 @@ fn spot_lights_in_clusters_whose_bounding_sphere_overflows_f32() {
 }
 
 #[test]
+fn spots_with_angles_outside_zero_to_90_degrees_or_no_axis_are_the_ranges_ball() {
+    // The oracle takes a spot whose half angle is not in (0°, 90°] (zero, negative, NaN, infinite
+    // or wider), or whose axis is zero or not finite, as its range's ball, so every method must
+    // list the whole ball. A zero or negative angle's "bounding sphere", or one about a zero axis,
+    // is smaller than the ball: it would miss clusters the ball reaches.
+    let camera = camera(1536, 768);
+    let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+    let t = camera.tan_half_fov();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+    let mut lights = Columns::default();
+    let angles = [
+        0.0f32,
+        -0.0,
+        -0.4,
+        -std::f32::consts::PI,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        2.0,
+    ];
+    let axes = [Vec3::ZERO, Vec3::NAN, Vec3::new(0.0, f32::INFINITY, 1.0)];
+    let cases = angles
+        .iter()
+        .map(|&a| (a, None))
+        .chain(axes.iter().map(|&axis| (0.3, Some(axis))))
+        .collect::<Vec<_>>();
+    for (angle, axis) in cases {
+        for _ in 0..6 {
+            let d = rng.random_range(1.0f32..60.0);
+            let view = Vec3::new(
+                rng.random_range(-0.8f32..0.8) * t.x * d,
+                rng.random_range(-0.8f32..0.8) * t.y * d,
+                -d,
+            );
+            let range = rng.random_range(0.5f32..6.0);
+            let axis = axis.unwrap_or_else(|| random_dir(&mut rng));
+            lights.push_spot(world_of(&camera, view), range, axis, angle);
+        }
+    }
+    let balls = brute_force(&lights, false, &camera, &grid);
+    let truth = brute_force(&lights, true, &camera, &grid);
+    assert!(truth.lists == balls.lists, "the oracle must see balls");
+    assert_spots_conservative(&lights, &camera, &grid, "angles outside (0°, 90°], no axis");
+}
+
+#[test]
 fn spot_axes_of_any_length() {
     // The axis need not be unit. About 1e-22 long, its f32 squared length is subnormal and an f32
     // normalisation came out 0.8–1.02 long: every method, `exact` included, missed up to 44 of
