@@ -563,10 +563,39 @@ fn lights_whose_view_space_sphere_overflows_f32() {
         let (exact, extra) = assert_conservative(method.name(), &lists, &truth, "overflow");
         assert!(exact > 0);
         assert_eq!(stats.rejected, 0, "{method}: every light is valid");
-        assert!(stats.culled >= 1, "{method}: the light behind is culled");
+        // Exactly: the light behind and the one past the far plane (a count that wrapped below
+        // zero would pass `>= 1`).
+        assert_eq!(
+            stats.culled, 2,
+            "{method}: the lights behind and beyond are culled"
+        );
         if method == Method::Exact {
             assert_eq!(extra, 0, "exact tests each cluster in f64");
         }
+    }
+}
+
+#[test]
+fn a_light_whose_padded_radius_alone_overflows_f32_is_culled_in_f64() {
+    // Radius f32::MAX, centre finite but behind, left of and below a narrow view, over f32::MAX
+    // from the eye: only the padded radius overflows, and the f64 test must still cull the
+    // light (an f32 path with an infinite radius would list it everywhere). The same radius in
+    // front of the eye covers every cluster.
+    let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 10.0, 64, 64, 1.0, 1.0e3);
+    let grid = ClusterGrid::new(UVec3::new(4, 4, 4), DepthSlicing::Linear, 1.0, 1.0e3);
+    let m = f32::MAX;
+    let mut lights = Columns::default();
+    lights.push(Vec3::new(-0.99 * m, -0.99 * m, 0.99 * m), m);
+    lights.push(Vec3::new(0.0, 0.0, -10.0), m);
+    let truth = brute_force(&lights, false, &camera, &grid);
+    assert!(
+        truth.iter().all(|l| l == &[1]),
+        "light 0 misses, light 1 covers"
+    );
+    for method in Method::ALL {
+        let (lists, stats) = assign(method, &lights, &camera, &grid);
+        assert_conservative(method.name(), &lists, &truth, "padded radius overflows");
+        assert_eq!((stats.culled, stats.pairs), (1, 64), "{method}: {stats:?}");
     }
 }
 
