@@ -7,7 +7,8 @@
 mod common;
 
 use common::*;
-use myriad_assignment::{Assigner, LightLists, Method};
+use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
+use myriad_cluster_math::{SpotCone, spot_bounding_sphere};
 use rand::{Rng, SeedableRng};
 
 #[test]
@@ -65,6 +66,76 @@ fn refined_and_cone_cut_binarys_boxes_and_stay_conservative() {
         assert!(
             fp <= limit,
             "{method}: false-positive ratio {fp:.3} (binary {binary_fp:.3}, {exact} exact pairs)"
+        );
+    }
+}
+
+/// `linear` (the paper's Algorithm 1) is the baseline of the same box `binary` searches for: on
+/// balls in front of the eye and inside the depth range, where the tangent planes alone bound the
+/// box, stepping the planes one by one lists exactly `binary`'s clusters and culls the same lights;
+/// and it lists a spot light as the ball that bounds its cone. The conservative suites cannot see
+/// a `linear` that lists too much (a spot as its whole range, a light off to one side); this can.
+#[test]
+fn linear_lists_binarys_boxes_and_a_spot_as_its_bounding_sphere() {
+    for (seed, slicing) in [(5, 1), (6, 0), (7, 2)] {
+        let scene = make_scene(&SceneParams {
+            seed,
+            slicing,
+            ..SceneParams::WIDE
+        });
+        let (right, up, forward) = view_basis(&scene.camera);
+        let t = scene.camera.tan_half_fov();
+        let assign = |method: Method, lights: &Columns, spots: bool| {
+            let mut lists = LightLists::new();
+            let stats = Assigner::new().assign(
+                method,
+                &lights.input(spots),
+                &scene.camera,
+                &scene.grid,
+                &mut lists,
+            );
+            (lists, stats)
+        };
+        let culls = |s: AssignStats| (s.rejected, s.culled, s.pairs);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let mut points = Columns::default();
+        for _ in 0..600 {
+            // 1.5–90 m deep with radii up to 1.4 m: inside the 0.5–100 m depth range; a fifth of
+            // the view wider than the frustum, so some are culled at the sides.
+            let depth = rng.random_range(1.5f32..90.0);
+            let sx = rng.random_range(-1.2f32..1.2) * t.x * depth;
+            let sy = rng.random_range(-1.2f32..1.2) * t.y * depth;
+            let centre = scene.camera.position + right * sx + up * sy + forward * depth;
+            points.push(centre, rng.random_range(0.05f32..1.4));
+        }
+        let (binary, binary_stats) = assign(Method::Binary, &points, false);
+        let (linear, linear_stats) = assign(Method::Linear, &points, false);
+        assert!(binary_stats.culled > 0 && binary_stats.pairs > 1000);
+        assert_eq!(culls(linear_stats), culls(binary_stats), "seed {seed}");
+        assert!(
+            linear == binary,
+            "seed {seed}: linear's boxes are not binary's"
+        );
+
+        let (mut spots, mut spheres) = (Columns::default(), Columns::default());
+        for i in 0..300 {
+            let depth = rng.random_range(3.0f32..60.0);
+            let sx = rng.random_range(-1.0f32..1.0) * t.x * depth;
+            let sy = rng.random_range(-1.0f32..1.0) * t.y * depth;
+            let apex = scene.camera.position + right * sx + up * sy + forward * depth;
+            let direction = random_dir(&mut rng);
+            let angle = 0.1 + (i % 7) as f32 * 0.2; // 0.1 .. 1.3 rad
+            let range = rng.random_range(1.0f32..6.0);
+            spots.push_spot(apex, range, direction, angle);
+            let (centre, radius) = spot_bounding_sphere(apex, range, SpotCone { direction, angle });
+            spheres.push(centre, radius);
+        }
+        let (as_spots, spot_stats) = assign(Method::Linear, &spots, true);
+        let (as_spheres, sphere_stats) = assign(Method::Linear, &spheres, false);
+        assert_eq!(culls(spot_stats), culls(sphere_stats), "seed {seed}");
+        assert!(
+            as_spots == as_spheres,
+            "seed {seed}: linear's spots are not their bounding spheres"
         );
     }
 }
