@@ -561,4 +561,49 @@ mod tests {
             assert_eq!(Method::from_name(name), None, "{name:?}");
         }
     }
+
+    /// `SERIAL_LIGHTS` is where a frame starts to split (`exact` splits at any size), into
+    /// tasks of at least `LIGHTS_PER_TASK` lights, four per thread at most.
+    #[test]
+    fn frames_split_from_serial_lights_into_four_tasks_per_thread_at_most() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            for method in [Method::Binary, Method::Refined, Method::Cone] {
+                assert_eq!(plan_tasks(0, method), 1);
+                assert_eq!(plan_tasks(SERIAL_LIGHTS - 1, method), 1, "{method}");
+                assert_eq!(plan_tasks(SERIAL_LIGHTS, method), 2, "{method}");
+                assert_eq!(plan_tasks(1000, method), 4, "{method}");
+                assert_eq!(plan_tasks(100_000, method), 12, "{method}");
+            }
+            assert_eq!(plan_tasks(0, Method::Exact), 1);
+            assert_eq!(plan_tasks(1, Method::Exact), 1);
+            assert_eq!(plan_tasks(300, Method::Exact), 2);
+            assert_eq!(plan_tasks(100_000, Method::Exact), 12);
+        });
+    }
+
+    /// A serial frame is one part of all its slices (a power of two of them, so a slice's part
+    /// is a shift); a split frame has a part per slice, for the append to group by work.
+    #[test]
+    fn parts_are_all_slices_when_serial_and_one_slice_each_when_split() {
+        let grid = ClusterGrid::new(
+            glam::UVec3::new(4, 3, 5),
+            myriad_cluster_math::DepthSlicing::Log,
+            0.1,
+            100.0,
+        );
+        let serial = plan_parts(&grid, 1);
+        let shape = |p: Parts| (p.count, p.clusters, p.slice_shift, p.row_stride);
+        assert_eq!(shape(serial), (1, 8 * 12, 3, 4));
+        for tasks in [2, 12] {
+            assert_eq!(
+                shape(plan_parts(&grid, tasks)),
+                (5, 12, 0, 4),
+                "{tasks} tasks"
+            );
+        }
+    }
 }
