@@ -59,6 +59,8 @@ fn over_budget_frames_coarsen_the_grid_and_stay_conservative() {
         );
         let grid = coarsened(&scene.grid, stats.coarsened);
         assert_eq!(stats.grid_dims, grid.dims().to_array());
+        // What callers rebuild the grid the lists are for from.
+        assert_eq!(stats.grid_built(&scene.grid), grid, "{method}");
         assert_eq!(lists.cluster_count(), grid.cluster_count());
         // Never a missed light on the grid actually used, and the same as assigning on it directly.
         let truth = brute_force(&scene.lights, true, &scene.camera, &grid);
