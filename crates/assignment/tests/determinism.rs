@@ -201,3 +201,40 @@ fn reused_lists_and_assigner_hold_nothing_from_the_previous_frame() {
         }
     }
 }
+
+#[test]
+fn one_assigner_switching_methods_and_grids_lists_as_fresh_ones_do() {
+    // An assigner keeps per-grid tables between frames: the clusters' bounding spheres (spots)
+    // and `cone`'s tile cones. A frame of another method on another grid must not leave `cone`
+    // reading the previous grid's cones (only `cone` builds them, and only when its own key
+    // changes).
+    let scene = |seed, dims| {
+        make_scene(&SceneParams {
+            seed,
+            lights: 400,
+            dims,
+            ..SceneParams::HD
+        })
+    };
+    let (wide, narrow) = (UVec3::new(24, 12, 16), UVec3::new(16, 9, 24));
+    let frames = [
+        (Method::Binary, scene(1, wide)),
+        (Method::Cone, scene(2, narrow)),
+        (Method::Refined, scene(3, wide)),
+        (Method::Cone, scene(4, wide)),
+        (Method::Exact, scene(5, narrow)),
+        (Method::Cone, scene(6, narrow)),
+    ];
+    let mut assigner = Assigner::new();
+    let mut lists = LightLists::new();
+    for (f, (method, scene)) in frames.iter().enumerate() {
+        let input = scene.lights.input(true);
+        assigner.assign(*method, &input, &scene.camera, &scene.grid, &mut lists);
+        let mut fresh = LightLists::new();
+        Assigner::new().assign(*method, &input, &scene.camera, &scene.grid, &mut fresh);
+        assert!(
+            lists == fresh,
+            "{method}: frame {f} differs from a fresh assignment"
+        );
+    }
+}
