@@ -80,3 +80,40 @@ fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
         );
     }
 }
+
+#[test]
+fn an_assigner_set_to_always_runs_every_split_frame_on_the_pool_after_idle_too() {
+    // 600 lights of 5 cm: split into tasks, and far under the default pacing's 250 µs of work,
+    // so a paced assigner would run them serially after idle.
+    let scene = make_scene(&SceneParams {
+        seed: 12,
+        lights: 600,
+        ..SceneParams::WIDE
+    });
+    let mut lights = Columns::default();
+    for l in 0..scene.lights.len() {
+        let p = glam::Vec3::new(scene.lights.x[l], scene.lights.y[l], scene.lights.z[l]);
+        lights.push(p, scene.lights.radius[l].min(0.05));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let input = lights.input(false);
+    let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
+    let mut lists = LightLists::new();
+    for frame in 0..5 {
+        std::thread::sleep(Duration::from_millis(5));
+        let stats = pool.install(|| {
+            assigner.assign(
+                Method::Binary,
+                &input,
+                &scene.camera,
+                &scene.grid,
+                &mut lists,
+            )
+        });
+        assert!(stats.tasks > 1, "600 lights are split into tasks");
+        assert!(stats.parallel, "frame {frame} after 5 ms idle ran serially");
+    }
+}
