@@ -606,4 +606,30 @@ mod tests {
             );
         }
     }
+
+    /// A pair budget degrades one step at a time: every dimension halved (rounding down, at
+    /// least 1), the same depth range and slicing, down to 1×1×1 and no further.
+    #[test]
+    fn coarser_grids_halve_every_dimension_down_to_one_cluster() {
+        let slicing = myriad_cluster_math::DepthSlicing::LogWithNearSlice {
+            first_slice_depth: 0.5,
+        };
+        let grid = ClusterGrid::new(glam::UVec3::new(16, 9, 24), slicing, 0.1, 300.0);
+        let mut dims = vec![];
+        let mut g = grid;
+        for _ in 0..6 {
+            g = coarser_grid(&g);
+            assert_eq!((g.slicing(), g.near(), g.far()), (slicing, 0.1, 300.0));
+            dims.push(g.dims().to_array());
+        }
+        let want = [
+            [8, 4, 12],
+            [4, 2, 6],
+            [2, 1, 3],
+            [1, 1, 1],
+            [1, 1, 1],
+            [1, 1, 1],
+        ];
+        assert_eq!(dims, want);
+    }
 }
