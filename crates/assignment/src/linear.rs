@@ -164,7 +164,10 @@ pub(crate) fn assign_linear(
 
 /// Steps through planes 1..=n for the first tile `t` whose far plane `t + 1` satisfies
 /// `reaches_before(t + 1)`, then on while the sphere still reaches past plane `t + 1`
-/// (`reaches_after`). Returns `(first, last)`; `first > last` when nothing is covered.
+/// (`reaches_after`). Returns `(first, last)`; `first > last` when the first tile found is
+/// reached only from before. A sphere that reaches no tile's far plane gives `(n, n)`: callers
+/// test the frustum first, which culls every such sphere, so that case is never asked (checking
+/// it here cost `paper` 1000 1–3% more instructions).
 fn step_planes(
     n: u32,
     reaches_before: impl Fn(usize) -> bool,
