@@ -10,7 +10,7 @@ use myriad::assignment::Method;
 use myriad::cluster_math::glam::Vec3;
 use myriad::cluster_math::{ClusterGrid, DepthSlicing, glam::UVec3};
 use myriad::gpu::{GpuContext, GpuError, ShadingMode, loop_budget};
-use myriad::render::{RenderScene, Shading, Viewer};
+use myriad::render::{RenderScene, Shading, Viewer, max_channel_difference};
 use myriad::scene::{LightRecord, Lights};
 
 const LLVMPIPE_LOOP_LIMIT: u64 = 65_535;
@@ -28,10 +28,6 @@ fn dark_lights_then_one(scene: &RenderScene, count: usize) -> Lights {
         lights.push(light);
     }
     lights
-}
-
-fn max_difference(a: &[u8], b: &[u8]) -> u8 {
-    a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap()
 }
 
 /// Renders `lights` lights (all but the last dark) with `shading` on a 1×1×`slices` grid: at the
@@ -74,7 +70,7 @@ fn check_edge(ctx: &GpuContext, shading: Shading, slices: u32) {
         );
     }
     let at_budget = viewer.image().unwrap();
-    let worst = max_difference(&alone, &at_budget);
+    let worst = max_channel_difference(&alone, &at_budget);
     assert!(
         worst <= 1,
         "{label}: {most} lights differ from the last alone by {worst}"
@@ -97,7 +93,7 @@ fn check_edge(ctx: &GpuContext, shading: Shading, slices: u32) {
         }
         None => {
             past.unwrap();
-            let worst = max_difference(&alone, &viewer.image().unwrap());
+            let worst = max_channel_difference(&alone, &viewer.image().unwrap());
             assert!(worst <= 1, "{label}: {} lights differ by {worst}", most + 1);
         }
     }

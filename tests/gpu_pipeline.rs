@@ -4,7 +4,7 @@
 
 use myriad::assignment::Method;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer, read_rgba8};
-use myriad::render::{GpuStage, LoopReport, RenderScene, run_frames};
+use myriad::render::{GpuStage, LoopReport, RenderScene, max_channel_difference, run_frames};
 
 fn frames(
     ctx: &GpuContext,
@@ -47,14 +47,6 @@ fn frames(
     (images, report)
 }
 
-fn max_difference(a: &[u8], b: &[u8]) -> u8 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap_or(0)
-}
-
 #[test]
 fn pipelined_frames_equal_sequential_frames() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
@@ -90,7 +82,7 @@ fn culled_frames_upload_fewer_lights_and_look_the_same() {
             culled[n] == culled_pipelined[n],
             "culled frame {n} differs between the loops"
         );
-        let d = max_difference(&all[n], &culled[n]);
+        let d = max_channel_difference(&all[n], &culled[n]);
         assert!(d <= 1, "culling changed frame {n} by {d}/255");
         let (a, c) = (&every.frames[n], &sequential.frames[n]);
         assert_eq!(a.lights_uploaded, scene.lights.len());

@@ -4,16 +4,10 @@
 
 use myriad::assignment::Method;
 use myriad::gpu::GpuContext;
-use myriad::render::{FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer};
+use myriad::render::{
+    FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer, max_channel_difference,
+};
 use myriad::scene::{ClusterGrid, Lights, atrium};
-
-fn max_difference(a: &[u8], b: &[u8]) -> u8 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap_or(0)
-}
 
 fn singles() -> Vec<(&'static str, Skips)> {
     let none = Skips::NONE;
@@ -107,7 +101,7 @@ fn each_saving_leaves_the_image_unchanged() {
             assert!(base.active_clusters.is_none());
             for (name, skips) in singles() {
                 let (image, frame) = render(v, &scene, skips);
-                let d = max_difference(&image, &reference);
+                let d = max_channel_difference(&image, &reference);
                 assert!(
                     d <= 1,
                     "{camera} (near {near}), spots {spots}: {name} changes the image by {d}/255"
@@ -161,7 +155,7 @@ fn unchanged_frames_are_reused_and_changes_are_seen() {
     assert!(f3.report.upload_bytes > 0 && f3.stats.is_none());
     let mut fresh = Viewer::new(ctx.clone(), &scene).unwrap();
     let (expected, _) = render(&mut fresh, &scene, Skips::NONE);
-    assert!(max_difference(&recoloured, &expected) <= 1);
+    assert!(max_channel_difference(&recoloured, &expected) <= 1);
     assert_ne!(recoloured, first);
 
     // A moved light: full path again.
@@ -188,7 +182,7 @@ fn a_plain_frame_in_between_invalidates_the_reuse_cache() {
         !frame.reused && !frame.appearance_only,
         "stale cache reused"
     );
-    assert!(max_difference(&skipping, &again) <= 1);
+    assert!(max_channel_difference(&skipping, &again) <= 1);
     // Another method is another set of lists: not reused either.
     let other = viewer
         .frame_with_skips(&scene, Method::Binary, Skips::ALL)
@@ -218,7 +212,7 @@ fn tuned_frames_probe_both_sides_hold_the_choice_and_leave_the_image_unchanged()
         assert_eq!(frame.active_clusters.is_some(), tuning.plan.use_prepass);
         assert_eq!(frame.prepass_seconds > 0.0, tuning.plan.use_prepass);
         assert!(
-            max_difference(&image, &expected) <= 1,
+            max_channel_difference(&image, &expected) <= 1,
             "{:?} changed the image",
             tuning.plan
         );

@@ -7,7 +7,9 @@ use super::progress::Progress;
 use super::render::{FrameSamples, StrategyResult, timed_frames};
 use anyhow::{Context, Result};
 use myriad::assignment::Method;
-use myriad::render::{PrepassDecision, RenderScene, SkipFrame, Skips, Viewer, pixel_stats};
+use myriad::render::{
+    PrepassDecision, RenderScene, SkipFrame, Skips, Viewer, max_channel_difference, pixel_stats,
+};
 use serde::Serialize;
 
 /// Name of the column in the table and of the strategy in `stats.json`.
@@ -90,12 +92,7 @@ pub fn measure(
     let frame = last.context("at least one frame")?;
     let assigned = assigned.context("the first frame assigns")?;
     let image = viewer.image()?;
-    let max_image_difference = clustered_image
-        .iter()
-        .zip(&image)
-        .map(|(a, b)| a.abs_diff(*b))
-        .max()
-        .unwrap_or(0);
+    let max_image_difference = max_channel_difference(clustered_image, &image);
     let depth = viewer
         .renderer
         .read_depth(&viewer.ctx)?

@@ -7,7 +7,7 @@ use super::assign::parse_method;
 use super::render::parse_size;
 use anyhow::Result;
 use myriad::gpu::GpuContext;
-use myriad::render::{RenderScene, SkipFrame, Skips, Viewer};
+use myriad::render::{RenderScene, SkipFrame, Skips, Viewer, max_channel_difference};
 use myriad::scene::LoadOptions;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -128,13 +128,7 @@ impl Samples {
     ) -> Result<(Measured, SkipFrame, Vec<u8>)> {
         let frame = self.last.expect("frames ran");
         let image = viewer.image()?;
-        let max_image_difference = reference.map_or(0, |r| {
-            r.iter()
-                .zip(&image)
-                .map(|(a, b)| a.abs_diff(*b))
-                .max()
-                .unwrap_or(0)
-        });
+        let max_image_difference = reference.map_or(0, |r| max_channel_difference(r, &image));
         Ok((
             Measured {
                 cpu_ms: median(self.cpu),

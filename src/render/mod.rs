@@ -5,6 +5,7 @@ mod depth_buffer;
 #[cfg(test)]
 mod frame_marks;
 mod geometry;
+mod image_difference;
 mod pipelined;
 mod pixel_stats;
 mod prepass_tuner;
@@ -14,6 +15,7 @@ mod viewer;
 
 pub use depth_buffer::{fitted_grid, mark_active};
 pub use geometry::scene_geometry;
+pub use image_difference::max_channel_difference;
 pub use pipelined::{FRAMES_IN_FLIGHT, GpuStage, LoopReport, StageTimes, run_frames};
 pub use pixel_stats::{PixelStats, pixel_stats};
 pub use prepass_tuner::{FramePlan, PrepassDecision, PrepassTuner, TunedFrame, TunerSettings};

@@ -203,10 +203,10 @@ mod tests {
     use super::*;
     use myriad_cluster_math::oracle::sphere_intersects_cell;
 
-    /// The tile cone holds its frustum: sampled directions across each tile, corners and edges
-    /// included, lie within its half-angle, and their depth/distance within `[q_min, q_max]`.
-    #[test]
-    fn tile_cones_hold_their_tiles() {
+    /// Calls `check(cone, cell)` for every tile of three grids — an ordinary view, a 10⁻³-rad
+    /// narrow one, and one about 179° wide (half-field tangents 114.6 × 11.46) — each tile's
+    /// cell at depth 1.
+    fn each_tile(mut check: impl FnMut(&TileCone, &Cell)) {
         for (fov, dims) in [
             ((0.6f64, 0.35f64), UVec3::new(24, 12, 16)),
             ((1e-3, 1e-3), UVec3::new(128, 128, 1)),
@@ -215,22 +215,30 @@ mod tests {
             for j in 0..dims.y {
                 for i in 0..dims.x {
                     let tile = TileCone::of_tile(fov, dims, i, j);
-                    let cell = Cell::of_tile(fov, dims.x, dims.y, i, j, [1.0, 1.0]);
-                    for a in 0..=8 {
-                        for b in 0..=8 {
-                            let t = |lo: f64, hi: f64, s: u32| lo + (hi - lo) * s as f64 / 8.0;
-                            let x = t(cell.x_slopes[0], cell.x_slopes[1], a);
-                            let y = t(cell.y_slopes[0], cell.y_slopes[1], b);
-                            let d = DVec3::new(x, y, -1.0);
-                            let half = tile.sin_half.atan2(tile.cos_half);
-                            assert!(angle_between(tile.axis, d) <= half);
-                            let q = 1.0 / d.length();
-                            assert!(tile.q_min <= q && q <= tile.q_max, "{q} {tile:?}");
-                        }
-                    }
+                    check(&tile, &Cell::of_tile(fov, dims.x, dims.y, i, j, [1.0, 1.0]));
                 }
             }
         }
+    }
+
+    /// The tile cone holds its frustum: sampled directions across each tile, corners and edges
+    /// included, lie within its half-angle, and their depth/distance within `[q_min, q_max]`.
+    #[test]
+    fn tile_cones_hold_their_tiles() {
+        each_tile(|tile, cell| {
+            for a in 0..=8 {
+                for b in 0..=8 {
+                    let t = |lo: f64, hi: f64, s: u32| lo + (hi - lo) * s as f64 / 8.0;
+                    let x = t(cell.x_slopes[0], cell.x_slopes[1], a);
+                    let y = t(cell.y_slopes[0], cell.y_slopes[1], b);
+                    let d = DVec3::new(x, y, -1.0);
+                    let half = tile.sin_half.atan2(tile.cos_half);
+                    assert!(angle_between(tile.axis, d) <= half);
+                    let q = 1.0 / d.length();
+                    assert!(tile.q_min <= q && q <= tile.q_max, "{q} {tile:?}");
+                }
+            }
+        });
     }
 
     /// The tile cone is tight as well: its half-angle is the widest angle from its axis to the
@@ -238,38 +246,28 @@ mod tests {
     /// axis lies inside the tile. (Holding the tile alone let every half-angle grow to 1 rad.)
     #[test]
     fn tile_cones_are_tight_around_their_tiles() {
-        for (fov, dims) in [
-            ((0.6f64, 0.35f64), UVec3::new(24, 12, 16)),
-            ((1e-3, 1e-3), UVec3::new(128, 128, 1)),
-            ((114.6, 11.46), UVec3::new(7, 5, 1)),
-        ] {
-            for j in 0..dims.y {
-                for i in 0..dims.x {
-                    let tile = TileCone::of_tile(fov, dims, i, j);
-                    let cell = Cell::of_tile(fov, dims.x, dims.y, i, j, [1.0, 1.0]);
-                    let [x0, x1] = cell.x_slopes;
-                    let [y0, y1] = cell.y_slopes;
-                    let widest = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
-                        .map(|(x, y)| {
-                            let e = DVec3::new(x, y, -1.0);
-                            tile.axis.cross(e).length().atan2(tile.axis.dot(e))
-                        })
-                        .into_iter()
-                        .fold(0.0, f64::max);
-                    let half = tile.sin_half.atan2(tile.cos_half);
-                    assert!(
-                        (half - widest - ANGLE_MARGIN).abs() <= 1e-12,
-                        "tile ({i}, {j}) of {dims}: half-angle {half}, widest edge {widest}"
-                    );
-                    let (sx, sy) = (-tile.axis.x / tile.axis.z, -tile.axis.y / tile.axis.z);
-                    assert!(
-                        x0 < sx && sx < x1 && y0 < sy && sy < y1,
-                        "tile ({i}, {j}) of {dims}: axis {}",
-                        tile.axis
-                    );
-                }
-            }
-        }
+        each_tile(|tile, cell| {
+            let [x0, x1] = cell.x_slopes;
+            let [y0, y1] = cell.y_slopes;
+            let widest = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
+                .map(|(x, y)| {
+                    let e = DVec3::new(x, y, -1.0);
+                    tile.axis.cross(e).length().atan2(tile.axis.dot(e))
+                })
+                .into_iter()
+                .fold(0.0, f64::max);
+            let half = tile.sin_half.atan2(tile.cos_half);
+            assert!(
+                (half - widest - ANGLE_MARGIN).abs() <= 1e-12,
+                "{cell:?}: half-angle {half}, widest edge {widest}"
+            );
+            let (sx, sy) = (-tile.axis.x / tile.axis.z, -tile.axis.y / tile.axis.z);
+            assert!(
+                x0 < sx && sx < x1 && y0 < sy && sy < y1,
+                "{cell:?}: axis {}",
+                tile.axis
+            );
+        });
     }
 
     /// A ball that meets a cell of the tile has that cell's depths inside the ball's depth range

@@ -9,19 +9,25 @@ use common::*;
 use myriad_assignment::{Assigner, LightLists, Method, PacingLimits, Parallelism};
 use std::time::Duration;
 
-#[test]
-fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
+/// A generated wide scene of `lights` lights with radii capped at 5 cm: the generator's radii
+/// reach 1000× the near plane, and small lights make a small frame.
+fn small_lights(seed: u64, lights: usize) -> (Scene, Columns) {
     let scene = make_scene(&SceneParams {
-        seed: 11,
-        lights: 1500,
+        seed,
+        lights,
         ..SceneParams::WIDE
     });
-    // The generator's radii reach 1000× the near plane; small lights make a small frame.
-    let mut lights = Columns::default();
+    let mut small = Columns::default();
     for l in 0..scene.lights.len() {
         let p = glam::Vec3::new(scene.lights.x[l], scene.lights.y[l], scene.lights.z[l]);
-        lights.push(p, scene.lights.radius[l].min(0.05));
+        small.push(p, scene.lights.radius[l].min(0.05));
     }
+    (scene, small)
+}
+
+#[test]
+fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
+    let (scene, lights) = small_lights(11, 1500);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
@@ -85,16 +91,7 @@ fn a_small_frame_after_idle_runs_serially_with_the_same_lists() {
 fn an_assigner_set_to_always_runs_every_split_frame_on_the_pool_after_idle_too() {
     // 600 lights of 5 cm: split into tasks, and far under the default pacing's 250 µs of work,
     // so a paced assigner would run them serially after idle.
-    let scene = make_scene(&SceneParams {
-        seed: 12,
-        lights: 600,
-        ..SceneParams::WIDE
-    });
-    let mut lights = Columns::default();
-    for l in 0..scene.lights.len() {
-        let p = glam::Vec3::new(scene.lights.x[l], scene.lights.y[l], scene.lights.z[l]);
-        lights.push(p, scene.lights.radius[l].min(0.05));
-    }
+    let (scene, lights) = small_lights(12, 600);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
