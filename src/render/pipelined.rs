@@ -181,6 +181,7 @@ impl<'a> CpuStage<'a> {
         if let Some(visibility) = &mut self.visibility {
             let start = Instant::now();
             cull_lights(&self.scene.camera, work.lights.slices(), visibility);
+            crate::profile_span!("gather visible lights");
             work.lights
                 .gather_into(&visibility.indices, &mut work.visible);
             work.cull_seconds = start.elapsed().as_secs_f64();

@@ -284,6 +284,7 @@ impl Viewer {
         // A reused frame ran neither side's work: it times nothing, and the probe waits.
         let ran = !frame.reused && !frame.appearance_only;
         if plan.probe && ran {
+            crate::profile_span!("prepass tuner: probe waits for the GPU");
             self.ctx.wait_idle()?;
             state.tuner.record(plan, start.elapsed().as_secs_f64());
         } else if !plan.probe {
