@@ -356,6 +356,19 @@ mod tests {
         }
     }
 
+    /// The two tangents from the eye to the circle of radius `r` around `(c, dc)` (the eye
+    /// outside it), in f64: `[(num, den)]` of the largest slope's, then the smallest's, each
+    /// slope `num / den`. `(num, den) / L²` is the tangent's unit direction, so `den / L²` is
+    /// its depth.
+    fn exact_tangents(c: f64, dc: f64, r: f64) -> [(f64, f64); 2] {
+        let l = (c * c + dc * dc).sqrt();
+        let h = ((l - r) * (l + r)).sqrt();
+        [
+            (c * h + dc * r, dc * h - c * r),
+            (c * h - dc * r, dc * h + c * r),
+        ]
+    }
+
     /// What the phases rely on: with the radius padded as every light's is, the f32 slopes
     /// contain the exact (f64) tangent slopes of the unpadded circle — no tolerance — from far
     /// away down to the eye inside the circle (then the bound must be dropped: ±∞), and when a
@@ -380,18 +393,17 @@ mod tests {
                 dropped += 1;
                 continue;
             }
-            let h = ((l64 - r64) * (l64 + r64)).sqrt();
-            let (den_max, den_min) = (dc64 * h - c64 * r64, dc64 * h + c64 * r64);
+            let [(num_max, den_max), (num_min, den_min)] = exact_tangents(c64, dc64, r64);
             let context = format!("c {c}, dc {dc}, r {r} (padded {padded}): [{lo}, {hi}]");
             if den_max > 0.0 {
-                let exact = (c64 * h + dc64 * r64) / den_max;
+                let exact = num_max / den_max;
                 assert!(hi as f64 >= exact, "max {exact}: {context}");
                 bounded += hi.is_finite() as usize;
             } else {
                 assert_eq!(hi, f32::INFINITY, "backward max tangent: {context}");
             }
             if den_min > 0.0 {
-                let exact = (c64 * h - dc64 * r64) / den_min;
+                let exact = num_min / den_min;
                 assert!(lo as f64 <= exact, "min {exact}: {context}");
             } else {
                 assert_eq!(lo, f32::NEG_INFINITY, "backward min tangent: {context}");
@@ -431,10 +443,7 @@ mod tests {
             if l64 < 1.1 * r64 * (1.0 + 1e-6) {
                 continue;
             }
-            let h = ((l64 - r64) * (l64 + r64)).sqrt();
-            // `(num, den) / L²` is the unit direction of a tangent: `den / L²` its depth.
-            let (num_max, den_max) = (c64 * h + dc64 * r64, dc64 * h - c64 * r64);
-            let (num_min, den_min) = (c64 * h - dc64 * r64, dc64 * h + c64 * r64);
+            let [(num_max, den_max), (num_min, den_min)] = exact_tangents(c64, dc64, r64);
             for (got, num, den, unbounded) in [
                 (hi, num_max, den_max, f32::INFINITY),
                 (lo, num_min, den_min, f32::NEG_INFINITY),
