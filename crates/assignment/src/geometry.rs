@@ -356,6 +356,19 @@ mod tests {
         }
     }
 
+    /// A circle `(c, dc, r)` for the tangent tests: radius 1e-4–1e4, its centre in a random
+    /// direction at `10^e` radii from the eye, `e` drawn from `log_distance`.
+    fn random_circle(
+        rng: &mut rand_pcg::Pcg64,
+        log_distance: std::ops::Range<f32>,
+    ) -> (f32, f32, f32) {
+        use rand::Rng;
+        let r = 10f32.powf(rng.random_range(-4.0..4.0));
+        let l = r * 10f32.powf(rng.random_range(log_distance));
+        let a = rng.random_range(-std::f32::consts::PI..std::f32::consts::PI);
+        (l * a.sin(), l * a.cos(), r)
+    }
+
     /// The two tangents from the eye to the circle of radius `r` around `(c, dc)` (the eye
     /// outside it), in f64: `[(num, den)]` of the largest slope's, then the smallest's, each
     /// slope `num / den`. `(num, den) / L²` is the tangent's unit direction, so `den / L²` is
@@ -375,15 +388,12 @@ mod tests {
     /// tangent turns backwards (its slope must then be unbounded too).
     #[test]
     fn padded_tangent_slopes_contain_the_exact_ones() {
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
         let (mut bounded, mut dropped) = (0, 0);
         for _ in 0..200_000 {
-            let r = 10f32.powf(rng.random_range(-4.0..4.0));
             // Distance from the eye: 0.3–1e4 radii, plenty of them close to 1.1 r.
-            let l = r * 10f32.powf(rng.random_range(-0.5..4.0));
-            let a = rng.random_range(-std::f32::consts::PI..std::f32::consts::PI);
-            let (c, dc) = (l * a.sin(), l * a.cos());
+            let (c, dc, r) = random_circle(&mut rng, -0.5..4.0);
             let padded = pad_radius(c, 0.0, dc, r);
             let (lo, hi) = tangent_slopes(c, dc, padded);
             let (c64, dc64, r64) = (c as f64, dc as f64, r as f64);
@@ -422,15 +432,12 @@ mod tests {
     /// and the 1.1 r threshold move.)
     #[test]
     fn tangent_slopes_are_the_exact_tangents_from_1_1_radii_out() {
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
         let (mut checked, mut dropped) = (0, 0);
         for _ in 0..100_000 {
-            let r = 10f32.powf(rng.random_range(-4.0..4.0));
             // Distance from the eye: 0.6–1000 radii, plenty of them close to 1.1 r.
-            let l = r * 10f32.powf(rng.random_range(-0.2..3.0));
-            let a = rng.random_range(-std::f32::consts::PI..std::f32::consts::PI);
-            let (c, dc) = (l * a.sin(), l * a.cos());
+            let (c, dc, r) = random_circle(&mut rng, -0.2..3.0);
             let (lo, hi) = tangent_slopes(c, dc, r);
             let (c64, dc64, r64) = (c as f64, dc as f64, r as f64);
             let l64 = (c64 * c64 + dc64 * dc64).sqrt();
