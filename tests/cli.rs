@@ -1652,7 +1652,7 @@ fn skips_measures_every_saving_and_the_image_stays() {
     ]);
     let reports: Value = serde_json::from_str(&stdout(&out)).unwrap();
     let rows = reports[0]["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 7);
+    assert_eq!(rows.len(), 8);
     for row in rows {
         assert!(
             row["after"]["max_image_difference"].as_u64().unwrap() <= 1,
@@ -1671,6 +1671,22 @@ fn skips_measures_every_saving_and_the_image_stays() {
     let reuse = by_name("4.");
     assert_eq!(reuse["after"]["upload_bytes"], 0);
     assert_eq!(reuse["after"]["pairs"], 0);
+    // Only the tuned row decides about the prepass, from probes of both kinds of frame.
+    for row in rows {
+        let tuned = row["saving"].as_str().unwrap().ends_with("tuned");
+        assert_eq!(row["prepass_decision"].is_object(), tuned, "{row}");
+    }
+    let decision = &by_name("1-3 and 5, tuned")["prepass_decision"];
+    assert!(
+        decision["with_seconds"].as_f64().unwrap() > 0.0,
+        "{decision}"
+    );
+    assert!(
+        decision["without_seconds"].as_f64().unwrap() > 0.0,
+        "{decision}"
+    );
+    assert_eq!(decision["frames_per_side"], 3);
+    assert!(decision["use_prepass"].is_boolean(), "{decision}");
 }
 
 /// The stage times every `myriad stress --json` report carries.

@@ -633,13 +633,7 @@ fn print_table(s: &Stats) {
             notes.push(format!("depth range fitted to [{n:.3}, {f:.3}]"));
         }
         if let Some(d) = w.prepass_decision {
-            notes.push(format!(
-                "tuned: depth prepass {} (frames {:.2} ms with it, {:.2} ms without, medians of {} probes each)",
-                if d.use_prepass { "on" } else { "off" },
-                d.with_seconds * 1e3,
-                d.without_seconds * 1e3,
-                d.frames_per_side
-            ));
+            notes.push(format!("tuned: {d}"));
         }
         notes.push(format!(
             "largest difference from the clustered image {}/255",

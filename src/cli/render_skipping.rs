@@ -39,9 +39,30 @@ pub struct WithSkips {
     pub max_image_difference: u8,
 }
 
-/// Frames the tuner may take to decide: its probes, plus one for a frame that did not count.
-fn tuning_frames(viewer: &Viewer) -> usize {
-    2 * viewer.prepass_tuner_settings().probe_frames + 1
+/// With `tune` among `skips`: renders untimed frames until the viewer's prepass tuner has
+/// decided (its probes plus one frame that did not count, at most), so timed frames after it all
+/// run the choice it settled on. Returns that choice; `None` without `tune`.
+pub fn settle_tuner(
+    viewer: &mut Viewer,
+    scene: &RenderScene,
+    method: Method,
+    skips: Skips,
+) -> Result<Option<PrepassDecision>> {
+    if !skips.tune_prepass {
+        return Ok(None);
+    }
+    let frames = 2 * viewer.prepass_tuner_settings().probe_frames + 1;
+    for _ in 0..frames {
+        if viewer.prepass_decision().is_some() {
+            break;
+        }
+        viewer.frame_with_skips(scene, method, skips)?;
+        viewer.ctx.wait_idle()?;
+    }
+    let decision = viewer
+        .prepass_decision()
+        .context("the prepass tuner decided within its probe frames")?;
+    Ok(Some(decision))
 }
 
 /// Times `runs` frames with `skips` (after one untimed frame, which also builds the pipeline
@@ -56,18 +77,7 @@ pub fn measure(
     progress: &Progress,
 ) -> Result<WithSkips> {
     // Tuned: the probes first, untimed, so the timed frames all run the choice they settle on.
-    if skips.tune_prepass {
-        for _ in 0..tuning_frames(viewer) {
-            if viewer.prepass_decision().is_some() {
-                break;
-            }
-            viewer.frame_with_skips(scene, method, skips)?;
-            viewer.ctx.wait_idle()?;
-        }
-        viewer
-            .prepass_decision()
-            .context("the prepass tuner decided within its probe frames")?;
-    }
+    settle_tuner(viewer, scene, method, skips)?;
     let mut samples = FrameSamples::default();
     let (mut prepass, mut mask) = (vec![], vec![]);
     let mut assigned: Option<SkipFrame> = None;

@@ -5,9 +5,12 @@
 
 use super::assign::parse_method;
 use super::render::parse_size;
+use super::render_skipping::settle_tuner;
 use anyhow::Result;
 use myriad::gpu::GpuContext;
-use myriad::render::{RenderScene, SkipFrame, Skips, Viewer, max_channel_difference};
+use myriad::render::{
+    PrepassDecision, RenderScene, SkipFrame, Skips, Viewer, max_channel_difference,
+};
 use myriad::scene::LoadOptions;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -60,6 +63,8 @@ struct Row {
     active_clusters: Option<usize>,
     clusters: usize,
     fitted_range: Option<[f32; 2]>,
+    /// With `tune`: the prepass tuner's choice, settled by untimed probes before the timed frames.
+    prepass_decision: Option<PrepassDecision>,
 }
 
 #[derive(Serialize)]
@@ -186,6 +191,7 @@ fn savings() -> Vec<(&'static str, Skips)> {
                 ..Skips::ALL
             },
         ),
+        ("1-3 and 5, tuned", Skips::TUNED),
         ("all five", Skips::ALL),
     ]
 }
@@ -205,6 +211,7 @@ fn scene_report(
     for (name, skips) in savings() {
         // Before and after frames alternate, so drift in the machine's load hits both alike.
         let mut fresh = Viewer::new(ctx.clone(), scene)?;
+        let prepass_decision = settle_tuner(&mut fresh, scene, method, skips)?;
         let (mut before, mut after) = (Samples::default(), Samples::default());
         for run in 0..=runs {
             before.frame(&mut viewer, scene, method, Skips::NONE, run > 0)?;
@@ -218,9 +225,10 @@ fn scene_report(
             after,
             active_clusters: frame.active_clusters,
             clusters: frame.grid.cluster_count(),
-            fitted_range: skips
-                .fitted_depth
+            // Tuned off, the frames ran without the prepass, so without fitting.
+            fitted_range: (skips.fitted_depth && frame.tuning.is_none_or(|t| t.plan.use_prepass))
                 .then(|| [frame.grid.near(), frame.grid.far()]),
+            prepass_decision,
         });
     }
     Ok(SceneReport {
@@ -297,7 +305,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
              read-back (wall clock; the frame then does not draw it again). mask = depth buffer -> fitted range \
              and active clusters on the CPU. Δimage = largest channel difference from the image \
              with no saving (of 255). \"all five\" and \"reuse\" time frames after an \
-             identical first one. Before and after frames alternate; medians."
+             identical first one. \"tuned\" keeps 2 and 3 only while timed probe frames show \
+             their depth prepass pays (the probes run first, untimed). Before and after frames \
+             alternate; medians."
         );
     }
     let changed = reports
@@ -368,6 +378,9 @@ fn print_table(r: &SceneReport) {
         }
         if let Some([n, f]) = row.fitted_range {
             notes.push(format!("depth range fitted to [{n:.3}, {f:.3}]"));
+        }
+        if let Some(d) = row.prepass_decision {
+            notes.push(format!("tuned: {d}"));
         }
         if !notes.is_empty() {
             println!("{:<25} {}", "", notes.join("; "));

@@ -64,6 +64,21 @@ pub struct PrepassDecision {
     pub frames_per_side: usize,
 }
 
+/// `depth prepass on (frames 373.21 ms with it, 397.52 ms without, medians of 3 probes each)`:
+/// the choice and the measurement behind it, as `myriad render` and `myriad skips` print it.
+impl std::fmt::Display for PrepassDecision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "depth prepass {} (frames {:.2} ms with it, {:.2} ms without, medians of {} probes each)",
+            if self.use_prepass { "on" } else { "off" },
+            self.with_seconds * 1e3,
+            self.without_seconds * 1e3,
+            self.frames_per_side
+        )
+    }
+}
+
 /// What the tuner did with one frame ([`super::SkipFrame::tuning`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TunedFrame {
