@@ -14,7 +14,7 @@
 //! * [`validate_file`], [`ValidationReport`] (`validate.rs`): every problem in a file at once.
 //! * [`Model`] and its parts (`model.rs`): meshes of triangle primitives, instances with world
 //!   transforms, PBR materials, images, cameras, punctual lights as [`Lights`] columns.
-//! * [`Model::load`], [`LoadOptions`] (`gltf_load.rs`): the glTF 2.0 loader (`.gltf`, `.glb`,
+//! * [`Model::load`], [`LoadOptions`] (`gltf_load/`): the glTF 2.0 loader (`.gltf`, `.glb`,
 //!   `KHR_lights_punctual`), with bounds-checked accessor reads (`gltf_accessors.rs`) and
 //!   generated flat normals and tangents (`tangents.rs`). [`Model::to_glb`] (`glb_write.rs`)
 //!   writes untextured models back as reproducible GLB.

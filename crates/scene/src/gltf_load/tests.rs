@@ -1,0 +1,581 @@
+//! The loader's unit tests: small documents built in memory, one decision each.
+
+use super::meshes::{fan_to_list, strip_to_list};
+use super::*;
+use crate::model::{AlphaMode, PunctualKind};
+use glam::Vec4;
+
+/// A one-triangle glTF with an embedded buffer; `extra` is spliced into the root object.
+fn triangle_gltf(indices: [u16; 3], extra: &str) -> String {
+    let mut bytes: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    bytes.extend([0, 0]);
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&bytes));
+    format!(
+        r#"{{"asset": {{"version": "2.0"}},
+  "buffers": [{{"byteLength": {}, "uri": "{uri}"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]}},
+            {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}],
+  "meshes": [{{"name": "tri", "primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}]
+  {extra}}}"#,
+        bytes.len()
+    )
+}
+
+/// Standard base64 (test helper; the loader uses the `gltf` crate's decoder).
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+fn load_str(text: &str) -> Result<Model> {
+    Model::from_gltf_slice(text.as_bytes(), "t.gltf", None, &LoadOptions::default())
+}
+
+#[test]
+fn loads_a_triangle_with_instances_cameras_and_lights() {
+    let extra = r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+  {"type": "point", "intensity": 40, "color": [1, 0.5, 0.5]},
+  {"type": "spot", "intensity": 5, "range": 7, "spot": {"outerConeAngle": 0.5}},
+  {"type": "directional", "intensity": 3},
+  {"type": "point", "intensity": 0}]}},
+  "cameras": [{"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1}}],
+  "scenes": [{"nodes": [0, 3, 8]}],
+  "nodes": [{"translation": [10, 0, 0], "children": [1, 2]},
+        {"mesh": 0},
+        {"mesh": 0, "translation": [0, 5, 0], "name": "up"},
+        {"children": [4, 5, 6, 7]},
+        {"camera": 0, "name": "Eye", "translation": [0, 0, 5]},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [1, 2, 3]},
+        {"extensions": {"KHR_lights_punctual": {"light": 1}}, "rotation": [-0.7071068, 0, 0, 0.7071068]},
+        {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 3}}, "name": "dark"}]"#;
+    let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+    assert_eq!(model.meshes.len(), 1);
+    assert_eq!(model.instances.len(), 2);
+    assert_eq!(model.triangle_count(), 2);
+    let b = model.bounds();
+    assert_eq!(b.min, Vec3::new(10.0, 0.0, 0.0));
+    assert_eq!(b.max, Vec3::new(11.0, 6.0, 0.0));
+    // No normals in the file: flat normals, facing +Z.
+    assert_eq!(model.meshes[0].primitives[0].normals, [Vec3::Z; 3]);
+    assert_eq!(model.cameras.len(), 1);
+    assert_eq!(model.cameras[0].name, "Eye");
+    assert_eq!(model.cameras[0].position, Vec3::new(0.0, 0.0, 5.0));
+    let camera = model.camera(0, 800, 600).unwrap();
+    assert_eq!((camera.width, camera.near), (800, 0.1));
+    assert_eq!(model.lights.len(), 2);
+    // Point light: radius from intensity 40 × max colour 1 at the default cut-off.
+    let expected = (40.0f32 / DEFAULT_LIGHT_CUTOFF).sqrt();
+    assert!((model.lights.radius[0] - expected).abs() < 1e-4);
+    assert_eq!(model.lights.get(0).position, Vec3::new(1.0, 2.0, 3.0));
+    // Spot light: range kept, axis = node's -Z rotated -90° about X = straight down.
+    let spot = model.lights.get(1);
+    assert_eq!(spot.radius, 7.0);
+    let cone = spot.spot.unwrap();
+    assert!(
+        (cone.direction - Vec3::NEG_Y).length() < 1e-5,
+        "{}",
+        cone.direction
+    );
+    assert_eq!(cone.angle, 0.5);
+    assert!(model.lights.problems().is_empty());
+    assert_eq!(model.placed_lights[1].range, Some(7.0));
+    assert_eq!(model.directional_lights.len(), 1);
+    assert_eq!(model.directional_lights[0].direction, Vec3::NEG_Z);
+    // A light of intensity 0 without range lights nothing: left out, counted, warned about.
+    assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+    assert!(
+        model.warnings[0].starts_with("nodes[8] \"dark\": KHR_lights_punctual lights[3]: no range"),
+        "{:?}",
+        model.warnings
+    );
+    assert_eq!(model.skipped_lights.len(), 1);
+    assert_eq!(model.skipped_lights[0].node, 8);
+    assert_eq!(model.skipped_lights[0].light, 3);
+    assert_eq!(model.summary().skipped_lights, 1);
+}
+
+#[test]
+fn invalid_lights_are_left_out_counted_and_reported() {
+    // Each bad light is skipped on its own: the triangle, the camera and the good light
+    // stay (these used to make the whole file an error).
+    let bad = [
+        (
+            r#"{"type": "point", "range": 0}"#,
+            "range 0 is not finite and > 0",
+        ),
+        (
+            r#"{"type": "point", "range": -3}"#,
+            "range -3 is not finite and > 0",
+        ),
+        (
+            r#"{"type": "point", "intensity": -1, "range": 2}"#,
+            "intensity -1 must be finite and >= 0",
+        ),
+        (
+            r#"{"type": "point", "intensity": 1e39, "range": 2}"#,
+            "intensity inf must be finite and >= 0",
+        ),
+        (
+            r#"{"type": "point", "color": [1, -1, 1], "range": 2, "name": "red"}"#,
+            "color [1, -1, 1] and intensity 1",
+        ),
+        (
+            r#"{"type": "spot", "range": 2, "spot": {"outerConeAngle": 0}}"#,
+            "outerConeAngle 0 is not in (0, π]",
+        ),
+        (
+            r#"{"type": "directional", "intensity": -2}"#,
+            "intensity -2 must be finite and >= 0",
+        ),
+    ];
+    let lights: Vec<&str> = bad.iter().map(|(light, _)| *light).collect();
+    let nodes: Vec<String> = (0..bad.len())
+        .map(|i| format!(r#"{{"extensions": {{"KHR_lights_punctual": {{"light": {i}}}}}}}"#))
+        .collect();
+    let good = bad.len();
+    let extra = format!(
+        r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{}, {{"type": "point", "range": 4}}]}}}},
+  "scenes": [{{"nodes": [{}]}}],
+  "nodes": [{}, {{"extensions": {{"KHR_lights_punctual": {{"light": {good}}}}}}}, {{"mesh": 0}}]"#,
+        lights.join(", "),
+        (0..good + 2)
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        nodes.join(", "),
+    );
+    let model = load_str(&triangle_gltf([0, 1, 2], &extra)).unwrap();
+    assert_eq!(model.triangle_count(), 1);
+    assert_eq!(model.lights.len(), 1);
+    assert_eq!(model.lights.radius[0], 4.0);
+    assert_eq!(model.placed_lights[0].light, good);
+    assert!(model.directional_lights.is_empty());
+    assert_eq!(
+        model.skipped_lights.len(),
+        bad.len(),
+        "{:?}",
+        model.warnings
+    );
+    assert_eq!(model.summary().skipped_lights, bad.len());
+    assert_eq!(model.warnings.len(), bad.len(), "{:?}", model.warnings);
+    for (i, (skipped, (_, why))) in model.skipped_lights.iter().zip(bad).enumerate() {
+        assert_eq!((skipped.node, skipped.light), (i, i));
+        assert!(skipped.reason.contains(why), "{skipped:?}");
+        let name = if i == 4 { " \"red\"" } else { "" };
+        let warning = &model.warnings[i];
+        assert!(
+            warning.starts_with(&format!(
+                "nodes[{i}]: KHR_lights_punctual lights[{i}]{name}: "
+            )) && warning.contains(why)
+                && warning.ends_with("; left out"),
+            "{warning}"
+        );
+    }
+    assert_eq!(model.skipped_lights[4].name.as_deref(), Some("red"));
+}
+
+#[test]
+fn tiny_and_huge_node_scales_keep_directions_and_zero_scales_are_named() {
+    // A spot, a sun and a camera under one node scale, each rotated by `rotation`.
+    let with = |scale: &str, rotation: &str| {
+        let extra = format!(
+            r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [
+  {{"type": "spot", "range": 7, "spot": {{"outerConeAngle": 0.5}}}},
+  {{"type": "directional"}}]}}}},
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 1.0, "znear": 0.1}}}}],
+  "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"scale": {scale}, "children": [1, 2, 3]}},
+        {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "rotation": {rotation}}},
+        {{"extensions": {{"KHR_lights_punctual": {{"light": 1}}}}, "rotation": {rotation}}},
+        {{"camera": 0, "rotation": {rotation}}}]"#
+        );
+        load_str(&triangle_gltf([0, 1, 2], &extra)).unwrap()
+    };
+    // f32 normalising squares these lengths to 0 or ∞: the nodes used to be "degenerate".
+    // Uniform scales, with the nodes turned to look down -Y (up -Z); and the audit's
+    // non-uniform case, unrotated (down -Z, up +Y).
+    let down = "[-0.7071068, 0, 0, 0.7071068]";
+    let ahead = "[0, 0, 0, 1]";
+    for (scale, rotation, forward, up) in [
+        ("[1e-30, 1e-30, 1e-30]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+        ("[1e-40, 1e-40, 1e-40]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+        ("[1e20, 1e20, 1e20]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+        ("[3e38, 3e38, 3e38]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+        ("[1, 1, 1e-30]", ahead, Vec3::NEG_Z, Vec3::Y),
+        ("[1, 1, 1e30]", ahead, Vec3::NEG_Z, Vec3::Y),
+    ] {
+        let model = with(scale, rotation);
+        let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-4;
+        assert!(model.warnings.is_empty(), "{scale}: {:?}", model.warnings);
+        let spot = model.lights.get(0).spot.expect("the spot is kept");
+        assert!(near(spot.direction, forward), "{scale}: {}", spot.direction);
+        assert_eq!(model.directional_lights.len(), 1, "{scale}");
+        let sun = model.directional_lights[0].direction;
+        assert!(near(sun, forward), "{scale}: {sun}");
+        assert_eq!(model.cameras.len(), 1, "{scale}");
+        let camera = &model.cameras[0];
+        assert!(near(camera.forward, forward), "{scale}: {}", camera.forward);
+        assert!(near(camera.up, up), "{scale}: {}", camera.up);
+    }
+    // A zero scale really leaves no direction: left out, and the message says why.
+    let model = with("[1, 1, 0]", ahead);
+    assert!(model.lights.is_empty() && model.directional_lights.is_empty());
+    assert!(model.cameras.is_empty());
+    assert_eq!(model.skipped_lights.len(), 2, "{:?}", model.warnings);
+    let axis_to_zero =
+        "its node's transform maps the -Z axis to zero (a zero scale or a singular matrix)";
+    assert_eq!(
+        model.warnings,
+        [
+            format!(
+                "nodes[1]: KHR_lights_punctual lights[0]: {axis_to_zero}, so the light has no direction; left out"
+            ),
+            format!(
+                "nodes[2]: KHR_lights_punctual lights[1]: {axis_to_zero}, so the light has no direction; left out"
+            ),
+            format!("cameras[0]: {axis_to_zero}, so the camera has no view direction; left out"),
+        ]
+    );
+}
+
+#[test]
+fn a_spot_inner_cone_outside_the_outer_is_clamped_and_reported() {
+    let extra = r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+  {"type": "spot", "range": 7, "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.5}}]}},
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}]"#;
+    let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+    assert_eq!(model.lights.len(), 1);
+    let PunctualKind::Spot {
+        inner_cone_angle,
+        outer_cone_angle,
+    } = model.placed_lights[0].kind
+    else {
+        panic!("not a spot: {:?}", model.placed_lights[0].kind);
+    };
+    assert_eq!(outer_cone_angle, 0.5);
+    assert!(inner_cone_angle < 0.5 && inner_cone_angle > 0.49);
+    assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+    assert!(
+        model.warnings[0].contains("innerConeAngle 0.6 is not in [0, outerConeAngle 0.5)"),
+        "{:?}",
+        model.warnings
+    );
+}
+
+#[test]
+fn a_spot_wider_than_the_spec_is_kept_and_reported() {
+    let extra = r#",
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+  {"type": "spot", "range": 7, "spot": {"outerConeAngle": 2.5}}]}},
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}]"#;
+    let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+    assert_eq!(model.lights.get(0).spot.unwrap().angle, 2.5);
+    assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+    assert!(
+        model.warnings[0].contains("outerConeAngle 2.5 is above the spec's π/2"),
+        "{:?}",
+        model.warnings
+    );
+}
+
+#[test]
+fn material_factors_outside_the_unit_range_are_clamped_and_reported() {
+    let extra = r#",
+  "materials": [{"name": "hot", "alphaMode": "MASK", "alphaCutoff": -0.5,
+  "emissiveFactor": [2, 0.5, -1],
+  "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": -2}},
+  "pbrMetallicRoughness": {"baseColorFactor": [1.5, 0.5, -0.25, 1],
+                           "metallicFactor": 3, "roughnessFactor": -1}},
+  {"name": "fine", "emissiveFactor": [1, 0, 0],
+   "pbrMetallicRoughness": {"baseColorFactor": [0, 0.5, 1, 0.5],
+                            "metallicFactor": 1, "roughnessFactor": 0}}],
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}]"#;
+    let model = load_str(&triangle_gltf([0, 1, 2], extra)).unwrap();
+    let hot = &model.materials[0];
+    assert_eq!(hot.base_color_factor, Vec4::new(1.0, 0.5, 0.0, 1.0));
+    assert_eq!((hot.metallic_factor, hot.roughness_factor), (1.0, 0.0));
+    assert_eq!(hot.emissive_factor, Vec3::ZERO);
+    assert_eq!(hot.alpha_mode, AlphaMode::Mask { cutoff: 0.0 });
+    let expected = [
+        "baseColorFactor[0] 1.5 is outside [0, 1]; clamped to 1",
+        "baseColorFactor[2] -0.25 is outside [0, 1]; clamped to 0",
+        "metallicFactor 3 is outside [0, 1]; clamped to 1",
+        "roughnessFactor -1 is outside [0, 1]; clamped to 0",
+        "emissiveFactor[0] 2 is outside [0, 1]; clamped to 1",
+        "emissiveFactor[2] -1 is outside [0, 1]; clamped to 0",
+        "alphaCutoff -0.5 is outside [0, 1]; clamped to 0",
+        "emissiveStrength -2 is negative; clamped to 0",
+    ];
+    assert_eq!(model.warnings.len(), expected.len(), "{:?}", model.warnings);
+    for (w, e) in model.warnings.iter().zip(expected) {
+        assert_eq!(w, &format!("materials[0] \"hot\": {e}"));
+    }
+    // In-range factors pass untouched.
+    let fine = &model.materials[1];
+    assert_eq!(fine.base_color_factor, Vec4::new(0.0, 0.5, 1.0, 0.5));
+    assert_eq!((fine.metallic_factor, fine.roughness_factor), (1.0, 0.0));
+}
+
+#[test]
+fn strips_and_fans_become_lists() {
+    assert_eq!(
+        strip_to_list(&[10, 11, 12, 13, 14]),
+        [10, 11, 12, 11, 13, 12, 12, 13, 14]
+    );
+    assert_eq!(fan_to_list(&[10, 11, 12, 13]), [11, 12, 10, 12, 13, 10]);
+    assert!(strip_to_list(&[1, 2]).is_empty() && fan_to_list(&[]).is_empty());
+    // Through the loader: one triangle either way, winding kept.
+    for mode in [5, 6] {
+        let text = triangle_gltf([0, 1, 2], "").replace(
+            r#""indices": 1}"#,
+            &format!(r#""indices": 1, "mode": {mode}}}"#),
+        );
+        let text = text.replace(
+            r#""meshes""#,
+            r#""nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "meshes""#,
+        );
+        let model = load_str(&text).unwrap();
+        let p = &model.meshes[0].primitives[0];
+        assert_eq!(p.triangle_count(), 1, "mode {mode}");
+        // Winding kept: flat normal still +Z.
+        assert_eq!(p.normals[0], Vec3::Z, "mode {mode}");
+    }
+}
+
+#[test]
+fn broken_documents_are_errors_naming_the_problem() {
+    let cycle = triangle_gltf(
+        [0, 1, 2],
+        r#", "scenes": [{"nodes": [0]}], "nodes": [{"children": [1]}, {"children": [0]}]"#,
+    );
+    let out_of_range = triangle_gltf([0, 1, 7], r#", "nodes": [{"mesh": 0}]"#);
+    let cases = [
+        (cycle, "nodes[0] is its own ancestor"),
+        (
+            out_of_range,
+            "meshes[0] \"tri\" primitives[0]: index 7 (element 2 of the indices) is out of range",
+        ),
+        ("{".to_string(), "not valid glTF JSON"),
+        (
+            "glTX\u{2}\0\0\0".to_string(),
+            "neither GLB (which starts with the magic \"glTF\") nor glTF JSON (an object, \
+             starting with '{'): it starts with glTX",
+        ),
+        (" \n\t".to_string(), "empty: neither GLB nor glTF JSON"),
+        (
+            r#"{"asset": {"version": "2.0"}, "nodes": [{"mesh": 3}]}"#.to_string(),
+            "invalid glTF: nodes[0].mesh",
+        ),
+        (
+            r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4, "uri": "missing.bin"}]}"#
+                .to_string(),
+            "buffers[0] \"missing.bin\": an external file cannot be read without a base folder",
+        ),
+        (
+            r#"{"asset": {"version": "2.0"}, "cameras": [{"type": "perspective"}], "nodes": [{"camera": 0}]}"#
+                .to_string(),
+            "invalid glTF: cameras[0]: Missing data",
+        ),
+    ];
+    for (text, expected) in cases {
+        let e = load_str(&text).unwrap_err().to_string();
+        assert!(e.starts_with("t.gltf: "), "{e}");
+        assert!(e.contains(expected), "expected {expected:?} in {e}");
+    }
+    for glb in [
+        &b"glTF"[..],
+        b"glTF\x01\0\0\0\x14\0\0\0\0\0\0\0\0\0\0\0",
+        b"glTF\x02\0\0\0\xff\xff\0\0\0\0\0\0\0\0\0\0",
+    ] {
+        let e = Model::from_gltf_slice(glb, "x.glb", None, &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("x.glb: ") && e.contains("GLB"), "{e}");
+    }
+}
+
+/// `json` as a GLB with one JSON chunk (padded with spaces) and the given header length
+/// (`None`: the true one).
+fn glb(json: &str, declared: Option<u32>) -> Vec<u8> {
+    let mut chunk = json.as_bytes().to_vec();
+    chunk.resize(chunk.len().next_multiple_of(4), b' ');
+    let total = 12 + 8 + chunk.len() as u32;
+    let mut out = b"glTF".to_vec();
+    for word in [2, declared.unwrap_or(total), chunk.len() as u32, 0x4E4F534A] {
+        out.extend(u32::to_le_bytes(word));
+    }
+    out.extend(chunk);
+    out
+}
+
+#[test]
+fn spec_violations_are_refused_or_reported() {
+    let text = triangle_gltf(
+        [0, 1, 2],
+        r#", "scenes": [{"nodes": [0, 1]}], "nodes": [{"mesh": 0}, {}]"#,
+    );
+    // Refused: what the spec tells a loader not to load, and containers or buffers whose
+    // declared lengths contradict their bytes.
+    let refused = [
+        (
+            text.replace(r#""version": "2.0""#, r#""version": "3.0""#),
+            "asset.version \"3.0\": only glTF 2.x is supported",
+        ),
+        (
+            text.replace(
+                r#""version": "2.0""#,
+                r#""version": "2.0", "minVersion": "2.1""#,
+            ),
+            "asset.minVersion \"2.1\": this loader implements glTF 2.0 only",
+        ),
+        (
+            text.replace(r#""version": "2.0""#, r#""version": "two""#),
+            "asset.version \"two\" is not MAJOR.MINOR",
+        ),
+        (
+            text.replace(r#""byteLength": 44"#, r#""byteLength": 10"#),
+            "bufferViews[0]: bytes 0..0+36 lie outside buffer 0 (10 bytes)",
+        ),
+        (
+            text.replace(
+                r#""nodes": [{"mesh": 0}, {}]"#,
+                r#""nodes": [{"mesh": 0}, {"name": "proj",
+                  "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0]}]"#,
+            ),
+            "nodes[1] \"proj\": matrix has last row [0.0, 0.0, 0.0, 0.0], not [0, 0, 0, 1]",
+        ),
+        (
+            text.replace(
+                r#""nodes": [{"mesh": 0}, {}]"#,
+                r#""nodes": [{"mesh": 0, "matrix": [1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}, {}]"#,
+            ),
+            "nodes[0]: matrix has last row [0.5, 0.0, 0.0, 1.0], not [0, 0, 0, 1]",
+        ),
+    ];
+    for (text, expected) in refused {
+        let e = load_str(&text).unwrap_err().to_string();
+        assert!(e.starts_with("t.gltf: ") && e.contains(expected), "{e}");
+    }
+    // A later minor version of 2 loads.
+    let minor = text.replace(
+        r#""version": "2.0""#,
+        r#""version": "2.7", "minVersion": "2.0""#,
+    );
+    assert_eq!(load_str(&minor).unwrap().triangle_count(), 1);
+    // The GLB header's length must be the file's, shorter as well as longer.
+    let load_glb =
+        |bytes: &[u8]| Model::from_gltf_slice(bytes, "t.glb", None, &LoadOptions::default());
+    let good = glb(&text, None);
+    assert_eq!(load_glb(&good).unwrap().triangle_count(), 1);
+    let short = glb(&text, Some(20));
+    let e = load_glb(&short).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "t.glb: GLB header declares 20 bytes, but the file has {}",
+            short.len()
+        )
+    );
+
+    // Reported: the file breaks a rule, but one reading is clear and the model stays usable.
+    let reported = [
+        (
+            text.replace(
+                r#""nodes": [{"mesh": 0}, {}]"#,
+                r#""nodes": [{}, {"mesh": 0, "name": "both", "translation": [0, 7, 0], "scale": [2, 2, 2],
+                  "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 0, 0, 1]}]"#,
+            ),
+            "nodes[1] \"both\": has both matrix and translation, scale (the spec allows one or \
+             the other); the matrix is used",
+        ),
+        (
+            text.replace(
+                r#""nodes": [{"mesh": 0}, {}]"#,
+                r#""nodes": [{"mesh": 0}, {"camera": 0}],
+                "cameras": [{"type": "perspective",
+                             "perspective": {"yfov": 1, "znear": 0.1, "aspectRatio": 0}}]"#,
+            ),
+            "cameras[0]: aspectRatio 0 is not finite and > 0; ignored (the aspect follows the \
+             output size)",
+        ),
+        (
+            text.replace(
+                r#""nodes": [{"mesh": 0}, {}]"#,
+                r#""nodes": [{"mesh": 0}, {"camera": 0}],
+                "cameras": [{"type": "perspective",
+                             "perspective": {"yfov": 1, "znear": 0.1, "aspectRatio": -2}}]"#,
+            ),
+            "cameras[0]: aspectRatio -2 is not finite and > 0; ignored (the aspect follows the \
+             output size)",
+        ),
+        (
+            triangle_gltf([2, 1, 0], r#", "scenes": [{"nodes": [0, 1]}], "nodes": [{"mesh": 0}, {}]"#).replace(
+                r#""max": [1, 1, 0]}"#,
+                r#""max": [1, 1, 0], "sparse": {"count": 3,
+                    "indices": {"bufferView": 1, "componentType": 5123},
+                    "values": {"bufferView": 0}}}"#,
+            ),
+            "accessors[0]: sparse indices must strictly increase, but element 1 is 1 after 2; \
+             applied in file order (a repeated index takes its last value)",
+        ),
+        (
+            r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4,
+                "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}]}"#
+                .to_string(),
+            "buffers[0] (data URI): holds 12 bytes but declares byteLength 4; the rest is \
+             ignored",
+        ),
+    ];
+    for (text, expected) in &reported {
+        let model = load_str(text).unwrap();
+        assert_eq!(&model.warnings, &[*expected]);
+        assert_eq!(model.triangle_count(), model.instances.len());
+    }
+    // The matrix wins over the TRS given beside it.
+    let both = load_str(&reported[0].0).unwrap();
+    assert_eq!(both.bounds().min, Vec3::new(5.0, 0.0, 0.0));
+    assert_eq!(both.bounds().max, Vec3::new(6.0, 1.0, 0.0));
+}
+
+#[test]
+fn missing_files_name_the_path() {
+    let e = Model::load("/no/such/model.gltf", &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.to_string(), "cannot read glTF file /no/such/model.gltf");
+    let source = std::error::Error::source(&e).expect("the OS error is the source");
+    assert!(source.to_string().contains("No such file"), "{source}");
+}
