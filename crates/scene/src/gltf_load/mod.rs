@@ -31,8 +31,9 @@
 //! 5. **Nodes**: the default scene (or scene 0; with no scenes, every node without a parent)
 //!    is walked iteratively, composing world transforms (`matrix`, or translation · rotation ·
 //!    scale). A node that is its own ancestor is an error; a node reached along several paths is
-//!    drawn once per path (instancing). Nodes with meshes become [`Instance`](crate::Instance)s, with cameras
-//!    [`ModelCamera`](crate::ModelCamera)s, with `KHR_lights_punctual` lights rows of [`Model::lights`](crate::Model::lights).
+//!    drawn once per path (instancing). Nodes with meshes become [`Instance`](crate::Instance)s,
+//!    with cameras [`ModelCamera`](crate::ModelCamera)s, with `KHR_lights_punctual` lights rows of
+//!    [`Model::lights`].
 //!
 //! [`load`] drives the steps; each has a file: `container.rs` (the checks of steps 1 and 2),
 //! `materials.rs` (materials, step 4's images), `meshes.rs` (primitives), `nodes.rs` (step 5 and
@@ -48,12 +49,13 @@
 //!   A light whose values cannot make a light (`range` not finite and > 0, a colour or
 //!   intensity that is negative or not finite in f32, an `outerConeAngle` outside (0, π], zero
 //!   intensity without a `range`) or whose node gives it no direction (a spot or directional
-//!   light under a zero scale) is left out of [`Model::lights`](crate::Model::lights) / [`Model::directional_lights`],
-//!   listed in [`Model::skipped_lights`](crate::Model::skipped_lights) (one row per node that places it, with the light's
-//!   index, name and reason; `myriad info` counts them) and warned about as
-//!   `nodes[N] "node": KHR_lights_punctual lights[I] "name": <what is wrong>; left out`. The
-//!   geometry, the cameras and the other lights stay usable. Only a node naming a light that
-//!   does not exist is an error: then the document itself is broken.
+//!   light under a zero scale) is left out of [`Model::lights`] /
+//!   [`Model::directional_lights`], listed in
+//!   [`Model::skipped_lights`] (one row per node that places it, with
+//!   the light's index, name and reason; `myriad info` counts them) and warned about as `nodes[N]
+//!   "node": KHR_lights_punctual lights[I] "name": <what is wrong>; left out`. The geometry, the
+//!   cameras and the other lights stay usable. Only a node naming a light that does not exist is an
+//!   error: then the document itself is broken.
 //! * **Directions ignore scale.** A spot's or sun's direction and a camera's view and up are the
 //!   node's −Z and +Y axes at unit length, however the node scales them (1e-30, 1e20, or
 //!   non-uniformly): normalised in f64 where f32 would square the length to 0 or ∞. Only a
@@ -121,8 +123,8 @@ pub enum ImageLoading {
     /// Decode every image to pixels ([`Image::pixels`](crate::Image::pixels) is `Some`).
     #[default]
     Decode,
-    /// Record where each image is, decode nothing ([`Image::pixels`](crate::Image::pixels) is `None`). Much faster;
-    /// what tools that only need geometry and lights use.
+    /// Record where each image is, decode nothing ([`Image::pixels`](crate::Image::pixels) is
+    /// `None`). Much faster; what tools that only need geometry and lights use.
     ReferencesOnly,
 }
 

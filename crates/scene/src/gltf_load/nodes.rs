@@ -313,10 +313,11 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// A node's `KHR_lights_punctual` light: a row of [`Model::lights`](crate::Model::lights) (point, spot) or a
-    /// [`DirectionalLight`]. A light whose values cannot make a light is left out, listed in
-    /// [`Model::skipped_lights`](crate::Model::skipped_lights) and warned about (see "Invalid lights" in the module docs); only
-    /// a light index that does not exist is an error, since then the document itself is broken.
+    /// A node's `KHR_lights_punctual` light: a row of [`Model::lights`](crate::Model::lights)
+    /// (point, spot) or a [`DirectionalLight`]. A light whose values cannot make a light is left
+    /// out, listed in [`Model::skipped_lights`](crate::Model::skipped_lights) and warned about (see
+    /// "Invalid lights" in the module docs); only a light index that does not exist is an error,
+    /// since then the document itself is broken.
     fn light(
         &mut self,
         index: usize,
@@ -476,7 +477,8 @@ impl Loader<'_> {
 enum Usable {
     /// A sun: only a direction.
     Directional { direction: Vec3, color: Vec3 },
-    /// A point or spot light, ready for [`Model::lights`](crate::Model::lights) but for its `source_index`.
+    /// A point or spot light, ready for [`Model::lights`](crate::Model::lights) but for its
+    /// `source_index`.
     Clustered {
         record: LightRecord,
         kind: PunctualKind,
