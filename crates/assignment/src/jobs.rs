@@ -623,3 +623,244 @@ pub(crate) fn cluster_bounding_spheres(camera: &Camera, grid: &ClusterGrid, out:
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cone::{self, LightCone};
+    use glam::UVec3;
+    use myriad_cluster_math::{DepthSlicing, PlaneSets};
+    use rand::{Rng, SeedableRng};
+
+    /// Slices per part in [`context`]'s frames: 4, so a span pushed to the wrong part shows.
+    const SLICE_SHIFT: u32 = 2;
+
+    /// A 70° 1536 × 768 camera at the origin looking down −z, a 24 × 12 × 16 log grid over
+    /// 0.1–60 and its plane sets (the geometry tests' frame).
+    fn frame() -> (Camera, ClusterGrid, PlaneSets) {
+        let (near, far) = (0.1, 60.0);
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 70.0, 1536, 768, near, far);
+        let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, near, far);
+        let sets = PlaneSets::new(&camera, &grid);
+        (camera, grid, sets)
+    }
+
+    /// `method`'s frame context over [`frame`], point lights only, no mask, four slices to a
+    /// part; `tile_cones` empty makes the `cone` method compute each tile's cone where needed.
+    fn context<'a>(
+        method: Method,
+        camera: &'a Camera,
+        grid: &'a ClusterGrid,
+        sets: &'a PlaneSets,
+        tile_cones: &'a [TileCone],
+    ) -> FrameContext<'a> {
+        let d = grid.dims();
+        FrameContext {
+            method,
+            lights: LightInput::points(&[], &[], &[], &[]),
+            camera,
+            grid,
+            planes: FramePlanes::new(sets, grid),
+            view_from_world: camera.view_rotation(),
+            cluster_spheres: &[],
+            tile_cones,
+            tan_half_fov: camera.tan_half_fov_f64(),
+            exact: None,
+            active: None,
+            parts: d.z.div_ceil(1 << SLICE_SHIFT) as usize,
+            slice_shift: SLICE_SHIFT,
+            cull: FrustumCull {
+                sides: [Vec3::ZERO; 4],
+                near: camera.near,
+                far: camera.far,
+            },
+        }
+    }
+
+    /// The clusters light 7 is listed in after `emit`, ascending. Checks on the way that every
+    /// span is light 7's, lies in the part of its slice, and that no cluster is listed twice.
+    fn emitted(ctx: &FrameContext<'_>, sphere: (f32, f32, f32, f32), bx: &ClusterBox) -> Vec<u32> {
+        let (cx, cy, dc, r) = sphere;
+        let d = ctx.grid.dims();
+        let mut buckets: Vec<CachePadded<Bucket>> = Vec::new();
+        buckets.resize_with(ctx.parts, CachePadded::default);
+        let mut gaps = vec![0.0; 2 * d.x as usize];
+        let mut columns = vec![ConeColumn::default(); d.x as usize];
+        let spot = SpotView::default();
+        emit(
+            ctx,
+            7,
+            cx,
+            cy,
+            dc,
+            r,
+            bx,
+            &spot,
+            &mut buckets,
+            &mut gaps,
+            &mut columns,
+        );
+        let mut clusters = Vec::new();
+        for (part, bucket) in buckets.iter().enumerate() {
+            for span in &bucket.spans {
+                assert_eq!(span.light, 7);
+                for start in span.row_starts(d.x) {
+                    for c in start..start + span.len() {
+                        let k = ctx.grid.cluster_coords(c).z;
+                        assert_eq!((k >> SLICE_SHIFT) as usize, part, "cluster {c}");
+                        clusters.push(c);
+                    }
+                }
+            }
+        }
+        clusters.sort_unstable();
+        let listed = clusters.len();
+        clusters.dedup();
+        assert_eq!(clusters.len(), listed, "a cluster listed twice");
+        clusters
+    }
+
+    /// The clusters of `bx` that pass `keep(i, j, k)`, ascending.
+    fn box_clusters(
+        grid: &ClusterGrid,
+        bx: &ClusterBox,
+        mut keep: impl FnMut(u32, u32, u32) -> bool,
+    ) -> Vec<u32> {
+        let mut out = Vec::new();
+        for k in bx.z.k0..=bx.z.k1 {
+            for j in bx.j0..=bx.j1 {
+                for i in bx.i0..=bx.i1 {
+                    if keep(i, j, k) {
+                        out.push(grid.cluster_id(i, j, k));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Each method's `emit` lists, per light, exactly what its definition keeps of the light's
+    /// box: `binary` the whole box; `refined` the rows of `refine_slice` on boxes at least two
+    /// tiles wide and tall, else the whole box; `cone` the clusters whose slice, closed, meets
+    /// the tile's depth range from `LightCone::depth_bounds` — from the cached tile cones and
+    /// from cones made on the fly alike. Lights straddle the near and far planes too, so that
+    /// tiles whose range lies wholly before the box's first slice or past its last (the slice
+    /// walks' ends, and an empty column at slice 0) occur. The oracle suites cannot see a method
+    /// that lists a superset (a slice walk stopping early, an empty column kept, `refined` or
+    /// `cone` cutting a box they should keep whole); this can.
+    #[test]
+    fn emit_lists_exactly_each_methods_definition() {
+        let (camera, grid, sets) = frame();
+        let d = grid.dims();
+        let mut cached = Vec::new();
+        cone::tile_cones(camera.tan_half_fov_f64(), d, &mut cached);
+        let planes = FramePlanes::new(&sets, &grid);
+        let z = &sets.z_depths;
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let (mut boxes, mut kept, mut cut, mut empty_at_0, mut past_far) = (0, 0, 0, 0, 0);
+        while boxes < 1500 {
+            // Depths 0–64, denser near the eye, so that the near and far planes are crossed.
+            let dc = 64.0 * rng.random::<f32>().powi(2);
+            let (cx, cy) = (rng.random_range(-dc..=dc), rng.random_range(-dc..=dc) * 0.5);
+            let r = 10f32.powf(rng.random_range(-1.5..1.0));
+            let Some(bx) = geometry::cluster_box(cx, cy, dc, r, &planes) else {
+                continue;
+            };
+            boxes += 1;
+            let sphere = (cx, cy, dc, r);
+            let all = box_clusters(&grid, &bx, |_, _, _| true);
+            let binary = context(Method::Binary, &camera, &grid, &sets, &[]);
+            assert_eq!(
+                emitted(&binary, sphere, &bx),
+                all,
+                "binary {sphere:?} {bx:?}"
+            );
+
+            let refined = context(Method::Refined, &camera, &grid, &sets, &[]);
+            let want = if bx.i1 > bx.i0 && bx.j1 > bx.j0 {
+                let mut rows = Vec::new();
+                let mut gaps = vec![0.0; 2 * d.x as usize];
+                for k in bx.z.k0..=bx.z.k1 {
+                    geometry::refine_slice(
+                        cx,
+                        cy,
+                        dc,
+                        r,
+                        &bx,
+                        k,
+                        &planes,
+                        &mut gaps,
+                        |j, i0, i1| rows.extend((i0..=i1).map(|i| grid.cluster_id(i, j, k))),
+                    );
+                }
+                rows.sort_unstable();
+                rows
+            } else {
+                all.clone()
+            };
+            assert_eq!(
+                emitted(&refined, sphere, &bx),
+                want,
+                "refined {sphere:?} {bx:?}"
+            );
+
+            let light = LightCone::new(cx, cy, dc, r);
+            let want = box_clusters(&grid, &bx, |i, j, k| {
+                let (lo, hi) = light.depth_bounds(&cached[(j * d.x + i) as usize]);
+                let (near, far) = (f64::from(z[k as usize]), f64::from(z[k as usize + 1]));
+                let keep = lo <= hi && far >= lo && near <= hi;
+                empty_at_0 += (bx.z.k0 == 0 && k == 0 && lo > hi) as usize;
+                past_far += (k == d.z - 1 && lo > far) as usize;
+                keep
+            });
+            for tiles in [&cached[..], &[]] {
+                let cone = context(Method::Cone, &camera, &grid, &sets, tiles);
+                let got = emitted(&cone, sphere, &bx);
+                assert_eq!(
+                    got,
+                    want,
+                    "cone {sphere:?} {bx:?}, cached tiles: {}",
+                    tiles.len()
+                );
+            }
+            kept += want.len();
+            cut += all.len() - want.len();
+        }
+        assert!(kept > cut && cut > 10_000, "cone kept {kept}, cut {cut}");
+        assert!(
+            empty_at_0 > 10 && past_far > 10,
+            "empty columns at slice 0: {empty_at_0}, ranges past the far plane: {past_far}"
+        );
+    }
+
+    /// An overflowed light (see `run_task`'s phase 0c) is listed once in every cluster of the
+    /// grid by every box method: an infinite radius must keep `refined` and `cone` from cutting.
+    #[test]
+    fn an_overflowed_light_is_listed_in_the_whole_grid() {
+        let (camera, grid, sets) = frame();
+        let mut cached = Vec::new();
+        cone::tile_cones(camera.tan_half_fov_f64(), grid.dims(), &mut cached);
+        for method in [Method::Binary, Method::Refined, Method::Cone] {
+            let ctx = context(method, &camera, &grid, &sets, &cached);
+            let mut out = TaskOutput::default();
+            out.buckets.resize_with(ctx.parts, CachePadded::default);
+            out.gaps.resize(2 * grid.dims().x as usize, 0.0);
+            out.cone_columns
+                .resize(grid.dims().x as usize, ConeColumn::default());
+            emit_overflowed(&ctx, 7, &SpotView::default(), &mut out);
+            let whole = ctx.whole_grid_box();
+            assert_eq!((whole.z.da, whole.z.db), (camera.near, camera.far));
+            let (mut listed, d) = (Vec::new(), grid.dims());
+            for bucket in &out.buckets {
+                for span in &bucket.spans {
+                    for start in span.row_starts(d.x) {
+                        listed.extend((start..start + span.len()).map(|c| (span.light, c)));
+                    }
+                }
+            }
+            listed.sort_unstable();
+            let every: Vec<_> = (0..grid.cluster_count() as u32).map(|c| (7, c)).collect();
+            assert_eq!(listed, every, "{method:?}");
+        }
+    }
+}
