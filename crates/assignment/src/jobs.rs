@@ -677,16 +677,25 @@ mod tests {
         }
     }
 
+    /// The clusters light 7 (a point light) is listed in after `emit`, ascending.
+    fn emitted(ctx: &FrameContext<'_>, sphere: (f32, f32, f32, f32), bx: &ClusterBox) -> Vec<u32> {
+        emitted_spot(ctx, sphere, bx, &SpotView::default())
+    }
+
     /// The clusters light 7 is listed in after `emit`, ascending. Checks on the way that every
     /// span is light 7's, lies in the part of its slice, and that no cluster is listed twice.
-    fn emitted(ctx: &FrameContext<'_>, sphere: (f32, f32, f32, f32), bx: &ClusterBox) -> Vec<u32> {
+    fn emitted_spot(
+        ctx: &FrameContext<'_>,
+        sphere: (f32, f32, f32, f32),
+        bx: &ClusterBox,
+        spot: &SpotView,
+    ) -> Vec<u32> {
         let (cx, cy, dc, r) = sphere;
         let d = ctx.grid.dims();
         let mut buckets: Vec<CachePadded<Bucket>> = Vec::new();
         buckets.resize_with(ctx.parts, CachePadded::default);
         let mut gaps = vec![0.0; 2 * d.x as usize];
         let mut columns = vec![ConeColumn::default(); d.x as usize];
-        let spot = SpotView::default();
         emit(
             ctx,
             7,
@@ -695,7 +704,7 @@ mod tests {
             dc,
             r,
             bx,
-            &spot,
+            spot,
             &mut buckets,
             &mut gaps,
             &mut columns,
@@ -862,5 +871,77 @@ mod tests {
             let every: Vec<_> = (0..grid.cluster_count() as u32).map(|c| (7, c)).collect();
             assert_eq!(listed, every, "{method:?}");
         }
+    }
+
+    /// A spot light's rows keep exactly the clusters of its bounding sphere's box that
+    /// `cone_may_touch_sphere` keeps, and every cluster whose bounding sphere is not finite
+    /// (there the cone cannot be tested). The oracle suites cannot see a spot listed as its whole
+    /// box, or a cluster without a finite sphere kept whatever it is; this can.
+    #[test]
+    fn spot_rows_keep_the_clusters_the_cone_may_touch() {
+        let (camera, grid, sets) = frame();
+        let mut spheres = Vec::new();
+        cluster_bounding_spheres(&camera, &grid, &mut spheres);
+        // One cluster every 7 loses its finite sphere: kept by every spot whose box holds it.
+        for s in spheres.iter_mut().step_by(7) {
+            s.w = f32::INFINITY;
+        }
+        let planes = FramePlanes::new(&sets, &grid);
+        let mut ctx = context(Method::Binary, &camera, &grid, &sets, &[]);
+        ctx.cluster_spheres = &spheres;
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
+        let (mut boxes, mut kept, mut cut, mut unsure) = (0, 0, 0, 0);
+        while boxes < 400 {
+            let d = 40.0 * rng.random::<f32>();
+            let apex = Vec3::new(rng.random_range(-d..=d), rng.random_range(-d..=d) * 0.5, -d);
+            let axis = Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize_or(Vec3::NEG_Z);
+            let angle = rng.random_range(0.05..1.5f32);
+            let range = 10f32.powf(rng.random_range(-0.5..1.2));
+            let direction = axis;
+            let (c, r) = spot_bounding_sphere(apex, range, SpotCone { direction, angle });
+            let r = geometry::pad_radius(c.x, c.y, -c.z, r);
+            let Some(bx) = geometry::cluster_box(c.x, c.y, -c.z, r, &planes) else {
+                continue;
+            };
+            boxes += 1;
+            let spot = SpotView {
+                apex,
+                axis,
+                cos_sin: (angle.cos(), angle.sin()),
+                range,
+                active: true,
+            };
+            let want = box_clusters(&grid, &bx, |i, j, k| {
+                let s = spheres[grid.cluster_id(i, j, k) as usize];
+                if !s.is_finite() {
+                    unsure += 1;
+                    return true;
+                }
+                let keep = geometry::cone_may_touch_sphere(
+                    apex,
+                    axis,
+                    spot.cos_sin,
+                    range,
+                    s.truncate(),
+                    s.w,
+                );
+                (kept, cut) = (kept + keep as usize, cut + !keep as usize);
+                keep
+            });
+            let got = emitted_spot(&ctx, (c.x, c.y, -c.z, r), &bx, &spot);
+            assert_eq!(
+                got, want,
+                "spot at {apex}, axis {axis}, {angle} rad, range {range}: box {bx:?}"
+            );
+        }
+        assert!(
+            kept > 10_000 && cut > 10_000 && unsure > 1000,
+            "kept {kept}, cut {cut}, kept without a finite sphere {unsure}"
+        );
     }
 }
