@@ -410,16 +410,7 @@ impl Assigner {
                 &[]
             },
             tan_half_fov,
-            cull: jobs::FrustumCull {
-                sides: [
-                    self.planes.x_plane_normal(0),
-                    self.planes.x_plane_normal(grid.dims().x as usize),
-                    self.planes.y_plane_normal(0),
-                    self.planes.y_plane_normal(grid.dims().y as usize),
-                ],
-                near: self.planes.z_depths[0],
-                far: self.planes.z_depths[self.planes.z_depths.len() - 1],
-            },
+            cull: jobs::FrustumCull::of_grid(&self.planes, grid),
         };
         let parallel = parallel && tasks > 1;
         let gather = |(t, task): (usize, &mut CachePadded<TaskOutput>)| {

@@ -19,7 +19,7 @@ use crate::{LightInput, Method};
 use crossbeam::utils::CachePadded;
 use glam::{DVec3, Mat3, Vec3, Vec4};
 use myriad_cluster_math::oracle::{Cell, OracleView};
-use myriad_cluster_math::{Camera, ClusterGrid, SpotCone, spot_bounding_sphere};
+use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets, SpotCone, spot_bounding_sphere};
 
 /// What the tasks of one frame share, read-only.
 pub(crate) struct FrameContext<'a> {
@@ -63,6 +63,21 @@ pub(crate) struct FrustumCull {
 }
 
 impl FrustumCull {
+    /// The grid's outer planes (its first and last x- and y-planes) and its first and last depth.
+    pub fn of_grid(sets: &PlaneSets, grid: &ClusterGrid) -> Self {
+        let d = grid.dims();
+        Self {
+            sides: [
+                sets.x_plane_normal(0),
+                sets.x_plane_normal(d.x as usize),
+                sets.y_plane_normal(0),
+                sets.y_plane_normal(d.y as usize),
+            ],
+            near: sets.z_depths[0],
+            far: sets.z_depths[sets.z_depths.len() - 1],
+        }
+    }
+
     /// Whether the padded sphere may touch the frustum: the six plane tests of the paper's
     /// "light is inside outer frustum", which are necessary conditions for any sphere.
     #[inline(always)]
@@ -629,7 +644,7 @@ mod tests {
     use super::*;
     use crate::cone::{self, LightCone};
     use glam::UVec3;
-    use myriad_cluster_math::{DepthSlicing, PlaneSets};
+    use myriad_cluster_math::DepthSlicing;
     use rand::{Rng, SeedableRng};
 
     /// Slices per part in [`context`]'s frames: 4, so a span pushed to the wrong part shows.
@@ -677,8 +692,7 @@ mod tests {
         }
     }
 
-    /// [`context`] with the early cull `Assigner` gives its tasks: the grid's outer side planes
-    /// (the left and right x-planes, the top and bottom y-planes) besides its near and far.
+    /// [`context`] with the early cull `Assigner` gives its tasks ([`FrustumCull::of_grid`]).
     fn culling_context<'a>(
         method: Method,
         camera: &'a Camera,
@@ -686,13 +700,7 @@ mod tests {
         sets: &'a PlaneSets,
     ) -> FrameContext<'a> {
         let mut ctx = context(method, camera, grid, sets, &[]);
-        let (x, y) = (grid.dims().x as usize, grid.dims().y as usize);
-        ctx.cull.sides = [
-            sets.x_plane_normal(0),
-            sets.x_plane_normal(x),
-            sets.y_plane_normal(0),
-            sets.y_plane_normal(y),
-        ];
+        ctx.cull = FrustumCull::of_grid(sets, grid);
         ctx
     }
 
