@@ -709,17 +709,23 @@ mod tests {
     fn task_pairs(ctx: &FrameContext<'_>, begin: usize, end: usize) -> (Vec<(u32, u32)>, u32, u32) {
         let mut out = TaskOutput::default();
         run_task(ctx, begin, end, &mut out);
-        let d = ctx.grid.dims();
+        let pairs = listed_pairs(&out.buckets[..ctx.parts], ctx.grid.dims().x);
+        (pairs, out.rejected, out.culled)
+    }
+
+    /// Every `(light, cluster)` pair the spans of `buckets` list, ascending (`width`: the grid's
+    /// tiles across, a span's row stride).
+    fn listed_pairs(buckets: &[CachePadded<Bucket>], width: u32) -> Vec<(u32, u32)> {
         let mut pairs = Vec::new();
-        for bucket in &out.buckets[..ctx.parts] {
+        for bucket in buckets {
             for span in &bucket.spans {
-                for start in span.row_starts(d.x) {
+                for start in span.row_starts(width) {
                     pairs.extend((start..start + span.len()).map(|c| (span.light, c)));
                 }
             }
         }
         pairs.sort_unstable();
-        (pairs, out.rejected, out.culled)
+        pairs
     }
 
     /// The clusters light 7 (a point light) is listed in after `emit`, ascending.
@@ -904,15 +910,7 @@ mod tests {
             emit_overflowed(&ctx, 7, &SpotView::default(), &mut out);
             let whole = ctx.whole_grid_box();
             assert_eq!((whole.z.da, whole.z.db), (camera.near, camera.far));
-            let (mut listed, d) = (Vec::new(), grid.dims());
-            for bucket in &out.buckets {
-                for span in &bucket.spans {
-                    for start in span.row_starts(d.x) {
-                        listed.extend((start..start + span.len()).map(|c| (span.light, c)));
-                    }
-                }
-            }
-            listed.sort_unstable();
+            let listed = listed_pairs(&out.buckets, grid.dims().x);
             let every: Vec<_> = (0..grid.cluster_count() as u32).map(|c| (7, c)).collect();
             assert_eq!(listed, every, "{method:?}");
         }
