@@ -197,7 +197,7 @@ mod tests {
         assert_eq!(e.kind(), ErrorKind::PermissionDenied, "{e}");
         assert_eq!(std::fs::read(&read_only).unwrap(), b"keep");
         // (Devices take the same path: not tested here, where a regression would replace the
-        // machine's /dev/null; `tests/cli.rs` writes to /dev/null only as a non-root user.)
+        // machine's /dev/null; `tests/cli/render.rs` writes to /dev/null only as a non-root user.)
         // Nothing was left behind.
         let hidden = std::fs::read_dir(dir.path())
             .unwrap()

@@ -1,0 +1,605 @@
+//! `assign`, `check` and `bench`: every method passes the oracle check through dump files, a
+//! broken dump or a missing light is caught, and invalid lights are skipped, counted and never
+//! renumbered.
+
+use super::*;
+
+#[test]
+fn every_method_passes_the_oracle_check() {
+    let dir = work_dir("methods_check");
+    let scene = paper_scene(&dir, 300);
+    let hand_written = write(&dir, "good.json", GOOD_SCENE);
+    for scene in [&scene, &hand_written] {
+        for method in ["exact", "linear", "binary", "refined", "cone"] {
+            let dump = dir.join(format!("{method}.dump.json"));
+            let cmp = assign_and_check(scene, method, &dump);
+            let context = format!("{} / {method}: {cmp}", scene.display());
+            assert_eq!(u64_field(&cmp, "misses"), 0, "{context}");
+            assert!(u64_field(&cmp, "exact_pairs") > 0, "{context}");
+            assert!(
+                u64_field(&cmp, "reported_pairs") >= u64_field(&cmp, "exact_pairs"),
+                "{context}"
+            );
+            if method == "exact" {
+                assert_eq!(u64_field(&cmp, "false_positives"), 0, "{context}");
+                assert_eq!(cmp["false_positive_ratio"].as_f64(), Some(0.0), "{context}");
+            }
+            // The dump has the DESIGN.md shape.
+            let d = read_json(&dump);
+            assert_eq!(d["grid"], serde_json::json!([24, 12, 16]));
+            assert_eq!(d["x_edges"].as_array().unwrap().len(), 25);
+            assert_eq!(d["y_edges"].as_array().unwrap().len(), 13);
+            assert_eq!(d["z_planes"].as_array().unwrap().len(), 17);
+            assert_eq!(d["offsets"].as_array().unwrap().len(), 24 * 12 * 16);
+            assert_eq!(d["counts"].as_array().unwrap().len(), 24 * 12 * 16);
+        }
+    }
+}
+
+#[test]
+fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
+    // Past its pair budget the assigner halves the grid; the dump must describe the grid its lists
+    // belong to (it once kept the scene's header, and `check` rejected the dump), and `check`
+    // must verify it on that grid.
+    let dir = work_dir("coarsened_dump");
+    let scene = paper_scene(&dir, 300);
+    for method in ["exact", "linear", "binary", "refined", "cone"] {
+        let dump = dir.join(format!("{method}.dump.json"));
+        let out = myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--method".as_ref(),
+            method.as_ref(),
+            "--pair-budget".as_ref(),
+            "1000".as_ref(),
+            "--out".as_ref(),
+            dump.as_os_str(),
+        ]);
+        assert_mentions(&stderr(&out), &["24x12x16", "coarser", "6x3x4"]);
+        let d = read_json(&dump);
+        assert_eq!(d["grid"], serde_json::json!([6, 3, 4]), "{method}");
+        assert_eq!(d["offsets"].as_array().unwrap().len(), 6 * 3 * 4);
+        assert_eq!(d["z_planes"].as_array().unwrap().len(), 5);
+        let indices = d["indices"].as_array().unwrap().len();
+        assert!(indices <= 1000, "{method}: {indices} pairs over the budget");
+        let cmp = check_json(&scene, &dump);
+        let context = format!("{method}: {cmp}");
+        assert_eq!(cmp["grid"], serde_json::json!([6, 3, 4]), "{context}");
+        assert_eq!(u64_field(&cmp, "misses"), 0, "{context}");
+        assert!(u64_field(&cmp, "exact_pairs") > 0, "{context}");
+    }
+    // The text report says which grid it checked when it is not the scene's.
+    let check_text = |dump: &Path| {
+        stdout(&myriad_ok(&[
+            "check".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--dump".as_ref(),
+            dump.as_os_str(),
+        ]))
+    };
+    let text = check_text(&dir.join("refined.dump.json"));
+    assert_mentions(
+        &text,
+        &["6x3x4 (coarser than the scene's", "misses                0"],
+    );
+    let full = dir.join("full.dump.json");
+    assign_and_check(&scene, "refined", &full);
+    let text = check_text(&full);
+    assert!(!text.contains("coarser"), "{text}");
+    // A grid no coarsening of the scene's reaches is still refused: 20x12x16 halves to
+    // 10x6x8, 5x3x4, 2x1x2, 1x1x1, never 6x3x4.
+    let other = write(
+        &dir,
+        "other.json",
+        &GOOD_SCENE.replace(r#""x": 24"#, r#""x": 20"#),
+    );
+    let dump = dir.join("binary.dump.json");
+    let err = myriad_fails(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        other.as_os_str(),
+        "--dump".as_ref(),
+        dump.as_os_str(),
+    ]);
+    assert_mentions(
+        &err,
+        &["binary.dump.json", "does not match the scene's 20x12x16"],
+    );
+}
+
+#[test]
+fn check_finds_a_removed_light_with_either_reference() {
+    let dir = work_dir("check_references");
+    let scene = dir.join("paper.json");
+    let scene_arg = scene.to_str().unwrap();
+    myriad_ok(&[
+        "scene", "--preset", "paper", "--lights", "300", "--out", scene_arg,
+    ]);
+    // The exact method's lists: every pair is a true one, so any removal is a miss.
+    let dump = dir.join("exact.dump.json");
+    let whole = assign_and_check(&scene, "exact", &dump);
+    // The middle y edge is written as 0, not -0.
+    let mut d = read_json(&dump);
+    assert_eq!(d["y_edges"][6].to_string(), "0.0");
+    // One light taken out of one list (the lists stay CSR).
+    let counts: Vec<u64> = serde_json::from_value(d["counts"].clone()).unwrap();
+    let c = counts.iter().position(|&n| n >= 1).unwrap();
+    let at = d["offsets"][c].as_u64().unwrap() as usize;
+    let removed = d["indices"].as_array_mut().unwrap().remove(at);
+    d["counts"][c] = Value::from(counts[c] - 1);
+    for later in c + 1..counts.len() {
+        let o = d["offsets"][later].as_u64().unwrap();
+        d["offsets"][later] = Value::from(o - 1);
+    }
+    let broken = write(&dir, "broken.dump.json", &d.to_string());
+    let check = |dump: &Path, reference: &str| {
+        let dump = dump.to_str().unwrap();
+        myriad(&[
+            "check",
+            "--scene",
+            scene_arg,
+            "--dump",
+            dump,
+            "--json",
+            "--reference",
+            reference,
+        ])
+    };
+    for reference in ["independent", "exact-method"] {
+        let out = check(&dump, reference);
+        assert!(out.status.success(), "{reference}: {}", all_output(&out));
+        let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(cmp["reference"], reference);
+        for field in ["exact_pairs", "reported_pairs", "misses", "false_positives"] {
+            assert_eq!(cmp[field], whole[field], "{reference}: {field}");
+        }
+        let out = check(&broken, reference);
+        assert!(!out.status.success(), "{reference}: a miss must fail");
+        let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(cmp["misses"], 1, "{reference}: {cmp}");
+        assert_eq!(cmp["first_miss"]["cluster"], c, "{reference}: {cmp}");
+        assert_eq!(cmp["first_miss"]["light"], removed, "{reference}: {cmp}");
+        assert_mentions(&stderr(&out), &["1 miss(es)", &format!("cluster {c}")]);
+    }
+}
+
+#[test]
+fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
+    let dir = work_dir("skipped_lights");
+    let l0 = r#"{"position": [0, 2, 0], "radius": 2}"#;
+    let l1 = r#"{"position": [3, 1, -5], "radius": 4}"#;
+    let l3 = r#"{"position": [-1, 1, 0], "radius": 3}"#;
+    // Light 2 is invalid in one file; in the other it is valid but behind the camera (culled).
+    let with_bad = write(
+        &dir,
+        "with_bad.json",
+        &scene_with_lights(&format!(
+            r#"{l0}, {l1}, {{"position": [2, 2, 0], "radius": -1}}, {l3}"#
+        )),
+    );
+    let with_culled = write(
+        &dir,
+        "with_culled.json",
+        &scene_with_lights(&format!(
+            r#"{l0}, {l1}, {{"position": [0, 2, 50], "radius": 1}}, {l3}"#
+        )),
+    );
+
+    for method in ["exact", "refined"] {
+        let bad_dump = dir.join(format!("with_bad.{method}.json"));
+        let out = myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            with_bad.as_os_str(),
+            "--method".as_ref(),
+            method.as_ref(),
+            "--out".as_ref(),
+            bad_dump.as_os_str(),
+        ]);
+        assert_mentions(&stderr(&out), &["skipped", "light 2", "radius"]);
+        // The skipped light is counted among the rejected ones.
+        assert_mentions(
+            &stdout(&out),
+            &["assigned 3 lights (3 visible, 0 culled, 1 rejected)"],
+        );
+
+        // The dump names lights by their index in the file: 0, 1 and 3, never 2.
+        let dump = read_json(&bad_dump);
+        assert_eq!(dump_lights(&dump), [0, 1, 3], "{method}");
+        let culled_dump = dir.join(format!("with_culled.{method}.json"));
+        myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            with_culled.as_os_str(),
+            "--method".as_ref(),
+            method.as_ref(),
+            "--out".as_ref(),
+            culled_dump.as_os_str(),
+        ]);
+        assert_eq!(dump, read_json(&culled_dump), "{method}");
+
+        // check compares in file indices too, with either scene.
+        for scene in [&with_bad, &with_culled] {
+            let cmp = check_json(scene, &bad_dump);
+            assert_eq!(u64_field(&cmp, "misses"), 0, "{method}: {cmp}");
+            assert!(u64_field(&cmp, "exact_pairs") > 0);
+            if method == "exact" {
+                assert_eq!(u64_field(&cmp, "false_positives"), 0, "{cmp}");
+            }
+        }
+    }
+
+    // Negative control: renumbering light 3 as 2 (what a dump in kept-light order would say)
+    // must fail the check.
+    let exact_dump = dir.join("with_bad.exact.json");
+    let mut dump = read_json(&exact_dump);
+    for index in dump["indices"].as_array_mut().unwrap() {
+        if *index == 3 {
+            *index = 2.into();
+        }
+    }
+    let renumbered = write(&dir, "renumbered.json", &dump.to_string());
+    let out = myriad(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        with_bad.as_os_str(),
+        "--dump".as_ref(),
+        renumbered.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert!(!out.status.success(), "{}", all_output(&out));
+    let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert!(u64_field(&cmp, "misses") > 0, "{cmp}");
+    // The miss names light 3 by its index in the file, not by its column (2) among the loaded
+    // lights.
+    assert_eq!(cmp["first_miss"]["light"], 3, "{cmp}");
+
+    // Listing the invalid light as well as every right one is no miss, but still wrong: it
+    // passed as a false positive (audit g2). The last cluster gains light 2.
+    let mut dump = read_json(&exact_dump);
+    let last = dump["counts"].as_array().unwrap().len() - 1;
+    let count = dump["counts"][last].as_u64().unwrap();
+    dump["counts"][last] = (count + 1).into();
+    dump["indices"].as_array_mut().unwrap().push(2.into());
+    let with_invalid = write(&dir, "with_invalid.json", &dump.to_string());
+    let out = myriad(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        with_bad.as_os_str(),
+        "--dump".as_ref(),
+        with_invalid.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", all_output(&out));
+    let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(u64_field(&cmp, "misses"), 0, "{cmp}");
+    assert_eq!(u64_field(&cmp, "invalid_lights_listed"), 1, "{cmp}");
+    assert_mentions(&stderr(&out), &["1 invalid light", "light 2"]);
+}
+
+#[test]
+fn check_rejects_broken_dumps_naming_the_file() {
+    let dir = work_dir("broken_dumps");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let dump = dir.join("dump.json");
+    assign_and_check(&scene, "refined", &dump);
+    let text = std::fs::read_to_string(&dump).unwrap();
+    let check = |dump: &Path| {
+        myriad_fails(&[
+            "check".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--dump".as_ref(),
+            dump.as_os_str(),
+        ])
+    };
+
+    let truncated = write(&dir, "truncated.json", &text[..text.len() / 2]);
+    let out = check(&truncated);
+    assert_mentions(
+        &out,
+        &[
+            &truncated.display().to_string(),
+            "not a valid assignment dump",
+        ],
+    );
+
+    let garbage = write(&dir, "garbage.json", "this is not JSON");
+    assert_mentions(&check(&garbage), &[&garbage.display().to_string()]);
+
+    // Well-formed dumps that do not belong to the scene, or would shade a light twice.
+    let good: Value = serde_json::from_str(&text).unwrap();
+    let edited = |name: &str, edit: &dyn Fn(&mut Value)| {
+        let mut v = good.clone();
+        edit(&mut v);
+        write(&dir, name, &v.to_string())
+    };
+    let planes = edited("planes.json", &|v| {
+        let z = v["z_planes"][1].as_f64().unwrap();
+        v["z_planes"][1] = Value::from(z * 1.01);
+    });
+    assert_mentions(
+        &check(&planes),
+        &[
+            &planes.display().to_string(),
+            "z_planes[1]",
+            "does not match",
+        ],
+    );
+    let beyond = edited("beyond.json", &|v| v["indices"][0] = Value::from(999));
+    assert_mentions(
+        &check(&beyond),
+        &[&beyond.display().to_string(), "indices[0] = 999", "lights"],
+    );
+    let counts: Vec<u64> = serde_json::from_value(good["counts"].clone()).unwrap();
+    let offsets: Vec<u64> = serde_json::from_value(good["offsets"].clone()).unwrap();
+    let c = counts.iter().position(|&n| n >= 2).expect("a list of two");
+    let twice = edited("twice.json", &|v| {
+        let o = offsets[c] as usize;
+        v["indices"][o + 1] = v["indices"][o].clone();
+    });
+    assert_mentions(
+        &check(&twice),
+        &[
+            &twice.display().to_string(),
+            &format!("cluster {c}"),
+            "more than once",
+        ],
+    );
+
+    // Well-formed JSON whose lists run past the end of `indices`.
+    let mut value = read_json(&dump);
+    value["counts"][0] = 1_000_000.into();
+    let inconsistent = write(&dir, "inconsistent.json", &value.to_string());
+    assert_mentions(
+        &check(&inconsistent),
+        &[&inconsistent.display().to_string(), "inconsistent"],
+    );
+
+    // Lists that alias each other, or indices no list owns: not CSR, so not a dump.
+    let d = counts
+        .iter()
+        .rposition(|&n| n >= 1)
+        .expect("a last non-empty list");
+    assert_ne!(c, d);
+    let aliased = edited("aliased.json", &|v| {
+        v["offsets"][d] = v["offsets"][c].clone()
+    });
+    assert_mentions(
+        &check(&aliased),
+        &[&aliased.display().to_string(), "overlaps", "inconsistent"],
+    );
+    let stray = edited("stray.json", &|v| {
+        v["indices"].as_array_mut().unwrap().push(Value::from(0))
+    });
+    assert_mentions(
+        &check(&stray),
+        &[&stray.display().to_string(), "belong to no cluster's list"],
+    );
+
+    // A dump of another grid.
+    let other = dir.join("other.json");
+    myriad_ok(&[
+        "assign".as_ref(),
+        "--preset".as_ref(),
+        "uniform".as_ref(),
+        "--lights".as_ref(),
+        "50".as_ref(),
+        "--out".as_ref(),
+        other.as_os_str(),
+    ]);
+    assert_mentions(
+        &check(&other),
+        &[&other.display().to_string(), "does not match"],
+    );
+
+    let missing = dir.join("missing.json");
+    assert_mentions(
+        &check(&missing),
+        &[&missing.display().to_string(), "cannot read dump"],
+    );
+}
+
+#[test]
+fn bench_json_reports_every_method_without_misses() {
+    let out = myriad_ok(&[
+        "bench", "--preset", "paper", "--lights", "300", "--json", "--runs", "3",
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).expect("bench --json prints JSON");
+    assert_eq!(report["lights"].as_u64(), Some(300));
+    let methods = report["methods"].as_array().expect("a methods array");
+    let names: Vec<&str> = methods
+        .iter()
+        .map(|m| m["method"].as_str().expect("method name"))
+        .collect();
+    assert_eq!(names, ["exact", "linear", "binary", "refined", "cone"]);
+    for m in methods {
+        assert!(m["median_us"].as_f64().is_some_and(|t| t > 0.0), "{m}");
+        assert!(u64_field(m, "pairs") > 0, "{m}");
+        assert!(
+            m["false_positive_ratio"].as_f64().is_some_and(|r| r >= 0.0),
+            "{m}"
+        );
+        assert_eq!(u64_field(m, "misses"), 0, "{m}");
+        // The throughput is the output's bytes over the median time, in GB/s; the fastest run
+        // took no longer than the median.
+        let bytes = u64_field(m, "bytes") as f64;
+        let median = m["median_us"].as_f64().unwrap();
+        let gb_s = m["effective_gb_s"].as_f64().unwrap();
+        assert!((gb_s - bytes / median / 1e3).abs() <= 1e-9 * gb_s, "{m}");
+        assert!(m["min_us"].as_f64().is_some_and(|t| t <= median), "{m}");
+    }
+    let exact = &methods[0];
+    assert_eq!(exact["false_positive_ratio"].as_f64(), Some(0.0));
+    // 300 lights are one task (below SERIAL_LIGHTS) and `linear` is serial: never on the pool.
+    for m in &methods[1..] {
+        assert_eq!(u64_field(m, "runs"), 3, "{m}");
+        assert_eq!(u64_field(m, "pooled_runs"), 0, "{m}");
+    }
+    // One thread has no link between threads to report.
+    let one: Value = serde_json::from_str(&stdout(&myriad_ok(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--lights",
+        "300",
+        "--methods",
+        "binary",
+        "--threads",
+        "1",
+        "--runs",
+        "3",
+        "--json",
+    ])))
+    .unwrap();
+    assert!(one["core_link"].is_null(), "{}", one["core_link"]);
+
+    // A chosen subset of methods on a scene file.
+    let dir = work_dir("bench_json");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let out = myriad_ok(&[
+        "bench".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--methods".as_ref(),
+        "binary,refined".as_ref(),
+        "--runs".as_ref(),
+        "3".as_ref(),
+        "--json".as_ref(),
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let names: Vec<&str> = report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["binary", "refined"]);
+
+    // Frames apart, slept through or spun through, paced or always on the pool: the same lists.
+    let mut pairs = Vec::new();
+    for extra in [
+        &["--idle-us", "200"][..],
+        &["--idle-us", "200", "--busy"],
+        &["--idle-us", "200", "--busy", "--always-parallel"],
+    ] {
+        let mut args = vec![
+            "bench",
+            "--preset",
+            "paper",
+            "--lights",
+            "800",
+            "--threads",
+            "2",
+        ];
+        args.extend(["--methods", "binary,refined", "--runs", "3", "--json"]);
+        args.extend(extra);
+        let report: Value = serde_json::from_str(&stdout(&myriad_ok(&args))).unwrap();
+        // Two threads: the link between them is measured before and after the timings.
+        for when in ["before", "after"] {
+            let link = &report["core_link"][when];
+            for field in ["round_trip_ns", "handoff_us"] {
+                assert!(link[field].as_f64().is_some_and(|v| v > 0.0), "{link}");
+            }
+        }
+        for m in report["methods"].as_array().unwrap() {
+            assert_eq!(u64_field(m, "misses"), 0, "{extra:?}: {m}");
+            pairs.push(u64_field(m, "pairs"));
+            // 800 lights on two threads are split into tasks: always on the pool when asked.
+            if extra.contains(&"--always-parallel") {
+                assert_eq!(u64_field(m, "pooled_runs"), 3, "{extra:?}: {m}");
+            }
+        }
+    }
+    assert!(pairs[0] > 0 && pairs[1] > 0);
+    assert_eq!(pairs[..2], pairs[2..4]);
+    assert_eq!(pairs[..2], pairs[4..6]);
+    let out = myriad_fails(&["bench", "--preset", "paper", "--busy"]);
+    assert_mentions(&out, &["--idle-us"]);
+}
+
+#[test]
+fn skipped_invalid_lights_are_counted_in_bench_output() {
+    let dir = work_dir("skipped_counted");
+    let scene = write(
+        &dir,
+        "one_bad.json",
+        &scene_with_lights(
+            r#"{"position": [0, 2, 0], "radius": 2}, {"position": [1, 2, 0], "radius": -1},
+               {"position": [0, 1, -3], "radius": 1}"#,
+        ),
+    );
+    let out = myriad_ok(&[
+        "bench".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--methods".as_ref(),
+        "binary".as_ref(),
+        "--runs".as_ref(),
+        "1".as_ref(),
+        "--json".as_ref(),
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(report["lights"].as_u64(), Some(2), "{report}");
+    assert_eq!(report["lights_skipped"].as_u64(), Some(1), "{report}");
+    assert_mentions(
+        &all_output(&out),
+        &["1 invalid light(s) skipped", "lights[1].radius"],
+    );
+}
+
+#[test]
+fn many_skipped_lights_are_counted_and_the_list_stops_after_ten() {
+    let dir = work_dir("many_skipped");
+    // One good light, then `bad` lights with a negative radius (file indices 1..=bad).
+    let assign = |bad: usize| {
+        let lights: Vec<String> = std::iter::once(r#"{"position": [0, 2, 0], "radius": 2}"#.into())
+            .chain((0..bad).map(|i| format!(r#"{{"position": [{i}, 2, 0], "radius": -1}}"#)))
+            .collect();
+        let scene = write(
+            &dir,
+            &format!("bad_{bad}.json"),
+            &scene_with_lights(&lights.join(", ")),
+        );
+        let dump = dir.join(format!("bad_{bad}.dump.json"));
+        myriad_ok(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            dump.as_os_str(),
+        ])
+    };
+    let out = assign(12);
+    let err = stderr(&out);
+    assert_mentions(
+        &err,
+        &[
+            "12 invalid light(s) skipped",
+            "light 10 skipped",
+            "… and 2 more",
+        ],
+    );
+    assert!(!err.contains("light 11 skipped"), "{err}");
+    assert_mentions(&stdout(&out), &["12 rejected"]);
+    // Exactly ten: all listed, no summary line.
+    let err = stderr(&assign(10));
+    assert_mentions(&err, &["10 invalid light(s) skipped", "light 10 skipped"]);
+    assert!(!err.contains("more"), "{err}");
+}
+
+#[test]
+fn check_of_a_scene_no_light_touches_has_a_zero_ratio() {
+    // Every light behind the camera: no exact pairs, and the ratio is 0, not 0 / 0.
+    let dir = work_dir("no_pairs");
+    let scene = write(
+        &dir,
+        "behind.json",
+        &scene_with_lights(r#"{"position": [0, 2, 50], "radius": 1}"#),
+    );
+    let cmp = assign_and_check(&scene, "refined", &dir.join("dump.json"));
+    assert_eq!(u64_field(&cmp, "exact_pairs"), 0, "{cmp}");
+    assert_eq!(cmp["false_positive_ratio"], 0.0, "{cmp}");
+}

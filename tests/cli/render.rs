@@ -1,0 +1,457 @@
+//! The main job, `render`, `frames` and `skips`: what renders, what it writes (whole or not at
+//! all, never over its inputs) and what it refuses.
+
+use super::*;
+
+#[test]
+fn no_arguments_runs_the_main_job() {
+    if !gpu_available() {
+        return;
+    }
+    // The main job writes into ./out: run it in a fresh folder.
+    let dir = work_dir("main_job");
+    let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .current_dir(&dir)
+        .output()
+        .expect("cannot run the myriad binary");
+    assert!(
+        out.status.success(),
+        "main job failed:\n{}",
+        all_output(&out)
+    );
+    let text = stdout(&out);
+    assert_mentions(
+        &text,
+        &[
+            "default scene",
+            "1000 lights",
+            "1536x768",
+            "CPU light assignment",
+            "GPU shading pass",
+            "lighting calculations skipped",
+            "faster than brute-force deferred",
+            "outside the view frustum",
+        ],
+    );
+    for file in ["frame.png", "heatmap.png", "stats.json"] {
+        assert!(dir.join("out").join(file).is_file(), "no out/{file}");
+    }
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/stats.json")).unwrap())
+            .unwrap();
+    assert_eq!(stats["lights"], 1000);
+    let strategies = stats["strategies"].as_array().unwrap();
+    assert_eq!(strategies.len(), 3);
+    let clustered = &strategies[0];
+    assert_eq!(clustered["shading"], "clustered");
+    assert!(clustered["pairs"].as_u64().unwrap() > 0);
+    let mean = clustered["pixels"]["mean_lights"].as_f64().unwrap();
+    assert!(mean > 0.0 && mean < 1000.0, "{mean}");
+    assert_eq!(
+        strategies[2]["pixels"]["mean_lights"].as_f64().unwrap(),
+        1000.0
+    );
+    // Beside them, clustered shading with every saving but reuse, which must not change the
+    // image and must do less: lights culled, clusters masked, so fewer pairs.
+    let skipping = &stats["with_skips"];
+    assert_eq!(
+        skipping["savings"],
+        serde_json::json!(["cull", "active", "depth", "variants"])
+    );
+    assert!(skipping["max_image_difference"].as_u64().unwrap() <= 1);
+    let lights_assigned = skipping["lights_assigned"].as_u64().unwrap();
+    assert_eq!(
+        lights_assigned,
+        1000 - stats["lights_culled"].as_u64().unwrap()
+    );
+    let active = skipping["active_clusters"].as_u64().unwrap();
+    assert!(active > 0 && active < skipping["clusters"].as_u64().unwrap());
+    let skip_pairs = skipping["result"]["pairs"].as_u64().unwrap();
+    assert!(
+        skip_pairs > 0 && skip_pairs < clustered["pairs"].as_u64().unwrap(),
+        "{skip_pairs} pairs with skips"
+    );
+    assert_mentions(&text, &["clustered+skips", "clusters active"]);
+}
+
+#[test]
+fn render_rejects_bad_options_clearly() {
+    assert_rejected(&[
+        (&["render", "--size", "0x10"], &["--size", "WxH"]),
+        (&["render", "--grid", "24x12"], &["--grid", "XxYxZ"]),
+        (
+            &["render", "--depth", "cubic"],
+            &["--depth", "log, linear or log_near:D"],
+        ),
+        (&["render", "--method", "magic"], &["magic", "refined"]),
+        (
+            &["render", "--camera", "Nowhere", "--size", "64x32"],
+            &["Nowhere", "Main"],
+        ),
+        (
+            &["render", "--gltf", "/nonexistent/model.glb"],
+            &["/nonexistent/model.glb"],
+        ),
+        (
+            &["render", "--skips", "cull,shadows"],
+            &["--skips", "\"shadows\"", "variants"],
+        ),
+    ]);
+}
+
+#[test]
+fn frames_compares_sequential_and_pipelined_loops() {
+    if !gpu_available() {
+        return;
+    }
+    let out = myriad_ok(&[
+        "frames", "--lights", "3000", "--size", "64x32", "--frames", "4", "--json",
+    ]);
+    let loops: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let loops = loops.as_array().unwrap();
+    assert_eq!(loops.len(), 2);
+    assert_eq!(loops[0]["pipelined"], false);
+    assert_eq!(loops[1]["pipelined"], true);
+    for l in loops {
+        assert_eq!(l["frames"], 4);
+        assert!(l["assign_ms"].as_f64().unwrap() > 0.0);
+        assert!(l["frame_ms"].as_f64().unwrap() > 0.0);
+        // Culled by default: some of the orbiting lights are outside the view.
+        let uploaded = l["lights_uploaded"].as_f64().unwrap();
+        assert!(uploaded > 0.0 && uploaded < 3000.0, "{uploaded}");
+        assert!(l["cull_ms"].as_f64().unwrap() > 0.0);
+        assert!(l["upload_bytes"].as_f64().unwrap() > uploaded * 48.0);
+    }
+    let out = myriad_ok(&[
+        "frames",
+        "--lights",
+        "3000",
+        "--size",
+        "64x32",
+        "--frames",
+        "2",
+        "--no-cull",
+    ]);
+    assert_mentions(
+        &stdout(&out),
+        &[
+            "every light assigned and uploaded",
+            "lights assigned and uploaded",
+        ],
+    );
+    let out = myriad_fails(&["frames", "--frames", "1"]);
+    assert_mentions(&out, &["--frames", "at least 2"]);
+}
+
+#[test]
+fn outputs_never_replace_their_inputs_or_fifos() {
+    let dir = work_dir("outputs_vs_inputs");
+    let scene = paper_scene(&dir, 30);
+    let original = std::fs::read(&scene).unwrap();
+    // The scene named again as the dump, directly or through a link: refused before any work,
+    // and the scene is intact (it was replaced by its own dump).
+    let link = dir.join("link.json");
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&scene, &link).unwrap();
+    #[cfg(not(unix))]
+    std::fs::copy(&scene, &link).unwrap();
+    for out in [&scene, &link] {
+        let text = myriad_fails(&[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        assert_mentions(&text, &["is the input", "refusing to overwrite"]);
+        assert_eq!(std::fs::read(&scene).unwrap(), original);
+    }
+    // The model named again as the scene file: refused, the model intact.
+    let model = dir.join("model.glb");
+    myriad_ok(&["atrium".as_ref(), "--out".as_ref(), model.as_os_str()]);
+    let glb = std::fs::read(&model).unwrap();
+    let text = myriad_fails(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        model.as_os_str(),
+        "--out".as_ref(),
+        model.as_os_str(),
+    ]);
+    assert_mentions(&text, &["is the input"]);
+    assert_eq!(std::fs::read(&model).unwrap(), glb);
+    // A FIFO is written into, not renamed over (the same path as a device: `--out /dev/null`
+    // as root turned the device into a regular file).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let fifo = dir.join("fifo");
+        let made = Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let (sent, received) = std::sync::mpsc::channel();
+            let reader_path = fifo.clone();
+            std::thread::spawn(move || {
+                let _ = sent.send(std::fs::read(&reader_path));
+            });
+            myriad_ok(&[
+                "assign".as_ref(),
+                "--scene".as_ref(),
+                scene.as_os_str(),
+                "--out".as_ref(),
+                fifo.as_os_str(),
+            ]);
+            let dump = received
+                .recv_timeout(std::time::Duration::from_secs(60))
+                .expect("the dump reached the FIFO's reader")
+                .unwrap();
+            assert!(
+                dump.starts_with(b"{\"grid\""),
+                "{:?}",
+                &dump[..20.min(dump.len())]
+            );
+            let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+            assert!(kind.is_fifo(), "the FIFO became {kind:?}");
+        }
+    }
+}
+
+#[test]
+fn a_failed_render_leaves_the_old_output_set_whole() {
+    if !gpu_available() {
+        return;
+    }
+    let out_dir = work_dir("render_all_or_nothing").join("out");
+    let dir = out_dir.to_str().unwrap();
+    let rest = [
+        "--size", "64x32", "--runs", "1", "--skips", "none", "--out", dir,
+    ];
+    let render = |lights: &str, extra: &[&str]| {
+        let args = ["render", "--preset", "uniform", "--lights", lights];
+        myriad(&[&args[..], extra, &rest].concat())
+    };
+    assert!(render("50", &[]).status.success());
+    let names = ["frame.png", "heatmap.png", "stats.json"];
+    let read_all = || names.map(|n| std::fs::read(out_dir.join(n)).unwrap());
+    let old = read_all();
+    let stats: Value = serde_json::from_slice(&old[2]).unwrap();
+    assert_eq!(stats["strategies"][0]["shading"], "clustered");
+    assert!(
+        stats["with_skips"].is_null(),
+        "--skips none: no such column"
+    );
+    // One cluster holding all 100 000 lights passes llvmpipe's shader loop limit: clustered
+    // shading is refused, the run fails and must write nothing. A GPU without that limit renders
+    // the whole set instead.
+    let out = render("100000", &["--grid", "1x1x1"]);
+    if out.status.success() {
+        let stats: Value = serde_json::from_slice(&read_all()[2]).unwrap();
+        assert_eq!(stats["grid"], serde_json::json!([1, 1, 1]));
+    } else {
+        assert_mentions(&all_output(&out), &["stops shader loops"]);
+        assert!(read_all() == old, "the old output set was changed");
+    }
+}
+
+#[test]
+fn render_skips_a_baseline_the_adapter_cannot_draw_and_keeps_the_rest() {
+    if !gpu_available() {
+        return;
+    }
+    let out_dir = work_dir("render_skips_baseline").join("out");
+    let out = myriad_ok(&[
+        "render",
+        "--preset",
+        "uniform",
+        "--lights",
+        "100000",
+        "--size",
+        "64x32",
+        "--runs",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stats = read_json(&out_dir.join("stats.json"));
+    let drawn: Vec<&str> = stats["strategies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["shading"].as_str().unwrap())
+        .collect();
+    let skipped = stats["skipped"].as_array().unwrap();
+    if skipped.is_empty() {
+        // A GPU without a loop limit draws all three.
+        assert_eq!(drawn, ["clustered", "tiled", "brute force"]);
+        assert!(stats["speedup_vs_brute_force"].as_f64().unwrap() > 0.0);
+    } else {
+        // llvmpipe: brute force over 100 000 lights per pixel is refused and skipped, said so.
+        assert_eq!(drawn, ["clustered", "tiled"]);
+        assert_eq!(skipped[0]["shading"], "brute force");
+        assert!(
+            skipped[0]["reason"]
+                .as_str()
+                .unwrap()
+                .contains("stops shader loops")
+        );
+        assert!(stats["speedup_vs_brute_force"].is_null());
+        assert_mentions(
+            &all_output(&out),
+            &["brute force skipped", "stops shader loops"],
+        );
+    }
+    assert!(out_dir.join("frame.png").is_file() && out_dir.join("heatmap.png").is_file());
+}
+
+#[test]
+fn render_takes_scene_files_presets_and_sizes() {
+    if !gpu_available() {
+        return;
+    }
+    let dir = work_dir("render_sources");
+    let scene = dir.join("uniform.json");
+    myriad_ok(&[
+        "scene",
+        "--preset",
+        "uniform",
+        "--lights",
+        "300",
+        "--out",
+        scene.to_str().unwrap(),
+    ]);
+    let out_dir = dir.join("out");
+    let out = myriad_ok(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--size",
+        "96x54",
+        "--grid",
+        "8x4x6",
+        "--runs",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_mentions(
+        &stdout(&out),
+        &[
+            "uniform.json in default scene",
+            "300 lights",
+            "96x54",
+            "grid 8x4x6",
+        ],
+    );
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
+            .unwrap();
+    assert_eq!(stats["lights"], 300);
+    assert_eq!(stats["grid"], serde_json::json!([8, 4, 6]));
+    let out = myriad_ok(&[
+        "render",
+        "--preset",
+        "paper",
+        "--lights",
+        "200",
+        "--size",
+        "64x32",
+        "--runs",
+        "1",
+        "--skips",
+        "cull,active,depth,variants,tune",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_mentions(
+        &stdout(&out),
+        &[
+            "preset paper (200 lights, seed 1)",
+            "64x32",
+            "grid 24x12x16",
+            "tuned: depth prepass",
+        ],
+    );
+    // Tuned, the column reports the timed choice, and its frames ran it: with the prepass off,
+    // no clusters were masked and no depth range fitted.
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
+            .unwrap();
+    let skipping = &stats["with_skips"];
+    assert_eq!(
+        skipping["savings"],
+        serde_json::json!(["cull", "active", "depth", "variants", "tune"])
+    );
+    let decision = &skipping["prepass_decision"];
+    assert_eq!(decision["frames_per_side"], 3);
+    for side in ["with_seconds", "without_seconds"] {
+        assert!(decision[side].as_f64().unwrap() > 0.0, "{decision}");
+    }
+    let on = decision["use_prepass"].as_bool().unwrap();
+    assert_eq!(skipping["active_clusters"].is_u64(), on, "{skipping}");
+    assert_eq!(skipping["fitted_depth_range"].is_array(), on, "{skipping}");
+    assert!(skipping["max_image_difference"].as_u64().unwrap() <= 1);
+    // A scene file fixes its own lights; a preset has no model cameras.
+    let out = myriad_fails(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--lights",
+        "5",
+    ]);
+    assert_mentions(&out, &["--lights", "--scene"]);
+    let out = myriad_fails(&["render", "--preset", "paper", "--camera", "Main"]);
+    assert_mentions(&out, &["--camera", "--preset"]);
+}
+
+#[test]
+fn skips_measures_every_saving_and_the_image_stays() {
+    if !gpu_available() {
+        return;
+    }
+    let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
+    let out = myriad_ok(&[
+        "skips",
+        "--gltf",
+        atrium.to_str().unwrap(),
+        "--size",
+        "96x48",
+        "--runs",
+        "1",
+        "--json",
+    ]);
+    let reports: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let rows = reports[0]["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 8);
+    for row in rows {
+        assert!(
+            row["after"]["max_image_difference"].as_u64().unwrap() <= 1,
+            "{row}"
+        );
+    }
+    let by_name = |prefix: &str| {
+        rows.iter()
+            .find(|r| r["saving"].as_str().unwrap().starts_with(prefix))
+            .unwrap()
+    };
+    let cull = by_name("1.");
+    assert!(cull["after"]["lights_assigned"].as_u64() < cull["before"]["lights_assigned"].as_u64());
+    let active = by_name("2.");
+    assert!(active["after"]["pairs"].as_u64() < active["before"]["pairs"].as_u64());
+    let reuse = by_name("4.");
+    assert_eq!(reuse["after"]["upload_bytes"], 0);
+    assert_eq!(reuse["after"]["pairs"], 0);
+    // Only the tuned row decides about the prepass, from probes of both kinds of frame.
+    for row in rows {
+        let tuned = row["saving"].as_str().unwrap().ends_with("tuned");
+        assert_eq!(row["prepass_decision"].is_object(), tuned, "{row}");
+    }
+    let decision = &by_name("1-3 and 5, tuned")["prepass_decision"];
+    assert!(
+        decision["with_seconds"].as_f64().unwrap() > 0.0,
+        "{decision}"
+    );
+    assert!(
+        decision["without_seconds"].as_f64().unwrap() > 0.0,
+        "{decision}"
+    );
+    assert_eq!(decision["frames_per_side"], 3);
+    assert!(decision["use_prepass"].is_boolean(), "{decision}");
+}

@@ -1,0 +1,194 @@
+//! `validate`, `scene` and the presets: a scene file is checked, named and generated as a user
+//! expects, and a bad one is refused with the file, the light and the problem.
+
+use super::*;
+
+#[test]
+fn validate_accepts_a_hand_written_scene() {
+    let dir = work_dir("validate_good");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let out = myriad_ok(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+    assert_mentions(
+        &stdout(&out),
+        &[&scene.display().to_string(), "valid", "4 ok, 0 bad"],
+    );
+}
+
+#[test]
+fn validate_names_file_light_and_problem() {
+    let dir = work_dir("validate_bad");
+    // Two problems at once: near >= far on the camera, and a negative radius on light 2.
+    let text = GOOD_SCENE
+        .replace(r#""near": 0.1, "far": 100"#, r#""near": 100, "far": 10"#)
+        .replace(r#""radius": 1.5"#, r#""radius": -1"#);
+    assert_ne!(text, GOOD_SCENE);
+    let scene = write(&dir, "bad.json", &text);
+    let out = myriad_fails(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+    assert_mentions(
+        &out,
+        &[
+            &scene.display().to_string(),
+            "lights[2].radius",
+            "-1",
+            "camera.far",
+            "near",
+        ],
+    );
+    // Every problem is reported, not just the first.
+    assert_mentions(&out, &["2 problems", "1 bad"]);
+}
+
+#[test]
+fn validate_reports_unreadable_and_missing_files() {
+    let dir = work_dir("validate_unreadable");
+    let truncated = write(&dir, "truncated.json", &GOOD_SCENE[..GOOD_SCENE.len() / 2]);
+    let out = myriad_fails(&[
+        "validate".as_ref(),
+        "--scene".as_ref(),
+        truncated.as_os_str(),
+    ]);
+    assert_mentions(
+        &out,
+        &[&truncated.display().to_string(), "cannot parse", "line "],
+    );
+    let missing = dir.join("missing.json");
+    let dump = dir.join("dump.json");
+    for command in [
+        &["validate"][..],
+        &["bench"],
+        &["assign", "--out", dump.to_str().unwrap()],
+    ] {
+        let mut args: Vec<&std::ffi::OsStr> = command.iter().map(|a| a.as_ref()).collect();
+        args.extend(["--scene".as_ref(), missing.as_os_str()]);
+        let out = myriad_fails(&args);
+        assert_mentions(&out, &[&missing.display().to_string(), "cannot read"]);
+        // The operating system's reason is printed once: the message does not repeat its source.
+        assert_eq!(out.matches("(os error").count(), 1, "{command:?}: {out}");
+    }
+}
+
+#[test]
+fn generated_scenes_validate() {
+    let dir = work_dir("scene_validates");
+    for preset in ["paper", "uniform", "sphere"] {
+        let scene = dir.join(format!("{preset}.json"));
+        let out = myriad_ok(&[
+            "scene".as_ref(),
+            "--preset".as_ref(),
+            preset.as_ref(),
+            "--lights".as_ref(),
+            "200".as_ref(),
+            "--seed".as_ref(),
+            "7".as_ref(),
+            "--out".as_ref(),
+            scene.as_os_str(),
+        ]);
+        assert_mentions(&stdout(&out), &[&scene.display().to_string()]);
+        let out = myriad_ok(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+        assert_mentions(&stdout(&out), &["200 ok, 0 bad"]);
+        assert_eq!(read_json(&scene)["lights"].as_array().unwrap().len(), 200);
+    }
+}
+
+#[test]
+fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
+    let dir = work_dir("scene_source");
+    let out_file = dir.join("s.scene");
+    let out_path = out_file.to_str().unwrap();
+    let out = myriad_fails(&["scene", "--lights", "10", "--out", out_path]);
+    assert_mentions(&out, &["--preset", "--gltf"]);
+    let atrium = format!("{}/assets/atrium.glb", env!("CARGO_MANIFEST_DIR"));
+    for flag in ["--width", "--height"] {
+        let out = myriad_fails(&["scene", "--gltf", &atrium, flag, "0", "--out", out_path]);
+        assert_mentions(&out, &[flag, "0 is not in 1.."]);
+    }
+    // Options of another light field were silently ignored (audit g2).
+    let base = ["scene", "--gltf", &atrium, "--out", out_path];
+    assert_rejected(&[
+        (
+            &[&base[..], &["--field", "box", "--clumps", "3"]].concat(),
+            &["--clumps only applies to --field clumps"],
+        ),
+        (
+            &[&base[..], &["--spread", "2"]].concat(),
+            &[
+                "--spread only applies to --field clumps",
+                "--field surfaces",
+            ],
+        ),
+        (
+            &[&base[..], &["--field", "frustum", "--offset", "1"]].concat(),
+            &["--offset only applies to --field surfaces"],
+        ),
+        (
+            &[&base[..], &["--spot-angles", "10..20"]].concat(),
+            &["--spot-angles only applies with --spots"],
+        ),
+    ]);
+    assert!(!out_file.exists(), "nothing is written for refused options");
+    let far_slice = "log_near:5000";
+    let out = myriad_fails(&[
+        "scene", "--gltf", &atrium, "--depth", far_slice, "--out", out_path,
+    ]);
+    assert_mentions(&out, &["log_near:5000", "strictly between", "far (50)"]);
+    // A cut-off that makes radii overflow is named as the cause.
+    let out = myriad_fails(&[
+        "scene", "--gltf", &atrium, "--cutoff", "1e-45", "--out", out_path,
+    ]);
+    assert_mentions(&out, &["atrium.glb", "cut-off", "too small"]);
+    // A model whose only node is scaled to nothing gives no usable camera: the model is blamed,
+    // not the output file.
+    let flat = write(
+        &dir,
+        "flat.gltf",
+        r#"{"asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0, "matrix": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,1]}],
+        "scenes": [{"nodes": [0]}], "scene": 0}"#,
+    );
+    let out = myriad_fails(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        flat.as_os_str(),
+        "--field".as_ref(),
+        "box".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    assert_mentions(&out, &["flat.gltf", "camera.target"]);
+    assert!(!out.contains("s.scene"), "{out}");
+    assert!(!out_file.exists(), "nothing is written on bad options");
+}
+
+#[test]
+fn preset_options_without_a_preset_are_rejected() {
+    let dir = work_dir("preset_options");
+    let scene = dir.join("s.json");
+    let out = myriad(&[
+        "scene",
+        "--preset",
+        "paper",
+        "--lights",
+        "10",
+        "--out",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let out = myriad(&[
+        "assign",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--lights",
+        "5",
+        "--out",
+        dir.join("d.json").to_str().unwrap(),
+    ]);
+    assert!(
+        !out.status.success(),
+        "--lights without --preset must be an error"
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--preset"));
+}

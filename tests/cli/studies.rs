@@ -1,0 +1,392 @@
+//! The studies: `paper` (the paper's tables and heat map), `report` (time against error over every
+//! scene, grid and method) and `stress` (one frame of very many lights, checked against the
+//! oracle).
+
+use super::*;
+
+#[test]
+fn paper_reproduces_both_tables_with_json_and_heat_map() {
+    if !gpu_available() {
+        return;
+    }
+    // Run in a fresh folder: the scene is Sponza only when ../shared/assets has it from there.
+    let dir = work_dir("paper");
+    let out_dir = dir.join("results");
+    let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .current_dir(&dir)
+        .args(["paper", "--size", "192x96", "--runs", "1", "--out"])
+        .arg(&out_dir)
+        .output()
+        .expect("cannot run the myriad binary");
+    assert!(out.status.success(), "paper failed:\n{}", all_output(&out));
+    let text = stdout(&out);
+    let sponza = dir.join("../shared/assets/sponza/Sponza.gltf").is_file();
+    assert_mentions(
+        &text,
+        &[
+            if sponza {
+                "scene: Sponza"
+            } else {
+                "scene: default scene (atrium)"
+            },
+            "192x96",
+            "Table 1 — 1000 lights",
+            "Table 2 — 10 lights",
+            "the paper's Table 1",
+            "Figure 4",
+            "paper_heatmap.png",
+        ],
+    );
+    if !sponza {
+        assert_mentions(&text, &["not found", "--assets"]);
+    }
+    // Each table: its three grids and "no clustering", with the paper's row beside ours.
+    let paper_rows = [
+        ("Table 1", ["9.16", "8.28", "9.10", "156.00"]),
+        ("Table 2", ["0.63", "0.64", "0.78", "1.60"]),
+    ];
+    for (table, paper_totals) in paper_rows {
+        let start = text.find(table).unwrap();
+        let lines: Vec<&str> = text[start..].lines().skip(3).take(4).collect();
+        let configs = ["24x12x16", "24x12x32", "24x12x64", "no clustering"];
+        for ((line, config), total) in lines.iter().zip(configs).zip(paper_totals) {
+            assert!(
+                line.starts_with(config),
+                "{table}: {line:?} is not {config}"
+            );
+            assert!(
+                line.contains(total),
+                "{table}: no paper total {total} in {line:?}"
+            );
+        }
+    }
+    // Progress: one result line per configuration (and a start line each).
+    let err = stderr(&out);
+    let results = err
+        .lines()
+        .filter(|l| l.contains("/8] ") && l.contains(": shading "))
+        .count();
+    assert_eq!(results, 8, "{err}");
+
+    let json = read_json(&out_dir.join("paper.json"));
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 8);
+    for (i, row) in rows.iter().enumerate() {
+        let lights = if i < 4 { 10 } else { 1000 };
+        assert_eq!(row["lights"], lights, "{row}");
+        assert_eq!(row["table"], if lights == 10 { 2 } else { 1 }, "{row}");
+        let shading = row["shading_ms"].as_f64().unwrap();
+        let total = row["total_ms"].as_f64().unwrap();
+        assert!(shading > 0.0 && total >= shading, "{row}");
+        assert!(row["paper"]["total_ms"].as_f64().unwrap() > 0.0, "{row}");
+        if i % 4 < 3 {
+            let z = [16, 32, 64][i % 4];
+            assert_eq!(row["config"], format!("24x12x{z}"));
+            assert_eq!(row["grid"], serde_json::json!([24, 12, z]));
+            assert!(row["assign_ms"].as_f64().unwrap() > 0.0, "{row}");
+            let pairs = u64_field(row, "pairs");
+            assert!(pairs > 0, "{row}");
+            // The CSR lists: offsets and counts per cluster, one index per pair.
+            assert_eq!(u64_field(row, "list_bytes"), 4 * (2 * 24 * 12 * z + pairs));
+            let mean = row["pixels"]["mean_lights"].as_f64().unwrap();
+            assert!(mean < lights as f64, "{row}");
+        } else {
+            assert_eq!(row["config"], "no clustering");
+            assert_eq!(row["assign_ms"].as_f64().unwrap(), 0.0);
+            assert_eq!(u64_field(row, "list_bytes"), 0);
+            assert_eq!(
+                row["pixels"]["mean_lights"].as_f64().unwrap(),
+                lights as f64
+            );
+        }
+    }
+    assert_eq!(json["heat_map"]["grid"], serde_json::json!([24, 12, 32]));
+    let heat = out_dir.join("paper_heatmap.png");
+    assert!(heat.is_file(), "no {}", heat.display());
+    assert!(std::fs::metadata(&heat).unwrap().len() > 1000);
+
+    // Sponza itself, where this checkout has the shared assets beside it (the run above, in a
+    // fresh folder, never does): the paper's own scene and camera.
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets");
+    if assets.join("sponza/Sponza.gltf").is_file() {
+        let out = myriad_ok(&[
+            "paper".as_ref(),
+            "--assets".as_ref(),
+            assets.as_os_str(),
+            "--size".as_ref(),
+            "96x48".as_ref(),
+            "--runs".as_ref(),
+            "1".as_ref(),
+            "--out".as_ref(),
+            dir.join("sponza").as_os_str(),
+        ]);
+        assert_mentions(
+            &stdout(&out),
+            &["scene: Sponza", "camera CameraMain", "Table 1", "Table 2"],
+        );
+    } else {
+        eprintln!("{} has no Sponza: only the atrium run", assets.display());
+    }
+
+    // Bad options fail before any rendering, naming the option.
+    assert_rejected(&[
+        (&["paper", "--runs", "0"], &["--runs", "at least 1"]),
+        (&["paper", "--size", "192"], &["--size", "WxH"]),
+        (
+            &["paper", "--assets", "/nonexistent/assets"],
+            &["--assets", "/nonexistent/assets", "no such folder"],
+        ),
+        (
+            &["paper", "--depth", "cubic"],
+            &["--depth", "log, linear or log_near:D"],
+        ),
+    ]);
+}
+
+#[test]
+fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
+    let dir = work_dir("report");
+    let out = myriad_ok(&[
+        "report",
+        "--lights",
+        "500",
+        "--grids",
+        "8x4x8,16x9x24",
+        "--runs",
+        "3",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let (scenes, grids, methods) = (
+        ["paper", "uniform", "sphere"],
+        ["8×4×8", "16×9×24"],
+        ["exact", "linear", "binary", "refined", "cone"],
+    );
+
+    // report.md, also printed to stdout: one table row per scene × grid × method, no misses.
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert_eq!(stdout(&out), md);
+    assert_mentions(&md, &["shading cost", "| scene | grid | method |"]);
+    let rows: Vec<Vec<&str>> = md
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| scene") && !l.starts_with("| ---"))
+        .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 2 * methods.len(), "{md}");
+    for scene in scenes {
+        for grid in grids {
+            for method in methods {
+                let row = rows
+                    .iter()
+                    .find(|r| r[..3] == [scene, grid, method])
+                    .unwrap_or_else(|| panic!("no row for {scene} {grid} {method} in:\n{md}"));
+                assert_eq!(row[6], "0", "misses in {row:?}");
+            }
+        }
+        assert!(
+            rows.iter().any(|r| r[0] == scene && r[8] == "✓"),
+            "{scene} has no point on its Pareto front:\n{md}"
+        );
+    }
+    // Progress: one stderr line per scene × grid.
+    let progress = stderr(&out);
+    for k in 1..=6 {
+        assert!(progress.contains(&format!("[{k}/6] ")), "{progress}");
+    }
+
+    // report.json: every number, misses 0 everywhere.
+    let report = read_json(&dir.join("report.json"));
+    let json_rows = report["rows"].as_array().expect("a rows array");
+    assert_eq!(json_rows.len(), 3 * 2 * methods.len());
+    for r in json_rows {
+        assert_eq!(u64_field(r, "misses"), 0, "{r}");
+        assert!(r["median_us"].as_f64().is_some_and(|t| t > 0.0), "{r}");
+        assert!(u64_field(r, "pairs") > 0, "{r}");
+        let exact = json_rows
+            .iter()
+            .find(|e| e["scene"] == r["scene"] && e["grid"] == r["grid"] && e["method"] == "exact")
+            .unwrap();
+        assert_eq!(exact["false_positive_ratio"].as_f64(), Some(0.0));
+        // Every method lists a superset of the exact lights: never cheaper to shade than exact.
+        assert!(
+            r["shading_cost"].as_f64().unwrap() >= exact["shading_cost"].as_f64().unwrap(),
+            "{r} vs {exact}"
+        );
+        assert_eq!(r["lit_clusters"], exact["lit_clusters"]);
+        assert!(r["false_positive_ratio"].as_f64().unwrap() >= 0.0, "{r}");
+    }
+
+    // report.svg: an SVG with the method and scene names and one Pareto-front line per scene and
+    // error measure (false positives, shading cost)
+    // (drawn in the front colour, #FF7F0E; the legend has one more sample of it).
+    let svg = std::fs::read_to_string(dir.join("report.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") || svg.starts_with("<?xml"),
+        "{}",
+        &svg[..svg.len().min(200)]
+    );
+    assert!(svg.trim_end().ends_with("</svg>"));
+    for name in methods.iter().chain(&scenes).chain(&grids) {
+        assert!(svg.contains(name), "{name} not in the SVG");
+    }
+    let fronts = svg
+        .lines()
+        .filter(|l| l.starts_with("<polyline") && l.contains(r##"stroke="#FF7F0E""##))
+        .count();
+    assert_eq!(
+        fronts,
+        1 + 6,
+        "legend sample + one front per scene and error measure"
+    );
+
+    // Bad options fail before measuring anything.
+    let out = myriad_fails(&[
+        "report",
+        "--grids",
+        "8x4x8,16x9",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_mentions(&out, &["--grids", "16x9"]);
+    let out = myriad_fails(&["report", "--runs", "0", "--out", dir.to_str().unwrap()]);
+    assert_mentions(&out, &["--runs"]);
+}
+
+/// The stage times every `myriad stress --json` report carries.
+const STRESS_STAGES: [&str; 8] = [
+    "scene_ms",
+    "assign_ms",
+    "assign_again_ms",
+    "gpu_setup_ms",
+    "upload_ms",
+    "encode_ms",
+    "gpu_wall_ms",
+    "check_ms",
+];
+
+/// Runs `myriad stress --json` with `args`; the parsed report (the run must succeed).
+fn stress_json(args: &[&str]) -> Value {
+    let mut all = vec!["stress", "--json"];
+    all.extend_from_slice(args);
+    let out = myriad_ok(&all);
+    serde_json::from_str(&stdout(&out)).expect("stress --json prints one JSON object")
+}
+
+fn assert_stress_stages(report: &Value) {
+    let stages = &report["stages"];
+    for stage in STRESS_STAGES {
+        let ms = stages[stage]
+            .as_f64()
+            .unwrap_or_else(|| panic!("stage {stage} missing in {stages}"));
+        assert!(ms >= 0.0 && ms.is_finite(), "{stage}: {ms}");
+    }
+    assert!(stages["gpu_wall_ms"].as_f64().unwrap() > 0.0);
+    if report["timestamps"] == true {
+        for pass in ["gpu_gbuffer_ms", "gpu_shading_ms"] {
+            assert!(
+                stages[pass].as_f64().is_some(),
+                "{pass} missing in {stages}"
+            );
+        }
+    }
+}
+
+#[test]
+fn stress_checks_every_cluster_against_the_oracle() {
+    if !gpu_available() {
+        return;
+    }
+    let r = stress_json(&["--lights", "20000", "--size", "64x36"]);
+    assert_eq!(r["lights"], 20000);
+    assert_eq!(
+        (r["width"].as_u64(), r["height"].as_u64()),
+        (Some(64), Some(36))
+    );
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["mode"], "full");
+    assert_eq!(check["misses"], 0);
+    assert_eq!(check["first_miss"], Value::Null);
+    assert_eq!(check["clusters_checked"], check["clusters_total"]);
+    assert!(u64_field(check, "exact_pairs") > 0);
+    let pairs = u64_field(&r["assignment"], "pairs");
+    assert!(pairs > 0);
+    // Every cluster was checked, so the reported pairs are all of them.
+    assert_eq!(u64_field(check, "reported_pairs"), pairs);
+    assert!(u64_field(check, "exact_pairs") <= pairs);
+    // Lights (32 bytes or more each) and the lists went up.
+    assert!(u64_field(&r, "upload_bytes") > 20000 * 32 + 4 * pairs);
+    assert_stress_stages(&r);
+}
+
+#[test]
+fn stress_checks_the_exact_method_independently() {
+    if !gpu_available() {
+        return;
+    }
+    // The exact method's lists were compared with themselves, a check that could not fail
+    // (audit g1): every cluster goes through the independent oracle instead.
+    let r = stress_json(&["--lights", "3000", "--size", "64x36", "--method", "exact"]);
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["mode"], "independent");
+    assert_eq!(check["clusters_checked"], check["clusters_total"]);
+    assert_eq!(check["misses"], 0);
+    let pairs = u64_field(&r["assignment"], "pairs");
+    // The exact method lists exactly the pairs the independent oracle finds.
+    assert_eq!(u64_field(check, "exact_pairs"), pairs);
+    assert_eq!(u64_field(check, "reported_pairs"), pairs);
+}
+
+#[test]
+fn stress_samples_clusters_above_the_exact_limit() {
+    if !gpu_available() {
+        return;
+    }
+    let r = stress_json(&["--sample", "50", "--lights", "250000", "--size", "32x18"]);
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["mode"], "sampled");
+    assert_eq!(check["clusters_checked"], 50);
+    assert_eq!(check["misses"], 0);
+    assert!(u64_field(check, "exact_pairs") > 0, "{check}");
+    assert!(u64_field(check, "reported_pairs") >= u64_field(check, "exact_pairs"));
+    assert_stress_stages(&r);
+}
+
+#[test]
+fn stress_rejects_bad_options_clearly() {
+    assert_rejected(&[
+        (&["stress", "--lights", "0"], &["--lights", "at least 1"]),
+        (
+            &["stress", "--sample", "0", "--lights", "10"],
+            &["--sample", "at least 1"],
+        ),
+        (&["stress", "--size", "64"], &["--size", "WxH"]),
+        (&["stress", "--method", "guess"], &["guess", "refined"]),
+        (&["stress", "--lights", "many"], &["--lights", "many"]),
+        (
+            &["bench", "--preset", "paper", "--threads", "1000000"],
+            &["--threads 1000000", "at most 1024"],
+        ),
+        (
+            &[
+                "scene",
+                "--gltf",
+                "assets/atrium.glb",
+                "--field",
+                "clumps",
+                "--clumps",
+                "4294967295",
+                "--lights",
+                "2",
+                "--out",
+                "unused.json",
+            ],
+            &[
+                "--clumps 4294967295",
+                "between 1 and the number of lights (2)",
+            ],
+        ),
+    ]);
+}
