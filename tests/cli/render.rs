@@ -36,9 +36,7 @@ fn no_arguments_runs_the_main_job() {
     for file in ["frame.png", "heatmap.png", "stats.json"] {
         assert!(dir.join("out").join(file).is_file(), "no out/{file}");
     }
-    let stats: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/stats.json")).unwrap())
-            .unwrap();
+    let stats = read_json(&dir.join("out/stats.json"));
     assert_eq!(stats["lights"], 1000);
     let strategies = stats["strategies"].as_array().unwrap();
     assert_eq!(strategies.len(), 3);
@@ -340,9 +338,7 @@ fn render_takes_scene_files_presets_and_sizes() {
             "grid 8x4x6",
         ],
     );
-    let stats: Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
-            .unwrap();
+    let stats = read_json(&out_dir.join("stats.json"));
     assert_eq!(stats["lights"], 300);
     assert_eq!(stats["grid"], serde_json::json!([8, 4, 6]));
     let out = myriad_ok(&[
@@ -371,9 +367,7 @@ fn render_takes_scene_files_presets_and_sizes() {
     );
     // Tuned, the column reports the timed choice, and its frames ran it: with the prepass off,
     // no clusters were masked and no depth range fitted.
-    let stats: Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
-            .unwrap();
+    let stats = read_json(&out_dir.join("stats.json"));
     let skipping = &stats["with_skips"];
     assert_eq!(
         skipping["savings"],
