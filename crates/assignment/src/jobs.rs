@@ -180,7 +180,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     // Pre-cull columns of the current block, indexed by position in the block.
     let (mut vx, mut vy, mut vd, mut vr) =
         ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
-    let (mut valid, mut inside, mut overflowed) = ([false; BLOCK], [false; BLOCK], [false; BLOCK]);
+    let (mut ok, mut inside, mut overflowed) = ([false; BLOCK], [false; BLOCK], [false; BLOCK]);
     let mut spots = [SpotView::default(); BLOCK];
     let l = &ctx.lights;
     let m = ctx.view_from_world;
@@ -191,30 +191,38 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         // Each phase of the block is a span of its own: fine-grained (a few µs each), and nothing
         // at all without the `tracy` feature.
         crate::profiling::profile_span!("phase: view and cull", view_and_cull);
-        // Phase 0a: camera-relative view transform, validity and padding, branch-free over the
-        // block's columns so that it vectorises.
+        // Phase 0a: camera-relative view transform, padding and the early frustum cull, branch-free
+        // over the block's columns so that it vectorises. Validity costs nothing here: the padded
+        // radius sums |cx| + |cy| + |dc| + r, and each of cx, cy, dc takes every input coordinate
+        // (a non-finite one makes them all NaN or infinite, even times a zero matrix entry), so
+        // `r > 0` with a finite padded radius holds exactly when every input is finite, `r > 0`
+        // and the view-space sphere fits f32. The rare others are sorted out below (phase 0d).
         let (xs, ys, zs) = (
             &l.x[block_start..][..n],
             &l.y[block_start..][..n],
             &l.z[block_start..][..n],
         );
         let rs = &l.radius[block_start..][..n];
+        // Counted in u32: a usize sum halves the vector width.
+        let mut sound = 0u32;
         for b in 0..n {
             let (px, py, pz, r) = (xs[b] - eye.x, ys[b] - eye.y, zs[b] - eye.z, rs[b]);
             let x = m.x_axis.x * px + m.y_axis.x * py + m.z_axis.x * pz;
             let y = m.x_axis.y * px + m.y_axis.y * py + m.z_axis.y * pz;
             let z = m.x_axis.z * px + m.y_axis.z * py + m.z_axis.z * pz;
-            valid[b] = xs[b].is_finite()
-                & ys[b].is_finite()
-                & zs[b].is_finite()
-                & r.is_finite()
-                & (r > 0.0);
+            let padded = geometry::pad_radius(x, y, -z, r);
             vx[b] = x;
             vy[b] = y;
             vd[b] = -z;
-            vr[b] = geometry::pad_radius(x, y, -z, r);
+            vr[b] = padded;
+            let fine = (r > 0.0) & padded.is_finite();
+            ok[b] = fine;
+            inside[b] = fine & cull.may_touch(x, y, -z, padded);
+            sound += fine as u32;
         }
-        // Phase 0b: spot lights trade their range sphere for the spot volume's bounding sphere.
+        // Phase 0b: spot lights trade their range sphere for the spot volume's bounding sphere,
+        // and are culled again with it. One whose range sphere overflowed stays with phase 0d
+        // even if its bounding sphere fits: conservative, and only near `f32::MAX`.
         if let Some(s) = &l.spot {
             for b in 0..n {
                 let g = block_start + b;
@@ -245,35 +253,45 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                     };
                 }
             }
-        }
-        // Phase 0c: the early frustum cull, then compaction of the survivors into the block's
-        // columns, walking the set bits of a survivor mask (cheap whether few or most survive).
-        // A valid light whose view-space sphere overflowed f32 (coordinates and radius near
-        // `f32::MAX`) cannot go through the f32 phases: it is culled in f64 or, if it may touch
-        // the frustum, given the whole grid (the `exact` method still tests each cluster in f64).
-        // Rare and conservative; it once counted such lights as culled, a miss.
-        let mut any_overflowed = false;
-        for b in 0..n {
-            // The padded radius sums |cx| + |cy| + |dc| + r: finite only when all of them are.
-            let fits = vr[b].is_finite();
-            overflowed[b] = valid[b] & !fits;
-            any_overflowed |= overflowed[b];
-            inside[b] = valid[b] & fits & cull.may_touch(vx[b], vy[b], vd[b], vr[b]);
-        }
-        if any_overflowed {
+            sound = 0;
             for b in 0..n {
-                if overflowed[b] {
-                    let g = block_start + b;
-                    let world = DVec3::new(l.x[g].into(), l.y[g].into(), l.z[g].into());
-                    let z = &ctx.planes.sets.z_depths;
-                    inside[b] =
-                        geometry::may_touch_frustum_f64(ctx.camera, z, world, l.radius[g].into());
-                    // Finite stand-ins for the f32 phases, whose box is then ignored.
-                    (vx[b], vy[b], vd[b], vr[b]) = (0.0, 0.0, 1.0, 1.0);
-                    spots[b].active = false;
-                }
+                let fine = ok[b] & vr[b].is_finite();
+                ok[b] = fine;
+                inside[b] = fine & cull.may_touch(vx[b], vy[b], vd[b], vr[b]);
+                sound += fine as u32;
             }
         }
+        // Phase 0d, only for a block with a light that failed the test above: an invalid light is
+        // rejected (counted); a valid one whose view-space sphere overflowed f32 (coordinates and
+        // radius near `f32::MAX`) cannot go through the f32 phases: it is culled in f64 or, if it
+        // may touch the frustum, given the whole grid (the `exact` method still tests each
+        // cluster in f64). Rare and conservative; it once counted such lights as culled, a miss.
+        let mut rejected = 0;
+        let sound = sound as usize;
+        let any_overflowed = sound < n && {
+            overflowed[..n].fill(false);
+            for b in (0..n).filter(|&b| !ok[b]) {
+                let g = block_start + b;
+                let r = l.radius[g];
+                let valid = l.x[g].is_finite()
+                    & l.y[g].is_finite()
+                    & l.z[g].is_finite()
+                    & r.is_finite()
+                    & (r > 0.0);
+                if !valid {
+                    rejected += 1;
+                    continue;
+                }
+                overflowed[b] = true;
+                let world = DVec3::new(l.x[g].into(), l.y[g].into(), l.z[g].into());
+                let z = &ctx.planes.sets.z_depths;
+                inside[b] = geometry::may_touch_frustum_f64(ctx.camera, z, world, r.into());
+                // Finite stand-ins for the f32 phases, whose box is then ignored.
+                (vx[b], vy[b], vd[b], vr[b]) = (0.0, 0.0, 1.0, 1.0);
+                spots[b].active = false;
+            }
+            rejected < n - sound
+        };
         let mut alive = 0;
         for (word, flags) in inside[..n].chunks(64).enumerate() {
             let mut mask = flags
@@ -292,7 +310,13 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 alive += 1;
             }
         }
-        let rejected = valid[..n].iter().filter(|&&v| !v).count();
+        if any_overflowed {
+            // Their stand-in spheres must not give them a box: the emit below sees them as dead
+            // and only then asks whether they overflowed, off the path of every other light.
+            for b in 0..alive {
+                block.alive[b] &= !overflowed[block.source[b] as usize];
+            }
+        }
         out.rejected += rejected as u32;
         out.culled += (n - rejected - alive) as u32;
         if ctx.method == Method::Exact {
@@ -311,12 +335,12 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         for b in 0..alive {
             let source = block.source[b] as usize;
             let light = (block_start + source) as u32;
-            if overflowed[source] {
-                emit_overflowed(ctx, light, &spots[source], out);
-                continue;
-            }
             if !block.alive[b] {
-                out.culled += 1;
+                if any_overflowed && overflowed[source] {
+                    emit_overflowed(ctx, light, &spots[source], out);
+                } else {
+                    out.culled += 1;
+                }
                 continue;
             }
             let bx = block.cluster_box(b);
@@ -339,7 +363,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     }
 }
 
-/// A light whose view-space sphere overflowed f32 (see phase 0c): the whole grid, unrefined (an
+/// A light whose view-space sphere overflowed f32 (see phase 0d): the whole grid, unrefined (an
 /// infinite radius keeps `refined` from cutting it). Out of line: rare, and it keeps the hot
 /// loop small.
 #[cold]

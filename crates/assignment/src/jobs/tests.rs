@@ -244,7 +244,7 @@ fn emit_lists_exactly_each_methods_definition() {
     );
 }
 
-/// An overflowed light (see `run_task`'s phase 0c) is listed once in every cluster of the
+/// An overflowed light (see `run_task`'s phase 0d) is listed once in every cluster of the
 /// grid by every box method: an infinite radius must keep `refined` and `cone` from cutting.
 #[test]
 fn an_overflowed_light_is_listed_in_the_whole_grid() {
@@ -340,7 +340,11 @@ fn spot_rows_keep_the_clusters_the_cone_may_touch() {
 /// the side plane only beyond the far plane, so they pass the cull, yet inside the depth range
 /// their cross-section lies outside. They are listed nowhere either way, so the oracle suites
 /// cannot see them miscounted; this can. Three blocks, in a task that starts past light 0,
-/// check that light numbers and counts carry from block to block.
+/// check that light numbers and counts carry from block to block. The first block also holds a
+/// light with an infinite coordinate (rejected) and two whose view-space spheres overflow f32
+/// (phase 0d): one in front, listed in the whole grid, one behind, culled. The next block has,
+/// at the same positions, a light that passes the cull but gets no box and one with a box, and no
+/// invalid light: they must not inherit the overflow.
 #[test]
 fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
     let (camera, grid, sets) = frame();
@@ -375,28 +379,55 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
         x.push(px);
         y.push(py);
         z.push(-depth);
+        // Invalid radii in the first block only: a block whose lights all pass the view
+        // test leaves its overflow flags as they were.
         radius.push(match n % 50 {
-            0 => 0.0,
-            1 => f32::NAN,
+            0 if n < 356 => 0.0,
+            1 if n < 356 => f32::NAN,
             _ => r,
         });
     }
+    // Blocks of 256 from light 100: lights 103, 109 and 120 are the first block's 3rd, 9th and
+    // 20th, lights 359 and 365 the second block's 3rd and 9th.
+    let mut put = |l: usize, p: Vec3, r: f32| (x[l], y[l], z[l], radius[l]) = (p.x, p.y, p.z, r);
+    put(103, Vec3::new(0.0, 0.0, -3.0e38), 3.3e38);
+    put(109, Vec3::new(0.0, 0.0, 3.0e38), 1.0e38);
+    put(120, Vec3::new(f32::INFINITY, 0.0, -5.0), 1.0);
+    put(359, Vec3::new(t.x * 60.8 + 0.3, 0.0, -60.8), 1.0);
+    put(365, Vec3::new(0.0, 0.0, -10.0), 1.0);
     let mut ctx = culling_context(Method::Binary, &camera, &grid, &sets);
     ctx.lights = LightInput::points(&x, &y, &z, &radius);
     let (begin, end) = (100, x.len());
     let (mut want, mut rejected, mut culled_early, mut culled_late) = (Vec::new(), 0, 0, 0);
     for l in begin..end {
-        if !(radius[l] > 0.0) {
+        if !(radius[l] > 0.0) || !x[l].is_finite() {
             rejected += 1;
             continue;
         }
+        match l {
+            103 => {
+                want.extend((0..grid.cluster_count() as u32).map(|c| (103, c)));
+                continue;
+            }
+            109 => {
+                culled_early += 1;
+                continue;
+            }
+            _ => {}
+        }
         let v = ctx.view_from_world * Vec3::new(x[l], y[l], z[l]);
         let r = geometry::pad_radius(v.x, v.y, -v.z, radius[l]);
+        assert!(r.is_finite(), "light {l}");
         if !ctx.cull.may_touch(v.x, v.y, -v.z, r) {
             culled_early += 1;
             continue;
         }
-        match geometry::cluster_box(v.x, v.y, -v.z, r, &planes) {
+        let bx = geometry::cluster_box(v.x, v.y, -v.z, r, &planes);
+        if l == 359 || l == 365 {
+            assert!(ctx.cull.may_touch(v.x, v.y, -v.z, r), "light {l}");
+            assert_eq!(bx.is_some(), l == 365, "light {l}");
+        }
+        match bx {
             Some(bx) => want.extend(
                 box_clusters(&grid, &bx, |_, _, _| true)
                     .iter()
@@ -420,7 +451,7 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
         want.len()
     );
     assert!(
-        rejected == 24 && culled_early > 100 && culled_late > 20 && want.len() > 10_000,
+        rejected == 13 && culled_early > 100 && culled_late > 20 && want.len() > 10_000,
         "rejected {rejected}, culled early {culled_early}, without a box {culled_late}, pairs {}",
         want.len()
     );
