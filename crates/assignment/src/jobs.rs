@@ -17,7 +17,7 @@ use crate::phases::{BLOCK, Block};
 use crate::search::FramePlanes;
 use crate::{LightInput, Method};
 use crossbeam::utils::CachePadded;
-use glam::{DVec3, Mat3, Vec3, Vec4};
+use glam::{DVec3, Mat3, Vec2, Vec3, Vec4};
 use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets, SpotCone, spot_bounding_sphere};
 
@@ -54,9 +54,12 @@ pub(crate) struct FrameContext<'a> {
 /// `sphere`, where nine lights in ten are culled).
 #[derive(Clone, Copy)]
 pub(crate) struct FrustumCull {
-    /// Unit normals of the left, right, top and bottom planes (x-plane 0 and X, y-plane 0 and
-    /// Y), each pointing right or up.
-    pub sides: [Vec3; 4],
+    /// The left, right, top and bottom planes (x-plane 0 and X, y-plane 0 and Y), each as the two
+    /// components of its unit normal (pointing right or up) that are not zero: `(x, z)` for the
+    /// x-planes, `(y, z)` for the y-planes. The third is exactly zero ([`PlaneSets`] normalises
+    /// `(1, 0, slope)` and `(0, 1, slope)`), so leaving it out changes no test and saves the cull
+    /// loop a multiply and an add per plane.
+    pub sides: [Vec2; 4],
     /// The grid's near and far depths.
     pub near: f32,
     pub far: f32,
@@ -66,12 +69,15 @@ impl FrustumCull {
     /// The grid's outer planes (its first and last x- and y-planes) and its first and last depth.
     pub fn of_grid(sets: &PlaneSets, grid: &ClusterGrid) -> Self {
         let d = grid.dims();
+        let (left, right) = (sets.x_plane_normal(0), sets.x_plane_normal(d.x as usize));
+        let (top, bottom) = (sets.y_plane_normal(0), sets.y_plane_normal(d.y as usize));
+        debug_assert!([left.y, right.y, top.x, bottom.x] == [0.0; 4]);
         Self {
             sides: [
-                sets.x_plane_normal(0),
-                sets.x_plane_normal(d.x as usize),
-                sets.y_plane_normal(0),
-                sets.y_plane_normal(d.y as usize),
+                Vec2::new(left.x, left.z),
+                Vec2::new(right.x, right.z),
+                Vec2::new(top.y, top.z),
+                Vec2::new(bottom.y, bottom.z),
             ],
             near: sets.z_depths[0],
             far: sets.z_depths[sets.z_depths.len() - 1],
@@ -83,11 +89,11 @@ impl FrustumCull {
     #[inline(always)]
     fn may_touch(&self, cx: f32, cy: f32, depth: f32, r: f32) -> bool {
         let [left, right, top, bottom] = self.sides;
-        let c = Vec3::new(cx, cy, -depth);
-        (left.dot(c) >= -r)
-            & (right.dot(c) <= r)
-            & (top.dot(c) <= r)
-            & (bottom.dot(c) >= -r)
+        let (x, y) = (Vec2::new(cx, -depth), Vec2::new(cy, -depth));
+        (left.dot(x) >= -r)
+            & (right.dot(x) <= r)
+            & (top.dot(y) <= r)
+            & (bottom.dot(y) >= -r)
             & (depth + r >= self.near)
             & (depth - r <= self.far)
     }

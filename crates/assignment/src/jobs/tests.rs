@@ -44,7 +44,7 @@ fn context<'a>(
         parts: d.z.div_ceil(1 << SLICE_SHIFT) as usize,
         slice_shift: SLICE_SHIFT,
         cull: FrustumCull {
-            sides: [Vec3::ZERO; 4],
+            sides: [glam::Vec2::ZERO; 4],
             near: camera.near,
             far: camera.far,
         },
