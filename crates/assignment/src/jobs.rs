@@ -2,8 +2,10 @@
 //!
 //! A task walks its lights in blocks of [`BLOCK`] and runs the phases as SoA passes over each
 //! block, so every pass is a tight loop over a few columns:
-//! 0. **view**: reject invalid lights (counted), bring the rest to view space camera-relative, swap a
-//!    spot light for its bounding sphere, pad the radius;
+//! 0. **view and cull**: bring the lights to view space camera-relative, pad the radius and test
+//!    the frustum's six planes in one pass (an invalid light fails it too, and is counted as
+//!    rejected); a spot light swaps its range sphere for the spot's bounding sphere; the survivors
+//!    are compacted into the block's columns;
 //! 1. **z phase** → depth band and slices; 2. **x phase** → tile columns; 3. **y phase** → rows
 //!    (binary searches of the plane sets, see `geometry.rs`);
 //! 4. **emit**: the box's rows as spans (`binary`), the refined rows (`refined`), each row cut by the
