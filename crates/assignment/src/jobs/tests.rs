@@ -456,3 +456,57 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
         want.len()
     );
 }
+
+/// Spot columns whose lights are all point lights (angle `π`) change nothing: `run_task` lists
+/// the same pairs and counts the same rejected and culled lights as without the columns. With
+/// spot columns phase 0b recomputes which lights are sound and which may touch the frustum: a
+/// light phase 0a found invalid (a zero, negative or NaN radius at a finite position, whose
+/// padded radius is finite) must stay out and be rejected, and a valid one must keep its own
+/// box rather than fall to phase 0d and the whole grid. The oracle suites give invalid lights
+/// only without spot columns, and cannot see a valid light listed in the whole grid (still
+/// conservative); this can.
+#[test]
+fn point_lights_in_spot_columns_are_listed_and_counted_as_without_them() {
+    let (camera, grid, sets) = frame();
+    let t = camera.tan_half_fov();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(14);
+    let (mut x, mut y, mut z, mut radius) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for n in 0..300 {
+        // Depths 0–70, out to 1.3 times the frustum's width and height.
+        let depth = 70.0 * rng.random::<f32>();
+        x.push(rng.random_range(-1.3..1.3f32) * t.x * depth);
+        y.push(rng.random_range(-1.3..1.3f32) * t.y * depth);
+        z.push(-depth);
+        radius.push(match n % 10 {
+            0 => 0.0,
+            1 => -1.0,
+            2 => f32::NAN,
+            _ => 10f32.powf(rng.random_range(-1.0..0.8)),
+        });
+    }
+    let n = x.len();
+    let (zeros, down, angle) = (vec![0.0; n], vec![-1.0; n], vec![std::f32::consts::PI; n]);
+    let mut ctx = culling_context(Method::Binary, &camera, &grid, &sets);
+    ctx.lights = LightInput::points(&x, &y, &z, &radius);
+    let (want, want_rejected, want_culled) = task_pairs(&ctx, 0, n);
+    ctx.lights.spot = Some(crate::SpotInput {
+        dir_x: &zeros,
+        dir_y: &zeros,
+        dir_z: &down,
+        angle: &angle,
+    });
+    let (got, got_rejected, got_culled) = task_pairs(&ctx, 0, n);
+    assert_eq!(got_rejected, want_rejected, "rejected");
+    assert_eq!(got_culled, want_culled, "culled");
+    assert!(
+        got == want,
+        "{} pairs listed, {} expected",
+        got.len(),
+        want.len()
+    );
+    assert!(
+        want_rejected == 90 && want_culled > 20 && want.len() > 1000,
+        "rejected {want_rejected}, culled {want_culled}, pairs {}",
+        want.len()
+    );
+}
