@@ -204,7 +204,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         // radius sums |cx| + |cy| + |dc| + r, and each of cx, cy, dc takes every input coordinate
         // (a non-finite one makes them all NaN or infinite, even times a zero matrix entry), so
         // `r > 0` with a finite padded radius holds exactly when every input is finite, `r > 0`
-        // and the view-space sphere fits f32. The rare others are sorted out below (phase 0d).
+        // and the view-space sphere fits f32. The rare others are sorted out below (phase 0c).
         let (xs, ys, zs) = (
             &l.x[block_start..][..n],
             &l.y[block_start..][..n],
@@ -229,7 +229,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
             sound += fine as u32;
         }
         // Phase 0b: spot lights trade their range sphere for the spot volume's bounding sphere,
-        // and are culled again with it. One whose range sphere overflowed stays with phase 0d
+        // and are culled again with it. One whose range sphere overflowed stays with phase 0c
         // even if its bounding sphere fits: conservative, and only near `f32::MAX`.
         if let Some(s) = &l.spot {
             for b in 0..n {
@@ -269,7 +269,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
                 sound += fine as u32;
             }
         }
-        // Phase 0d, only for a block with a light that failed the test above: an invalid light is
+        // Phase 0c, only for a block with a light that failed the test above: an invalid light is
         // rejected (counted); a valid one whose view-space sphere overflowed f32 (coordinates and
         // radius near `f32::MAX`) cannot go through the f32 phases: it is culled in f64 or, if it
         // may touch the frustum, given the whole grid (the `exact` method still tests each
@@ -371,7 +371,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     }
 }
 
-/// A light whose view-space sphere overflowed f32 (see phase 0d): the whole grid, unrefined (an
+/// A light whose view-space sphere overflowed f32 (see phase 0c): the whole grid, unrefined (an
 /// infinite radius keeps `refined` from cutting it). Out of line: rare, and it keeps the hot
 /// loop small.
 #[cold]

@@ -244,7 +244,7 @@ fn emit_lists_exactly_each_methods_definition() {
     );
 }
 
-/// An overflowed light (see `run_task`'s phase 0d) is listed once in every cluster of the
+/// An overflowed light (see `run_task`'s phase 0c) is listed once in every cluster of the
 /// grid by every box method: an infinite radius must keep `refined` and `cone` from cutting.
 #[test]
 fn an_overflowed_light_is_listed_in_the_whole_grid() {
@@ -342,7 +342,7 @@ fn spot_rows_keep_the_clusters_the_cone_may_touch() {
 /// cannot see them miscounted; this can. Three blocks, in a task that starts past light 0,
 /// check that light numbers and counts carry from block to block. The first block also holds a
 /// light with an infinite coordinate (rejected) and two whose view-space spheres overflow f32
-/// (phase 0d): one in front, listed in the whole grid, one behind, culled. The next block has,
+/// (phase 0c): one in front, listed in the whole grid, one behind, culled. The next block has,
 /// at the same positions, a light that passes the cull but gets no box and one with a box, and no
 /// invalid light: they must not inherit the overflow.
 #[test]
@@ -462,7 +462,7 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
 /// spot columns phase 0b recomputes which lights are sound and which may touch the frustum: a
 /// light phase 0a found invalid (a zero, negative or NaN radius at a finite position, whose
 /// padded radius is finite) must stay out and be rejected, and a valid one must keep its own
-/// box rather than fall to phase 0d and the whole grid. The oracle suites give invalid lights
+/// box rather than fall to phase 0c and the whole grid. The oracle suites give invalid lights
 /// only without spot columns, and cannot see a valid light listed in the whole grid (still
 /// conservative); this can.
 #[test]
