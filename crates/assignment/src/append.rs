@@ -558,15 +558,11 @@ fn sort_lists(
     }
     for c in clusters.clone() {
         let start = offsets[c] as usize - base;
+        // The last list of a half ends where the next half's first starts: `offsets[mid]`.
         let end = if c + 1 < offsets.len() {
             offsets[c + 1] as usize - base
         } else {
             indices.len()
-        };
-        let end = if c + 1 == clusters.end {
-            indices.len().min(end)
-        } else {
-            end
         };
         indices[start..end].sort_unstable();
     }
