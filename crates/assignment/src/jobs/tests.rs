@@ -72,6 +72,23 @@ fn task_pairs(ctx: &FrameContext<'_>, begin: usize, end: usize) -> (Vec<(u32, u3
     (pairs, out.rejected, out.culled)
 }
 
+/// Checks a task's `(pairs, rejected, culled)` ([`task_pairs`]) against the expected ones, pair
+/// for pair; `context` goes with a wrong culled count.
+fn assert_task_output(
+    got: (Vec<(u32, u32)>, u32, u32),
+    want: (&[(u32, u32)], u32, u32),
+    context: &str,
+) {
+    assert_eq!(got.1, want.1, "rejected");
+    assert_eq!(got.2, want.2, "culled: {context}");
+    assert!(
+        got.0 == want.0,
+        "{} pairs listed, {} expected",
+        got.0.len(),
+        want.0.len()
+    );
+}
+
 /// Every `(light, cluster)` pair the spans of `buckets` list, ascending (`width`: the grid's
 /// tiles across, a span's row stride).
 fn listed_pairs(buckets: &[CachePadded<Bucket>], width: u32) -> Vec<(u32, u32)> {
@@ -437,18 +454,10 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
         }
     }
     want.sort_unstable();
-    let (got, got_rejected, got_culled) = task_pairs(&ctx, begin, end);
-    assert_eq!(got_rejected, rejected, "rejected");
-    assert_eq!(
-        got_culled,
-        culled_early + culled_late,
-        "culled: {culled_early} by the early cull, {culled_late} without a box"
-    );
-    assert!(
-        got == want,
-        "{} pairs listed, {} expected",
-        got.len(),
-        want.len()
+    assert_task_output(
+        task_pairs(&ctx, begin, end),
+        (&want, rejected, culled_early + culled_late),
+        &format!("{culled_early} by the early cull, {culled_late} without a box"),
     );
     assert!(
         rejected == 13 && culled_early > 100 && culled_late > 20 && want.len() > 10_000,
@@ -495,14 +504,10 @@ fn point_lights_in_spot_columns_are_listed_and_counted_as_without_them() {
         dir_z: &down,
         angle: &angle,
     });
-    let (got, got_rejected, got_culled) = task_pairs(&ctx, 0, n);
-    assert_eq!(got_rejected, want_rejected, "rejected");
-    assert_eq!(got_culled, want_culled, "culled");
-    assert!(
-        got == want,
-        "{} pairs listed, {} expected",
-        got.len(),
-        want.len()
+    assert_task_output(
+        task_pairs(&ctx, 0, n),
+        (&want, want_rejected, want_culled),
+        "with spot columns",
     );
     assert!(
         want_rejected == 90 && want_culled > 20 && want.len() > 1000,
