@@ -22,8 +22,10 @@ fn a_device_below_the_required_limits_is_a_device_limits_error() {
     if GpuContext::headless_for_tests().is_none() {
         return;
     }
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    // The process's one instance (`shared_instance` says why), as tests run in parallel.
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
     // The downlevel defaults allow four storage buffers per stage; the renderer needs five.
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         required_limits: wgpu::Limits::downlevel_defaults(),

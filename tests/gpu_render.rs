@@ -445,8 +445,10 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
     }
     // An engine's device, created with the renderer's documented minimum rather than the
     // adapter's limits, and one with wgpu's downlevel defaults (one storage buffer short).
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    // The process's one instance (`shared_instance` says why), as tests run in parallel.
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
     let device_with = |required_limits| {
         let descriptor = wgpu::DeviceDescriptor {
             required_limits,

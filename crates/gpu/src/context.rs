@@ -32,14 +32,18 @@ impl GpuContext {
     /// one such as Mesa's llvmpipe), with timestamp queries (in passes and between commands)
     /// when the adapter has them and the
     /// adapter's own limits (so large light lists fit).
+    ///
+    /// Every context this makes comes from one wgpu instance per process ([`shared_instance`]),
+    /// so it is safe to call from several threads at once (parallel tests do).
     pub fn headless() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: None,
-            apply_limit_buckets: false,
-        }))
+        let adapter = pollster::block_on(shared_instance().request_adapter(
+            &wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            },
+        ))
         .map_err(|e| GpuError::NoAdapter {
             detail: e.to_string(),
         })?;
@@ -112,6 +116,25 @@ impl GpuContext {
             .map(|_| ())
             .map_err(|e| GpuError::Device(e.to_string()))
     }
+}
+
+/// The one wgpu instance of this process behind [`GpuContext::headless`], created on first use
+/// and never dropped.
+///
+/// Why one: each instance loads the Vulkan loader and the driver, and dropping its last device
+/// unloads them again. Instances made and dropped on several threads at once crashed NVIDIA's
+/// driver (580.159, H100): the CLI's test binary, whose GPU tests each made and dropped a context
+/// of their own, died of a segmentation fault in 3 runs of 3 at 8 test threads and passed
+/// serially, while gdb reported the process's shared-library list changing under it; the test
+/// `contexts_made_and_dropped_on_many_threads_at_once_all_work` (8 threads, 3 rounds) passed 1
+/// run of 5 that way (2 segmentation faults, 1 abort, 2 hangs). With the instance shared the
+/// driver stays loaded and only devices come and go: 5 runs of 5 passed, and the CLI's tests 7 of
+/// 7 at 8 and 16 threads.
+#[cfg(feature = "headless")]
+pub fn shared_instance() -> &'static wgpu::Instance {
+    static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
+    INSTANCE
+        .get_or_init(|| wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle()))
 }
 
 /// Set to `1` to let GPU tests pass (with a note on stderr) where no adapter exists at all.

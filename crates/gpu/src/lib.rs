@@ -51,6 +51,8 @@ pub mod shaders;
 mod targets;
 mod timing;
 
+#[cfg(feature = "headless")]
+pub use context::shared_instance;
 pub use context::{GpuContext, SKIP_GPU_TESTS_VAR};
 pub use error::GpuError;
 pub use frame_input::{
