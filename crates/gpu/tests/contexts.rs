@@ -5,8 +5,8 @@
 
 use glam::UVec3;
 use myriad_cluster_math::{ClusterGrid, DepthSlicing};
-use myriad_gpu::GpuContext;
 use myriad_gpu::cluster_check::gpu_cluster_ids;
+use myriad_gpu::{GpuContext, shared_instance};
 
 const THREADS: usize = 8;
 const ROUNDS: usize = 3;
@@ -44,4 +44,20 @@ fn contexts_made_and_dropped_on_many_threads_at_once_all_work() {
             });
         }
     });
+}
+
+/// The instance behind every headless context is one per process, whichever thread asks first.
+#[test]
+fn every_thread_gets_the_one_shared_instance() {
+    let here: *const _ = shared_instance();
+    let elsewhere: Vec<usize> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..THREADS)
+            .map(|_| scope.spawn(|| shared_instance() as *const _ as usize))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(
+        elsewhere.iter().all(|&p| p == here as usize),
+        "{elsewhere:?}"
+    );
 }
