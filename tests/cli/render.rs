@@ -72,6 +72,33 @@ fn no_arguments_runs_the_main_job() {
     assert_mentions(&text, &["clustered+skips", "clusters active"]);
 }
 
+/// The headless device follows wgpu's environment variables: with `WGPU_BACKEND` naming only a
+/// backend this platform lacks there is no adapter, and the error says which variable chose that.
+#[test]
+fn render_follows_wgpu_backend_and_names_it_when_nothing_is_found() {
+    let absent = if cfg!(target_os = "macos") {
+        "dx12"
+    } else {
+        "metal"
+    };
+    let dir = work_dir("wgpu_backend");
+    let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(["render", "--size", "64x32", "--runs", "1", "--out"])
+        .arg(dir.join("out"))
+        .env("WGPU_BACKEND", absent)
+        .output()
+        .expect("cannot run the myriad binary");
+    assert_eq!(out.status.code(), Some(2), "{}", all_output(&out));
+    assert_mentions(
+        &stderr(&out),
+        &["no GPU adapter found", &format!("WGPU_BACKEND={absent}")],
+    );
+    assert!(
+        !dir.join("out").exists(),
+        "an output folder without a frame"
+    );
+}
+
 #[test]
 fn render_rejects_bad_options_clearly() {
     assert_rejected(&[

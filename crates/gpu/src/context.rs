@@ -45,7 +45,10 @@ impl GpuContext {
             },
         ))
         .map_err(|e| GpuError::NoAdapter {
-            detail: e.to_string(),
+            detail: match std::env::var("WGPU_BACKEND") {
+                Ok(backends) => format!("{e}; WGPU_BACKEND={backends} chose the backends"),
+                Err(_) => e.to_string(),
+            },
         })?;
         let info = adapter.get_info();
         let wanted =
@@ -119,7 +122,9 @@ impl GpuContext {
 }
 
 /// The one wgpu instance of this process behind [`GpuContext::headless`], created on first use
-/// and never dropped.
+/// and never dropped. It takes wgpu's environment variables (`WGPU_BACKEND=gl` to use OpenGL,
+/// `WGPU_VALIDATION=1` for wgpu's own validation in a release build, …), as wgpu's
+/// `InstanceDescriptor::new_without_display_handle_from_env` reads them.
 ///
 /// Why one: each instance loads the Vulkan loader and the driver, and dropping its last device
 /// unloads them again. Instances made and dropped on several threads at once crashed NVIDIA's
@@ -133,8 +138,9 @@ impl GpuContext {
 #[cfg(feature = "headless")]
 pub fn shared_instance() -> &'static wgpu::Instance {
     static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
-    INSTANCE
-        .get_or_init(|| wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle()))
+    INSTANCE.get_or_init(|| {
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+    })
 }
 
 /// Set to `1` to let GPU tests pass (with a note on stderr) where no adapter exists at all.
