@@ -123,8 +123,7 @@ impl GpuContext {
 
 /// The one wgpu instance of this process behind [`GpuContext::headless`], created on first use
 /// and never dropped. It takes wgpu's environment variables (`WGPU_BACKEND` to choose among the
-/// backends built in — Vulkan, Metal, DX12 —, `WGPU_VALIDATION=1` for wgpu's own validation in a
-/// release build, …), as wgpu's
+/// backends built in — Vulkan, Metal, DX12 — and the rest), as wgpu's
 /// `InstanceDescriptor::new_without_display_handle_from_env` reads them.
 ///
 /// Why one: each instance loads the Vulkan loader and the driver, and dropping its last device
