@@ -27,10 +27,18 @@ struct Engine {
     target: wgpu::Texture,
 }
 
+/// The engine's wgpu instance: one per process, kept for its lifetime. Devices may come and go,
+/// but instances made and dropped on several threads at once (this file's tests run in
+/// parallel) crashed NVIDIA's driver (`myriad_gpu::shared_instance` says what was seen).
+fn engine_instance() -> &'static wgpu::Instance {
+    static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
+    INSTANCE
+        .get_or_init(|| wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle()))
+}
+
 impl Engine {
     fn new() -> Result<Self, Box<dyn std::error::Error>> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-        let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
+        let adapter = pollster::block_on(engine_instance().request_adapter(&Default::default()))?;
         let (device, queue) = pollster::block_on(adapter.request_device(&Default::default()))?;
         let target = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("engine target"),
