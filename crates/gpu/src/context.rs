@@ -131,8 +131,9 @@ impl GpuContext {
 /// driver (580.159, H100): the CLI's test binary, whose GPU tests each made and dropped a context
 /// of their own, died of a segmentation fault in 3 runs of 3 at 8 test threads and passed
 /// serially, while gdb reported the process's shared-library list changing under it; the test
-/// `contexts_made_and_dropped_on_many_threads_at_once_all_work` (8 threads, 3 rounds) passed 1
-/// run of 5 that way (2 segmentation faults, 1 abort, 2 hangs). With the instance shared the
+/// `contexts_made_and_dropped_on_many_threads_at_once_all_work` (8 threads, 3 rounds) failed 5
+/// runs of 5 that way (2 segmentation faults, 2 hangs, 1 abort at exit after the test itself had
+/// passed). With the instance shared the
 /// driver stays loaded and only devices come and go: 5 runs of 5 passed, and the CLI's tests 7 of
 /// 7 at 8 and 16 threads.
 #[cfg(feature = "headless")]
