@@ -72,6 +72,24 @@ fn task_pairs(ctx: &FrameContext<'_>, begin: usize, end: usize) -> (Vec<(u32, u3
     (pairs, out.rejected, out.culled)
 }
 
+/// [`task_pairs`] in blocks of `B` lights, [`BLOCK`] or [`LARGE_BLOCK`], whatever the task's
+/// length (`run_task` picks the width by the length).
+fn task_pairs_in_blocks<const B: usize>(
+    ctx: &FrameContext<'_>,
+    begin: usize,
+    end: usize,
+) -> (Vec<(u32, u32)>, u32, u32) {
+    let mut out = TaskOutput::default();
+    out.reset(ctx);
+    match B {
+        BLOCK => run_small_blocks(ctx, begin, end, &mut out),
+        LARGE_BLOCK => run_large_blocks(ctx, begin, end, &mut out),
+        _ => unreachable!("no task runs blocks of {B}"),
+    }
+    let pairs = listed_pairs(&out.buckets[..ctx.parts], ctx.grid.dims().x);
+    (pairs, out.rejected, out.culled)
+}
+
 /// Checks a task's `(pairs, rejected, culled)` ([`task_pairs`]) against the expected ones, pair
 /// for pair; `context` goes with a wrong culled count.
 fn assert_task_output(
@@ -350,26 +368,34 @@ fn spot_rows_keep_the_clusters_the_cone_may_touch() {
     );
 }
 
-/// `run_task` (`binary`) lists each valid point light in exactly the clusters of its box,
-/// and counts every other light once: an invalid one as rejected, a valid one as culled
-/// whether the early six-plane cull drops it or the phases then find it no box. Lights that
-/// straddle the far plane just outside a side plane are of the second kind: they reach past
-/// the side plane only beyond the far plane, so they pass the cull, yet inside the depth range
-/// their cross-section lies outside. They are listed nowhere either way, so the oracle suites
-/// cannot see them miscounted; this can. Three blocks, in a task that starts past light 0,
-/// check that light numbers and counts carry from block to block. The first block also holds a
-/// light with an infinite coordinate (rejected) and two whose view-space spheres overflow f32
-/// (phase 0c): one in front, listed in the whole grid, one behind, culled. The next block has,
-/// at the same positions, a light that passes the cull but gets no box and one with a box, and no
-/// invalid light: they must not inherit the overflow.
+/// A task (`binary`) lists each valid point light in exactly the clusters of its box, and
+/// counts every other light once: an invalid one as rejected, a valid one as culled whether the
+/// early six-plane cull drops it or the phases then find it no box. Lights that straddle the far
+/// plane just outside a side plane are of the second kind: they reach past the side plane only
+/// beyond the far plane, so they pass the cull, yet inside the depth range their cross-section
+/// lies outside. They are listed nowhere either way, so the oracle suites cannot see them
+/// miscounted; this can. Three blocks, in a task that starts past light 0, check that light
+/// numbers and counts carry from block to block — for both block widths. The first block also
+/// holds a light with an infinite coordinate (rejected) and two whose view-space spheres overflow
+/// f32 (phase 0c): one in front, listed in the whole grid, one behind, culled. The next block has,
+/// at the same positions, a light that passes the cull but gets no box and one with a box, and
+/// no invalid light: they must not inherit the overflow.
 #[test]
-fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
+fn a_task_lists_each_lights_box_and_counts_every_other_light_once() {
+    lists_each_lights_box_and_counts_every_other_light_once::<BLOCK>();
+    lists_each_lights_box_and_counts_every_other_light_once::<LARGE_BLOCK>();
+}
+
+fn lists_each_lights_box_and_counts_every_other_light_once<const B: usize>() {
     let (camera, grid, sets) = frame();
     let planes = FramePlanes::new(&sets, &grid);
     let t = camera.tan_half_fov();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(13);
     let (mut x, mut y, mut z, mut radius) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for n in 0..700 {
+    // From light 100: two whole blocks and 88 lights of a third.
+    let begin = 100;
+    let second_block = begin + B;
+    for n in 0..second_block + B + 88 {
         let r = 10f32.powf(rng.random_range(-1.0..0.8));
         let (sx, sy) = (
             rng.random_range(-1.3..1.3f32),
@@ -399,38 +425,36 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
         // Invalid radii in the first block only: a block whose lights all pass the view
         // test leaves its overflow flags as they were.
         radius.push(match n % 50 {
-            0 if n < 356 => 0.0,
-            1 if n < 356 => f32::NAN,
+            0 if n < second_block => 0.0,
+            1 if n < second_block => f32::NAN,
             _ => r,
         });
     }
-    // Blocks of 256 from light 100: lights 103, 109 and 120 are the first block's 3rd, 9th and
-    // 20th, lights 359 and 365 the second block's 3rd and 9th.
+    // The first block's 3rd, 9th and 20th lights, then the second block's 3rd and 9th.
+    let (huge_front, huge_behind, infinite) = (begin + 3, begin + 9, begin + 20);
+    let (no_box, boxed) = (second_block + 3, second_block + 9);
     let mut put = |l: usize, p: Vec3, r: f32| (x[l], y[l], z[l], radius[l]) = (p.x, p.y, p.z, r);
-    put(103, Vec3::new(0.0, 0.0, -3.0e38), 3.3e38);
-    put(109, Vec3::new(0.0, 0.0, 3.0e38), 1.0e38);
-    put(120, Vec3::new(f32::INFINITY, 0.0, -5.0), 1.0);
-    put(359, Vec3::new(t.x * 60.8 + 0.3, 0.0, -60.8), 1.0);
-    put(365, Vec3::new(0.0, 0.0, -10.0), 1.0);
+    put(huge_front, Vec3::new(0.0, 0.0, -3.0e38), 3.3e38);
+    put(huge_behind, Vec3::new(0.0, 0.0, 3.0e38), 1.0e38);
+    put(infinite, Vec3::new(f32::INFINITY, 0.0, -5.0), 1.0);
+    put(no_box, Vec3::new(t.x * 60.8 + 0.3, 0.0, -60.8), 1.0);
+    put(boxed, Vec3::new(0.0, 0.0, -10.0), 1.0);
     let mut ctx = culling_context(Method::Binary, &camera, &grid, &sets);
     ctx.lights = LightInput::points(&x, &y, &z, &radius);
-    let (begin, end) = (100, x.len());
+    let end = x.len();
     let (mut want, mut rejected, mut culled_early, mut culled_late) = (Vec::new(), 0, 0, 0);
     for l in begin..end {
         if !(radius[l] > 0.0) || !x[l].is_finite() {
             rejected += 1;
             continue;
         }
-        match l {
-            103 => {
-                want.extend((0..grid.cluster_count() as u32).map(|c| (103, c)));
-                continue;
-            }
-            109 => {
-                culled_early += 1;
-                continue;
-            }
-            _ => {}
+        if l == huge_front {
+            want.extend((0..grid.cluster_count() as u32).map(|c| (l as u32, c)));
+            continue;
+        }
+        if l == huge_behind {
+            culled_early += 1;
+            continue;
         }
         let v = ctx.view_from_world * Vec3::new(x[l], y[l], z[l]);
         let r = geometry::pad_radius(v.x, v.y, -v.z, radius[l]);
@@ -440,9 +464,9 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
             continue;
         }
         let bx = geometry::cluster_box(v.x, v.y, -v.z, r, &planes);
-        if l == 359 || l == 365 {
+        if l == no_box || l == boxed {
             assert!(ctx.cull.may_touch(v.x, v.y, -v.z, r), "light {l}");
-            assert_eq!(bx.is_some(), l == 365, "light {l}");
+            assert_eq!(bx.is_some(), l == boxed, "light {l}");
         }
         match bx {
             Some(bx) => want.extend(
@@ -455,15 +479,86 @@ fn run_task_lists_each_lights_box_and_counts_every_other_light_once() {
     }
     want.sort_unstable();
     assert_task_output(
-        task_pairs(&ctx, begin, end),
+        task_pairs_in_blocks::<B>(&ctx, begin, end),
         (&want, rejected, culled_early + culled_late),
-        &format!("{culled_early} by the early cull, {culled_late} without a box"),
+        &format!("{B}-wide blocks: {culled_early} by the early cull, {culled_late} without a box"),
     );
+    // Two invalid radii in every 50 lights of the first block, and the infinite coordinate.
+    let invalid = (begin..second_block).filter(|n| n % 50 < 2).count() as u32 + 1;
     assert!(
-        rejected == 13 && culled_early > 100 && culled_late > 20 && want.len() > 10_000,
+        rejected == invalid
+            && culled_early as usize > B / 3
+            && culled_late as usize > B / 12
+            && want.len() > 10_000,
         "rejected {rejected}, culled early {culled_early}, without a box {culled_late}, pairs {}",
         want.len()
     );
+}
+
+/// The two block widths list the same pairs and count the same lights, for a task that starts
+/// mid-block and ends in a partial block, spot lights and invalid lights among them.
+#[test]
+fn both_block_widths_give_the_same_task_output() {
+    let (camera, grid, sets) = frame();
+    let t = camera.tan_half_fov();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(15);
+    let n = 3 * LARGE_BLOCK + 77;
+    let (mut x, mut y, mut z, mut radius) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut dx, mut dy, mut dz, mut angle) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for l in 0..n {
+        let depth = 70.0 * rng.random::<f32>();
+        x.push(rng.random_range(-1.3..1.3f32) * t.x * depth);
+        y.push(rng.random_range(-1.3..1.3f32) * t.y * depth);
+        z.push(-depth);
+        radius.push(match l % 97 {
+            0 => f32::NAN,
+            1 => -1.0,
+            _ => 10f32.powf(rng.random_range(-1.0..0.8)),
+        });
+        let d = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        dx.push(d.x);
+        dy.push(d.y);
+        dz.push(d.z);
+        // Every third light a point light (angle π), the others spots of 5–80°.
+        angle.push(if l % 3 == 0 {
+            std::f32::consts::PI
+        } else {
+            rng.random_range(5f32..80.0).to_radians()
+        });
+    }
+    for method in [Method::Binary, Method::Refined, Method::Cone] {
+        for spots in [false, true] {
+            let mut ctx = culling_context(method, &camera, &grid, &sets);
+            ctx.lights = LightInput::points(&x, &y, &z, &radius);
+            let mut spheres = Vec::new();
+            if spots {
+                ctx.lights.spot = Some(crate::SpotInput {
+                    dir_x: &dx,
+                    dir_y: &dy,
+                    dir_z: &dz,
+                    angle: &angle,
+                });
+                cluster_bounding_spheres(&camera, &grid, &mut spheres);
+                ctx.cluster_spheres = &spheres;
+            }
+            let (begin, end) = (123, n);
+            let small = task_pairs_in_blocks::<BLOCK>(&ctx, begin, end);
+            let large = task_pairs_in_blocks::<LARGE_BLOCK>(&ctx, begin, end);
+            let what = format!("{method}, spots {spots}");
+            assert_task_output(large, (&small.0, small.1, small.2), &what);
+            assert!(
+                small.0.len() > 10_000 && small.1 > 50 && small.2 > 100,
+                "{what}: pairs {}, rejected {}, culled {}",
+                small.0.len(),
+                small.1,
+                small.2
+            );
+        }
+    }
 }
 
 /// Spot columns whose lights are all point lights (angle `π`) change nothing: `run_task` lists
