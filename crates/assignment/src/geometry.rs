@@ -196,9 +196,15 @@ fn fmin(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
+/// Scratch [`refine_slice`] needs for a grid of `dims`: two squared gaps per tile column and a
+/// room per tile row.
+pub(crate) fn refine_scratch_len(dims: glam::UVec3) -> usize {
+    2 * dims.x as usize + dims.y as usize
+}
+
 /// Refinement of one slice `k` of a light's box: calls `row(j, i0, i1)` for every row of the slice
 /// the sphere (shrunk to the slab) can touch, with the tightened x tile span. `gaps` is scratch of
-/// at least twice the box's columns.
+/// at least [`refine_scratch_len`].
 ///
 /// A cluster `(i, j)` of the slab is kept when `dx² ≤ R_k² − dy²`, where `dx` (`dy`) is the distance
 /// from the centre to the column's (row's) band of x (y) over the slab's depths `[ka, kb]` — the
@@ -252,8 +258,10 @@ pub(crate) fn refine_slice(
         }
         return;
     }
-    let (left, right) = gaps.split_at_mut(columns);
-    let right = &mut right[..columns];
+    let (left, rest) = gaps.split_at_mut(columns);
+    let (right, rooms) = rest.split_at_mut(columns);
+    let rows = (b.j1 - b.j0 + 1) as usize;
+    let rooms = &mut rooms[..rows];
     // Squared gap of each column wholly left (right) of the centre, −∞ for the others.
     for (c, (l, r)) in left.iter_mut().zip(right.iter_mut()).enumerate() {
         let (s0, s1) = (xs[c], xs[c + 1]);
@@ -270,16 +278,21 @@ pub(crate) fn refine_slice(
             f32::NEG_INFINITY
         };
     }
-    for j in b.j0..=b.j1 {
-        let top = sets.y_slopes[j as usize];
-        let bottom = sets.y_slopes[j as usize + 1];
+    // Each row's room first, branch-free (`−1` for a row the disc misses), so that the walks
+    // below hold nothing of the slab's geometry in registers.
+    let ys = &sets.y_slopes[b.j0 as usize..][..rows + 1];
+    for (room, edges) in rooms.iter_mut().zip(ys.windows(2)) {
+        let (top, bottom) = (edges[0], edges[1]);
         let y_lo = fmin(bottom * ka, bottom * kb);
         let y_hi = fmax(top * ka, top * kb);
         let dy = fmax(fmax(y_lo - cy, cy - y_hi), 0.0);
-        if dy > rk {
+        *room = if dy > rk { -1.0 } else { (rk - dy) * (rk + dy) };
+    }
+    for (j, &room) in (b.j0..=b.j1).zip(rooms.iter()) {
+        // `dy ≤ rk` gives `room ≥ 0`, and the rows it fails were given −1.
+        if room < 0.0 {
             continue;
         }
-        let room = (rk - dy) * (rk + dy);
         let cut_left = left.iter().take_while(|&&g| g > room).count() as u32;
         let cut_right = right.iter().rev().take_while(|&&g| g > room).count() as u32;
         // (A row cut from both sides to nothing is skipped before `i1` could wrap below 0.)
@@ -505,7 +518,7 @@ mod tests {
         let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, near, far);
         let sets = PlaneSets::new(&cam, &grid);
         let planes = FramePlanes::new(&sets, &grid);
-        let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
+        let mut gaps = vec![0.0; refine_scratch_len(grid.dims())];
         let (mut kept, mut cut, mut whole_slices) = (0usize, 0usize, 0usize);
         for _ in 0..draws {
             let dc = rng.random_range(0.5..50.0f32) * scale;
@@ -608,7 +621,7 @@ mod tests {
     fn refine_slice_keeps_a_column_exactly_r_k_away() {
         let (grid, sets) = odd_grid();
         let planes = FramePlanes::new(&sets, &grid);
-        let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
+        let mut gaps = vec![0.0; refine_scratch_len(grid.dims())];
         let (mid_row, columns) = (grid.dims().y / 2, grid.dims().x);
         let mut ties = 0;
         for k in [4u32, 9, 13] {
@@ -677,7 +690,7 @@ mod tests {
     fn refine_slice_keeps_the_point_where_a_sphere_touches_a_slice() {
         let (grid, sets) = odd_grid();
         let planes = FramePlanes::new(&sets, &grid);
-        let mut gaps = vec![0.0; 2 * grid.dims().x as usize];
+        let mut gaps = vec![0.0; refine_scratch_len(grid.dims())];
         let d = grid.dims();
         for k in 1..d.z {
             let z = sets.z_depths[k as usize];

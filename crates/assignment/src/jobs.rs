@@ -144,7 +144,7 @@ pub(crate) struct TaskOutput {
     /// One per part, each on cache lines of its own: every span pushed writes its bucket's
     /// length and pair count, and two tasks' buckets must not share a line (see `assigner.rs`).
     pub buckets: Vec<CachePadded<Bucket>>,
-    /// Scratch of the refinement: two squared gaps per tile column.
+    /// Scratch of the refinement: two squared gaps per tile column, a room per tile row.
     gaps: Vec<f32>,
     /// Scratch of the `cone` method: one row of the box, column by column.
     cone_columns: Vec<ConeColumn>,
@@ -163,7 +163,8 @@ impl TaskOutput {
         }
         self.rejected = 0;
         self.culled = 0;
-        self.gaps.resize(2 * ctx.grid.dims().x as usize, 0.0);
+        self.gaps
+            .resize(geometry::refine_scratch_len(ctx.grid.dims()), 0.0);
         if ctx.method == Method::Cone {
             self.cone_columns
                 .resize(ctx.grid.dims().x as usize, ConeColumn::default());

@@ -139,7 +139,7 @@ fn emitted_spot(
     let d = ctx.grid.dims();
     let mut buckets: Vec<CachePadded<Bucket>> = Vec::new();
     buckets.resize_with(ctx.parts, CachePadded::default);
-    let mut gaps = vec![0.0; 2 * d.x as usize];
+    let mut gaps = vec![0.0; geometry::refine_scratch_len(d)];
     let mut columns = vec![ConeColumn::default(); d.x as usize];
     emit(
         ctx,
@@ -233,7 +233,7 @@ fn emit_lists_exactly_each_methods_definition() {
         let refined = context(Method::Refined, &camera, &grid, &sets, &[]);
         let want = if bx.i1 > bx.i0 && bx.j1 > bx.j0 {
             let mut rows = Vec::new();
-            let mut gaps = vec![0.0; 2 * d.x as usize];
+            let mut gaps = vec![0.0; geometry::refine_scratch_len(d)];
             for k in bx.z.k0..=bx.z.k1 {
                 geometry::refine_slice(cx, cy, dc, r, &bx, k, &planes, &mut gaps, |j, i0, i1| {
                     rows.extend((i0..=i1).map(|i| grid.cluster_id(i, j, k)))
