@@ -1,7 +1,7 @@
 //! Every method is a superset of the exact f64 oracle (brute force over all clusters), and `exact`
 //! equals it, on proptest-generated hostile scenes and on hand-made regression cases — as one
-//! serial task (60 lights) and as a frame split into tasks on a pool, bucketed by depth
-//! parts (above `SERIAL_LIGHTS`).
+//! serial task (60 lights), as a frame split into tasks on a pool, bucketed by depth parts
+//! (above `SERIAL_LIGHTS`), and as a frame of tasks long enough for the larger blocks.
 
 mod common;
 
@@ -102,6 +102,30 @@ proptest! {
             .build()
             .expect("cannot start a rayon pool");
         let context = format!("split frame: {params:?}");
+        let pooled = pool.install(|| {
+            let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
+            check_with(&mut assigner, &scene, params.spots, &context)
+        });
+        prop_assert!(pooled, "a method ran as one task or off the pool ({context})");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// Hostile frames whose tasks hold 2048 lights or more, which walk them in blocks of 1024
+    /// instead of 256 (`phases.rs`): on a one-worker pool a frame is four tasks, so 8192 lights
+    /// and up. (The suites above run tasks of at most a few hundred lights.)
+    #[test]
+    fn frames_of_large_tasks_cover_the_oracle(
+        params in hostile_params(UVec3::new(9, 7, 9), 8192..8700),
+    ) {
+        let scene = make_scene(&params);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("cannot start a rayon pool");
+        let context = format!("large tasks: {params:?}");
         let pooled = pool.install(|| {
             let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
             check_with(&mut assigner, &scene, params.spots, &context)
