@@ -17,14 +17,17 @@ pub(crate) const BLOCK: usize = 256;
 /// Only the survivors of the early cull go through the phases, and where nine lights in ten are
 /// culled (`sphere`) a block of 256 leaves ~20 of them: two vector iterations and a scalar
 /// remainder per pass. Blocks of 1024 make those passes longer (`sphere` 100k `binary`: 5.21 →
-/// 4.67 M instructions a frame; `uniform` 100k −2%), but their columns cost a task more to set
-/// up — they are zeroed on entry, ~135 KiB of the running thread's stack against ~36 KiB — which
-/// tasks far shorter than a block notice (`paper` 1000, ~125 lights a task, ran 2% slower with
-/// blocks of 1024 for every task).
+/// 4.67 M instructions a frame; `uniform` 100k −2%), but their columns cost a task more: they
+/// are zeroed on entry, ~135 KiB of the running thread's stack against ~36 KiB, and no longer
+/// fit in L1 beside the rest.
 pub(crate) const LARGE_BLOCK: usize = 1024;
 
-/// Tasks of at least this many lights use blocks of [`LARGE_BLOCK`].
-pub(crate) const LARGE_BLOCK_TASK: usize = 2 * LARGE_BLOCK;
+/// Tasks of at least this many lights use blocks of [`LARGE_BLOCK`]. Measured on `sphere` scenes,
+/// whose lights cost least (~5 ns each, one thread; `myriad bench --threads 1`, interleaved
+/// rounds): tasks of 2048 lights ran 13% slower with blocks of 1024 (45.9 → 52.1 µs a frame of
+/// 8192 lights), tasks of 8192 the same (158 µs either way), tasks of 25 000 about 10% faster
+/// (`sphere` 100k).
+pub(crate) const LARGE_BLOCK_TASK: usize = 8 * LARGE_BLOCK;
 
 /// One block's columns, `B` lights wide. `cx, cy, dc, rad` (view-space centre and padded radius)
 /// and `alive` (valid and possibly inside the frustum) are inputs; the phases fill the rest and
