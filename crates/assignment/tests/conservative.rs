@@ -51,6 +51,19 @@ fn check_with(assigner: &mut Assigner, scene: &Scene, spots: bool, context: &str
     all_pooled
 }
 
+/// [`check_with`] on a pool of `threads` workers, every frame on the pool; returns whether the
+/// split methods ran their tasks there.
+fn check_on_pool(threads: usize, scene: &Scene, spots: bool, context: &str) -> bool {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("cannot start a rayon pool");
+    pool.install(|| {
+        let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
+        check_with(&mut assigner, scene, spots, context)
+    })
+}
+
 prop_compose! {
     /// A hostile random scene: any camera (fov 0.5–179°, aspect 0.1–10, near 1e-4–10, far/near
     /// up to 1e5, eye up to 1e6 from the origin), a grid below `max_dims`, `lights` lights.
@@ -96,16 +109,8 @@ proptest! {
     fn split_frames_cover_the_oracle(
         params in hostile_params(UVec3::new(17, 10, 17), SERIAL_LIGHTS..SERIAL_LIGHTS + 700),
     ) {
-        let scene = make_scene(&params);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .expect("cannot start a rayon pool");
         let context = format!("split frame: {params:?}");
-        let pooled = pool.install(|| {
-            let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
-            check_with(&mut assigner, &scene, params.spots, &context)
-        });
+        let pooled = check_on_pool(3, &make_scene(&params), params.spots, &context);
         prop_assert!(pooled, "a method ran as one task or off the pool ({context})");
     }
 }
@@ -120,16 +125,8 @@ proptest! {
     fn frames_of_large_tasks_cover_the_oracle(
         params in hostile_params(UVec3::new(9, 7, 9), 32_768..33_300),
     ) {
-        let scene = make_scene(&params);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .expect("cannot start a rayon pool");
         let context = format!("large tasks: {params:?}");
-        let pooled = pool.install(|| {
-            let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
-            check_with(&mut assigner, &scene, params.spots, &context)
-        });
+        let pooled = check_on_pool(1, &make_scene(&params), params.spots, &context);
         prop_assert!(pooled, "a method ran as one task or off the pool ({context})");
     }
 }
