@@ -1,9 +1,10 @@
 //! The three axis phases as SoA passes over a block of lights.
 //!
 //! Each phase is split in two loops: an arithmetic pass over the block's columns with no branches
-//! (so the compiler vectorises it), then a short scalar pass that searches the plane sets
-//! (`search.rs`). The per-light function [`geometry::cluster_box`] is the slow twin: a test checks
-//! that the passes give exactly its boxes.
+//! (so the compiler vectorises it), guessing each light's planes and whether the guess is proven
+//! exact, then a short scalar pass that searches the plane sets (`search.rs`) only where it is
+//! not. The per-light function [`geometry::cluster_box`] is the slow twin: a test checks that the
+//! passes give exactly its boxes.
 
 use crate::geometry::{self, ClusterBox, ZRange};
 use crate::profiling::profile_span;
@@ -47,6 +48,8 @@ pub(crate) struct Block<const B: usize> {
     smax: [f32; B],
     guess0: [u32; B],
     guess1: [u32; B],
+    /// The guesses are provably the partition points (`search::exact_margin`).
+    exact: [bool; B],
     k0: [u32; B],
     k1: [u32; B],
     i0: [u32; B],
@@ -71,6 +74,7 @@ impl<const B: usize> Block<B> {
             smax: [0.0; B],
             guess0: [0; B],
             guess1: [0; B],
+            exact: [false; B],
             k0: [0; B],
             k1: [0; B],
             i0: [0; B],
@@ -124,13 +128,17 @@ impl<const B: usize> Block<B> {
             self.da[b] = da;
             self.db[b] = db;
             self.band_r[b] = geometry::band_radius(dc, r, da, db);
-            self.guess0[b] = planes.slice_guess(da);
-            self.guess1[b] = planes.slice_guess(db);
+            let (guess0, exact0) = planes.slice_guess(da);
+            let (guess1, exact1) = planes.slice_guess(db);
+            self.guess0[b] = guess0;
+            self.guess1[b] = guess1;
+            self.exact[b] = exact0 & exact1;
         }
         for b in 0..n {
             if self.alive[b] {
-                self.k0[b] = planes.first_slice_exact(self.da[b], self.guess0[b]);
-                self.k1[b] = planes.slice_exact(self.db[b], self.guess1[b]);
+                let exact = self.exact[b];
+                self.k0[b] = planes.first_slice_exact(self.da[b], self.guess0[b], exact);
+                self.k1[b] = planes.slice_exact(self.db[b], self.guess1[b], exact);
             }
         }
     }
@@ -163,6 +171,7 @@ impl<const B: usize> Block<B> {
             smax,
             guess0,
             guess1,
+            exact,
             i0,
             i1,
             j0,
@@ -180,7 +189,7 @@ impl<const B: usize> Block<B> {
             let (min, max) = (lo.max(tlo), hi.min(thi));
             smin[b] = min;
             smax[b] = max;
-            (guess0[b], guess1[b]) = match axis {
+            (guess0[b], guess1[b], exact[b]) = match axis {
                 Axis::X => planes.columns_guess(min, max),
                 Axis::Y => planes.rows_guess(min, max),
             };
@@ -189,8 +198,8 @@ impl<const B: usize> Block<B> {
             if alive[b] {
                 let guess = (guess0[b], guess1[b]);
                 let tiles = match axis {
-                    Axis::X => planes.columns_exact(smin[b], smax[b], guess),
-                    Axis::Y => planes.rows_exact(smin[b], smax[b], guess),
+                    Axis::X => planes.columns_exact(smin[b], smax[b], guess, exact[b]),
+                    Axis::Y => planes.rows_exact(smin[b], smax[b], guess, exact[b]),
                 };
                 match tiles {
                     Some((f, l)) => (first[b], last[b]) = (f, l),
