@@ -107,6 +107,22 @@ fn clear_of_planes(u: f32, margin: f32) -> bool {
 /// sweeps the extreme exponents' mantissas on every run.
 const LOG2_APPROX_ERROR: f32 = 2.5e-4;
 
+/// [`FramePlanes::slice_exact`]'s answer in a grid of `slices` when `guess` is the partition
+/// point (branch-free).
+#[inline]
+pub(crate) fn slice_of_guess(guess: u32, slices: u32) -> u32 {
+    // Not `clamp`, whose check of its bounds would keep the z phase's loop from vectorising.
+    guess.max(1).min(slices) - 1
+}
+
+/// [`FramePlanes::first_slice_exact`]'s answer in a grid of `slices` when `guess` (of
+/// [`FramePlanes::slice_guess`]) is exact: one edge fewer lies below a band's start than the
+/// guess counts (branch-free).
+#[inline]
+pub(crate) fn first_slice_of_guess(guess: u32, slices: u32) -> u32 {
+    guess.saturating_sub(1).min(slices - 1)
+}
+
 /// log₂ from the float's exponent plus a rational fit of the mantissa's log (Mineiro's
 /// "fastlog2"; error about 1e-4), branch-free so guesses vectorise. Only used for guesses.
 #[inline]
@@ -293,13 +309,12 @@ impl<'a> FramePlanes<'a> {
     #[inline]
     pub fn slice_exact(&self, d: f32, guess: u32, proven: bool) -> u32 {
         let z = &self.sets.z_depths;
-        let slices = z.len() - 1;
         let edges_below = if proven {
-            guess as usize
+            guess
         } else {
-            partition_from(z, guess as usize, |e| e <= d)
+            partition_from(z, guess as usize, |e| e <= d) as u32
         };
-        (edges_below.clamp(1, slices) - 1) as u32
+        slice_of_guess(edges_below, self.sets.z_depths.len() as u32 - 1)
     }
 
     /// The *first* slice a depth band starting at `d` reaches: the first whose far edge is
@@ -311,15 +326,13 @@ impl<'a> FramePlanes<'a> {
     /// oracle counts the contact, so skipping them would be a miss.
     #[inline]
     pub fn first_slice_exact(&self, d: f32, guess: u32, proven: bool) -> u32 {
+        if proven {
+            return first_slice_of_guess(guess, self.sets.z_depths.len() as u32 - 1);
+        }
         let z = &self.sets.z_depths;
         let slices = z.len() - 1;
         let guess = (guess as usize).saturating_sub(1);
-        let edges_before = if proven {
-            guess
-        } else {
-            partition_from(&z[1..], guess, |e| e < d)
-        };
-        edges_before.min(slices - 1) as u32
+        partition_from(&z[1..], guess, |e| e < d).min(slices - 1) as u32
     }
 
     /// [`Self::first_slice_exact`] with its own guess.
