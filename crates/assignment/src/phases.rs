@@ -21,14 +21,28 @@ pub(crate) const BLOCK: usize = 256;
 /// 4.67 M instructions a frame; `uniform` 100k −2%), but their columns cost a task more: they
 /// are zeroed on entry, ~135 KiB of the running thread's stack against ~36 KiB, and no longer
 /// fit in L1 beside the rest.
-pub(crate) const LARGE_BLOCK: usize = 1024;
+///
+/// 1088 (17 words of 64 lanes), not 1024: a column of 1024 four-byte lanes is 4 KiB, the
+/// set stride of an 8-way 32 KiB L1 (and of a 12-way 48 KiB one), so lane `b` of every column
+/// — a light's `k0, k1, i0, i1, j0, j1, da, db, cx, …`, read together by the emit — fell into
+/// the same cache set, more lines than it has ways, and evicted each other before the next 15
+/// lanes could use them. A stride of 4352 bytes staggers the columns by four lines each.
+/// cachegrind (`uniform` 100k `binary`, the tasks' code, L1 32 KiB 8-way): read misses 24.2 →
+/// 3.6 M, write misses 10.0 → 2.5 M, instructions unchanged; `myriad bench`, interleaved
+/// rounds, `uniform` 100k `refined` one thread 10.5 → 7.8 ms, two threads 5.4 → 4.2 ms (README,
+/// "Measured"). Blocks of [`BLOCK`] show no such misses (columns of 1 KiB; 192 or 320 lanes
+/// measured the same), and an assertion below keeps the large columns off 4 KiB multiples.
+pub(crate) const LARGE_BLOCK: usize = 1088;
+
+// A large block's four-byte columns must not be a whole number of 4 KiB apart (see above).
+const _: () = assert!(!(LARGE_BLOCK * 4).is_multiple_of(4096));
 
 /// Tasks of at least this many lights use blocks of [`LARGE_BLOCK`]. Measured on `sphere` scenes,
 /// whose lights cost least (~5 ns each, one thread; `myriad bench --threads 1`, interleaved
-/// rounds): tasks of 2048 lights ran 13% slower with blocks of 1024 (45.9 → 52.1 µs a frame of
-/// 8192 lights), tasks of 8192 the same (158 µs either way), tasks of 25 000 about 10% faster
-/// (`sphere` 100k).
-pub(crate) const LARGE_BLOCK_TASK: usize = 8 * LARGE_BLOCK;
+/// rounds), with blocks of 1024 then: tasks of 2048 lights ran 13% slower with them (45.9 →
+/// 52.1 µs a frame of 8192 lights), tasks of 8192 the same (158 µs either way), tasks of 25 000
+/// about 10% faster (`sphere` 100k).
+pub(crate) const LARGE_BLOCK_TASK: usize = 8192;
 
 /// One block's columns, `B` lights wide. `cx, cy, dc, rad` (view-space centre and padded radius)
 /// and `alive` (valid and possibly inside the frustum) are inputs; the phases fill the rest and
