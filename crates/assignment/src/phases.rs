@@ -37,12 +37,15 @@ pub(crate) const LARGE_BLOCK: usize = 1088;
 // A large block's four-byte columns must not be a whole number of 4 KiB apart (see above).
 const _: () = assert!(!(LARGE_BLOCK * 4).is_multiple_of(4096));
 
-/// Tasks of at least this many lights use blocks of [`LARGE_BLOCK`]. Measured on `sphere` scenes,
-/// whose lights cost least (~5 ns each, one thread; `myriad bench --threads 1`, interleaved
-/// rounds), with blocks of 1024 then: tasks of 2048 lights ran 13% slower with them (45.9 →
-/// 52.1 µs a frame of 8192 lights), tasks of 8192 the same (158 µs either way), tasks of 25 000
-/// about 10% faster (`sphere` 100k).
-pub(crate) const LARGE_BLOCK_TASK: usize = 8192;
+/// Tasks of at least this many lights use blocks of [`LARGE_BLOCK`]: below it a task's lights
+/// fill few of the large columns, and zeroing them (~155 KiB a task) is most of the price.
+/// With blocks of 1024, whose columns shared L1 sets (see [`LARGE_BLOCK`]), tasks of 2048 lights
+/// ran 13% slower with them (`sphere` 8192, one thread, 45.9 → 52.1 µs) and the threshold was
+/// 8192. With 1088, interleaved rounds of `myriad bench` (median of per-round medians), against
+/// that threshold: `sphere` 8192 `binary` one thread (tasks of 2048) 75.3 → 69.3 µs, `sphere`
+/// 16 384 two threads 84.4 → 70.8 µs, `sphere` 32 768 two threads 150.7 → 131.4 µs, `uniform`
+/// 20 000 (tasks of 5000) `binary` two threads 684 → 657 µs and `refined` one thread the same.
+pub(crate) const LARGE_BLOCK_TASK: usize = 2048;
 
 /// One block's columns, `B` lights wide. `cx, cy, dc, rad` (view-space centre and padded radius)
 /// and `alive` (valid and possibly inside the frustum) are inputs; the phases fill the rest and
