@@ -19,7 +19,7 @@ pub(crate) const BLOCK: usize = 256;
 /// culled (`sphere`) a block of 256 leaves ~20 of them: two vector iterations and a scalar
 /// remainder per pass. Blocks of 1024 make those passes longer (`sphere` 100k `binary`: 5.21 →
 /// 4.67 M instructions a frame; `uniform` 100k −2%), but their columns cost a task more: they
-/// are zeroed on entry, ~135 KiB of the running thread's stack against ~36 KiB, and no longer
+/// are zeroed on entry, ~145 KiB of the running thread's stack against ~36 KiB, and no longer
 /// fit in L1 beside the rest.
 ///
 /// 1088 (17 words of 64 lanes), not 1024: a column of 1024 four-byte lanes is 4 KiB, the
@@ -30,7 +30,8 @@ pub(crate) const BLOCK: usize = 256;
 /// cachegrind (`uniform` 100k `binary`, the tasks' code, L1 32 KiB 8-way): read misses 24.2 →
 /// 3.6 M, write misses 10.0 → 2.5 M, instructions unchanged; `myriad bench`, interleaved
 /// rounds, `uniform` 100k `refined` one thread 10.5 → 7.8 ms, two threads 5.4 → 4.2 ms (README,
-/// "Measured"). Blocks of [`BLOCK`] show no such misses (columns of 1 KiB; 192 or 320 lanes
+/// "Measured"; on the Intel cores of the H100 machine, 48 KiB 12-way, the two measured alike).
+/// Blocks of [`BLOCK`] show no such misses (columns of 1 KiB; 192 or 320 lanes
 /// measured the same), and an assertion below keeps the large columns off 4 KiB multiples.
 pub(crate) const LARGE_BLOCK: usize = 1088;
 
@@ -38,7 +39,8 @@ pub(crate) const LARGE_BLOCK: usize = 1088;
 const _: () = assert!(!(LARGE_BLOCK * 4).is_multiple_of(4096));
 
 /// Tasks of at least this many lights use blocks of [`LARGE_BLOCK`]: below it a task's lights
-/// fill few of the large columns, and zeroing them (~155 KiB a task) is most of the price.
+/// fill few of the large columns, and zeroing them (~145 KiB a task) costs more than the longer
+/// passes save.
 /// With blocks of 1024, whose columns shared L1 sets (see [`LARGE_BLOCK`]), tasks of 2048 lights
 /// ran 13% slower with them (`sphere` 8192, one thread, 45.9 → 52.1 µs) and the threshold was
 /// 8192. With 1088, interleaved rounds of `myriad bench` (median of per-round medians), against
