@@ -548,7 +548,7 @@ mod tests {
 
     /// The clusters `(j, i)` of slice `k` of box `b` that `refine_slice`'s definition keeps:
     /// `dy ≤ R_k` and `dx² ≤ (R_k − dy)(R_k + dy)`, tested cluster by cluster.
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)] // The same light, box and slice as `refine_slice` takes.
     fn kept_by_definition(
         cx: f32,
         cy: f32,
