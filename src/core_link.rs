@@ -6,7 +6,7 @@
 //! move from one core to the other, and on a shared virtual machine that cost is not fixed. On
 //! the 2-vCPU CI-like VM it moved between about 50 ns and 400 ns per round trip from one minute
 //! to the next, and `paper` 1000 `binary` on two threads followed it: 26–28 µs at 50–60 ns,
-//! 51–53 µs (above its serial 46 µs) at ~400 ns, with the same binary (README, "Measured"). `myriad bench`
+//! 51–53 µs (above its serial 46 µs) at ~400 ns, with the same binary (docs/measured.md, "The link between the vCPUs"). `myriad bench`
 //! therefore measures the link before and after its timings and prints it with them.
 //!
 //! Two probes, both on the current rayon pool's threads 0 and 1 (via `rayon::broadcast`, so they

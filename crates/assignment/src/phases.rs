@@ -29,8 +29,8 @@ pub(crate) const BLOCK: usize = 256;
 /// lanes could use them. A stride of 4352 bytes staggers the columns by four lines each.
 /// cachegrind (`uniform` 100k `binary`, the tasks' code, L1 32 KiB 8-way): read misses 24.2 →
 /// 3.6 M, write misses 10.0 → 2.5 M, instructions unchanged; `myriad bench`, interleaved
-/// rounds, `uniform` 100k `refined` one thread 10.5 → 7.8 ms, two threads 5.4 → 4.2 ms (README,
-/// "Measured"; on the Intel cores of the H100 machine, with 48 KiB of L1, the two measured alike).
+/// rounds, `uniform` 100k `refined` one thread 10.5 → 7.8 ms, two threads 5.4 → 4.2 ms (docs/measured.md,
+/// "What made the difference"; on the Intel cores of the H100 machine, with 48 KiB of L1, the two measured alike).
 /// Blocks of [`BLOCK`] show no such misses (columns of 1 KiB; 192 or 320 lanes
 /// measured the same), and an assertion below keeps the large columns off 4 KiB multiples.
 pub(crate) const LARGE_BLOCK: usize = 1088;
