@@ -137,23 +137,40 @@ fn emitted_spot(
 ) -> Vec<u32> {
     let (cx, cy, dc, r) = sphere;
     let d = ctx.grid.dims();
-    let mut buckets: Vec<CachePadded<Bucket>> = Vec::new();
-    buckets.resize_with(ctx.parts, CachePadded::default);
     let mut gaps = vec![0.0; geometry::refine_scratch_len(d)];
     let mut columns = vec![ConeColumn::default(); d.x as usize];
-    emit(
-        ctx,
-        7,
-        cx,
-        cy,
-        dc,
-        r,
-        bx,
-        spot,
-        &mut buckets,
-        &mut gaps,
-        &mut columns,
-    );
+    let mut spans_of = |plain: bool| {
+        let mut buckets: Vec<CachePadded<Bucket>> = Vec::new();
+        buckets.resize_with(ctx.parts, CachePadded::default);
+        emit(
+            ctx,
+            ctx.method,
+            plain,
+            7,
+            cx,
+            cy,
+            dc,
+            r,
+            bx,
+            spot,
+            &mut buckets,
+            &mut gaps,
+            &mut columns,
+        );
+        buckets
+    };
+    let buckets = spans_of(false);
+    if !spot.active && ctx.active.is_none() {
+        // The copy of the emit for frames without spots or a mask pushes the same spans.
+        let plain = spans_of(true);
+        for (part, (a, b)) in buckets.iter().zip(&plain).enumerate() {
+            assert_eq!(a.spans, b.spans, "part {part}: the plain emit differs");
+            assert_eq!(
+                a.pairs, b.pairs,
+                "part {part}: the plain emit's pairs differ"
+            );
+        }
+    }
     let mut clusters = Vec::new();
     for (part, bucket) in buckets.iter().enumerate() {
         for span in &bucket.spans {
