@@ -11,6 +11,8 @@
 //!    (binary searches of the plane sets, see `geometry.rs`);
 //! 4. **emit**: the box's rows as spans (`binary`), the refined rows (`refined`), each row cut by the
 //!    cone test for spot lights, or each candidate cluster checked by the f64 oracle (`exact`).
+//!    The emit loop is compiled once per frame-constant pair (method; plain = no spots, no mask)
+//!    for `binary` and `refined`, so neither is tested per light ([`emit_block`]).
 
 use crate::active::ActiveView;
 use crate::append::Bucket;
