@@ -3,8 +3,8 @@
 //! Each phase is split in two loops: an arithmetic pass over the block's columns with no branches
 //! (so the compiler vectorises it), guessing each light's planes, writing the answer where the
 //! guess is proven exact, then a scalar pass that searches the plane sets (`search.rs`) for the
-//! other lanes only, found from a bit mask. The per-light function [`geometry::cluster_box`] is
-//! the slow twin: a test checks that the passes give exactly its boxes.
+//! other lanes only, found from a bit mask. The per-light function `geometry::cluster_box`
+//! (test builds only) is the slow twin: a test checks that the passes give exactly its boxes.
 
 use crate::geometry::{self, ClusterBox, ZRange};
 use crate::profiling::profile_span;

@@ -293,8 +293,8 @@ impl<'a> FramePlanes<'a> {
         self.slice_exact(d, guess, proven)
     }
 
-    /// Branch-free first half of [`Self::slice_of`]: a guess of the partition point, and
-    /// whether it is provably exact ([`exact_margin`]).
+    /// Branch-free first half of `Self::slice_of` (a test helper): a guess of the partition
+    /// point, and whether it is provably exact ([`exact_margin`]).
     #[inline]
     pub fn slice_guess(&self, d: f32) -> (u32, bool) {
         let t = self.slice_coordinate(d);
@@ -304,8 +304,9 @@ impl<'a> FramePlanes<'a> {
         )
     }
 
-    /// Second half of [`Self::slice_of`]: the exact slice from any guess, searched unless the
-    /// guess is `proven` exact. This is the *last* slice a depth band ending at `d` reaches.
+    /// Second half of `Self::slice_of` (a test helper): the exact slice from any guess,
+    /// searched unless the guess is `proven` exact. This is the *last* slice a depth band ending
+    /// at `d` reaches.
     #[inline]
     pub fn slice_exact(&self, d: f32, guess: u32, proven: bool) -> u32 {
         let z = &self.sets.z_depths;
@@ -349,9 +350,9 @@ impl<'a> FramePlanes<'a> {
         self.columns_exact(min, max, (first, after), proven)
     }
 
-    /// Branch-free first half of [`Self::columns`]: the guessed partition points, and whether
-    /// they are provably exact ([`exact_margin`]), in which case [`Self::columns_exact`] would
-    /// return them unchanged and need not run.
+    /// Branch-free first half of `Self::columns` (a test helper): the guessed partition points,
+    /// and whether they are provably exact ([`exact_margin`]), in which case
+    /// [`Self::columns_exact`] would return them unchanged and need not run.
     #[inline]
     pub fn columns_guess(&self, min: f32, max: f32) -> (u32, u32, bool) {
         let tiles = self.sets.x_slopes.len() - 1;
@@ -363,8 +364,8 @@ impl<'a> FramePlanes<'a> {
         )
     }
 
-    /// Second half of [`Self::columns`]: exact from any guess, searched unless the guess is
-    /// `proven` exact.
+    /// Second half of `Self::columns` (a test helper): exact from any guess, searched unless the
+    /// guess is `proven` exact.
     #[inline]
     pub fn columns_exact(
         &self,
@@ -395,8 +396,8 @@ impl<'a> FramePlanes<'a> {
         self.rows_exact(min, max, (first, after), proven)
     }
 
-    /// Branch-free first half of [`Self::rows`], with the same proof of exactness as
-    /// [`Self::columns_guess`].
+    /// Branch-free first half of `Self::rows` (a test helper), with the same proof of exactness
+    /// as [`Self::columns_guess`].
     #[inline]
     pub fn rows_guess(&self, min: f32, max: f32) -> (u32, u32, bool) {
         let rows = self.sets.y_slopes.len() - 1;
@@ -408,8 +409,8 @@ impl<'a> FramePlanes<'a> {
         )
     }
 
-    /// Second half of [`Self::rows`]: exact from any guess, searched unless the guess is
-    /// `proven` exact.
+    /// Second half of `Self::rows` (a test helper): exact from any guess, searched unless the
+    /// guess is `proven` exact.
     #[inline]
     pub fn rows_exact(
         &self,

@@ -334,7 +334,7 @@ impl Model {
     }
 
     /// Writes [`Model::to_glb`] to `path`, replacing it only once complete
-    /// ([`crate::replace_file`]). Errors name the file.
+    /// ([`crate::replace_file()`]). Errors name the file.
     pub fn save_glb(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let bytes = self.to_glb()?;

@@ -18,7 +18,7 @@
 //!   `KHR_lights_punctual`), with bounds-checked accessor reads (`gltf_accessors.rs`) and
 //!   generated flat normals and tangents (`tangents.rs`). [`Model::to_glb`] (`glb_write.rs`)
 //!   writes untextured models back as reproducible GLB.
-//! * [`atrium`], [`ATRIUM_FILE`] (`atrium.rs`): the generated default scene, shipped as
+//! * [`atrium()`], [`ATRIUM_FILE`] (`atrium.rs`): the generated default scene, shipped as
 //!   `assets/atrium.glb`.
 //! * [`LightField`], [`Placement`], [`SurfaceSampler`] (`light_fields.rs`): seeded lights in a
 //!   box, the frustum, on surfaces, in clumps, on a sphere, with radii from a range or from

@@ -181,7 +181,7 @@ impl Scene {
     }
 
     /// Writes [`Scene::to_json_string`] to `path`, replacing it only once complete
-    /// ([`crate::replace_file`]). Errors name the file.
+    /// ([`crate::replace_file()`]). Errors name the file.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let text = self.to_json_named(&path.display().to_string())?;
