@@ -346,8 +346,25 @@ fn run_blocks<const B: usize>(
                 .iter()
                 .enumerate()
                 .fold(0u64, |m, (i, &f)| m | ((f as u64) << i));
+            let (from, len) = (word * 64, flags.len());
+            // A word whose lights all survive (most of them, when the lights fill the view) is
+            // copied column by column, vectorised, instead of light by light. cachegrind, a
+            // frame on one thread, lists byte-identical: `uniform` 100k `binary` 29.1 → 27.7 M
+            // instructions, `refined` 36.7 → 35.2 M; `sphere` 100k (nine in ten culled) +0.8%.
+            if mask == u64::MAX >> (64 - len) {
+                block.cx[alive..][..len].copy_from_slice(&vx[from..][..len]);
+                block.cy[alive..][..len].copy_from_slice(&vy[from..][..len]);
+                block.dc[alive..][..len].copy_from_slice(&vd[from..][..len]);
+                block.rad[alive..][..len].copy_from_slice(&vr[from..][..len]);
+                block.alive[alive..][..len].fill(true);
+                for (i, s) in block.source[alive..][..len].iter_mut().enumerate() {
+                    *s = (from + i) as u32;
+                }
+                alive += len;
+                continue;
+            }
             while mask != 0 {
-                let b = word * 64 + mask.trailing_zeros() as usize;
+                let b = from + mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 block.cx[alive] = vx[b];
                 block.cy[alive] = vy[b];
