@@ -184,6 +184,17 @@ struct SpotView {
     active: bool,
 }
 
+impl SpotView {
+    /// No spot: what a plain frame's emit is given.
+    const NONE: Self = Self {
+        apex: Vec3::ZERO,
+        axis: Vec3::ZERO,
+        cos_sin: (1.0, 0.0),
+        range: 0.0,
+        active: false,
+    };
+}
+
 /// Runs lights `begin..end` through all phases into `out` (cleared first).
 ///
 /// A task of at least [`LARGE_BLOCK_TASK`] lights walks them in blocks of [`LARGE_BLOCK`], a
@@ -463,6 +474,13 @@ fn emit_block<const B: usize>(
         }
         let bx = block.cluster_box(b);
         let (cx, cy, dc, r) = (block.cx[b], block.cy[b], block.dc[b], block.rad[b]);
+        // A plain frame has no spots: not indexing `spots` spares each light a bounds check
+        // (cachegrind, a frame on one thread: `uniform` 100k `binary` 27.7 → 27.4 M).
+        let spot = if plain {
+            &SpotView::NONE
+        } else {
+            &spots[source]
+        };
         emit(
             ctx,
             method,
@@ -473,7 +491,7 @@ fn emit_block<const B: usize>(
             dc,
             r,
             &bx,
-            &spots[source],
+            spot,
             &mut out.buckets[..ctx.parts],
             &mut out.gaps,
             &mut out.cone_columns,
