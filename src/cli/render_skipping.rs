@@ -82,16 +82,12 @@ pub fn measure(
     let (mut prepass, mut mask) = (vec![], vec![]);
     let mut assigned: Option<SkipFrame> = None;
     let mut last: Option<SkipFrame> = None;
-    timed_frames(SHADING, runs, progress, |timed| {
+    let warm_ups = timed_frames(SHADING, runs, progress, || {
         let frame = viewer.frame_with_skips(scene, method, skips)?;
-        if timed {
-            let cpu_seconds = frame.cull_seconds + frame.assign_seconds;
-            samples.wait_and_record(viewer, cpu_seconds, &frame.report)?;
-            prepass.push(frame.prepass_seconds * 1e3);
-            mask.push(frame.mask_seconds * 1e3);
-        } else {
-            viewer.ctx.wait_idle()?;
-        }
+        let cpu_seconds = frame.cull_seconds + frame.assign_seconds;
+        samples.wait_and_record(viewer, cpu_seconds, &frame.report)?;
+        prepass.push(frame.prepass_seconds * 1e3);
+        mask.push(frame.mask_seconds * 1e3);
         // With `reuse`, frames after the first assign nothing: the lists are the first one's.
         if frame.stats.is_some() {
             assigned = Some(frame);
@@ -99,6 +95,9 @@ pub fn measure(
         last = Some(frame);
         Ok(())
     })?;
+    samples.drop_warm_ups(warm_ups);
+    prepass.drain(..warm_ups);
+    mask.drain(..warm_ups);
     let frame = last.context("at least one frame")?;
     let assigned = assigned.context("the first frame assigns")?;
     let image = viewer.image()?;

@@ -70,6 +70,21 @@ fn no_arguments_runs_the_main_job() {
         "{skip_pairs} pairs with skips"
     );
     assert_mentions(&text, &["clustered+skips", "clusters active"]);
+    // A strategy whose warm-up frame alone passed the time budget (brute force on llvmpipe) is
+    // measured on that one frame, and the table says so; every other one on its 5 timed frames
+    // after the warm-up, or fewer once the budget is spent, never none.
+    for r in strategies.iter().chain([&skipping["result"]]) {
+        let name = r["shading"].as_str().unwrap();
+        let frames = r["frames"].as_u64().unwrap();
+        let note = format!("{name}: one frame, its warm-up");
+        if r["warm_up_timed"].as_bool().unwrap() {
+            assert_eq!(frames, 1, "{name}");
+            assert_mentions(&text, &[&note]);
+        } else {
+            assert!((1..=5).contains(&frames), "{name}: {frames} frames");
+            assert!(!text.contains(&note), "{name}:\n{text}");
+        }
+    }
 }
 
 /// The headless device follows wgpu's environment variables: with `WGPU_BACKEND` naming only a
