@@ -225,14 +225,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new(&engine.ctx, FORMAT);
     let scene = renderer.upload_scene(&engine.ctx, &floor())?;
     let lights = Lights::rows(64);
+    // At load time: the shading pipelines of the frames to come, so no frame compiles shaders.
+    let (camera, grid) = view();
+    let prepared = renderer.prepare(
+        &engine.ctx,
+        &scene,
+        &FrameDesc {
+            camera: &camera,
+            grid: &grid,
+            mode: ShadingMode::Lists,
+            heat_map: false,
+            lights: Some(lights.columns()),
+            lists: None,
+            settings: ShadingSettings::default(),
+        },
+    );
+    let built_before = renderer.pipelines_built();
     let (report, pairs, pixels) =
         frame(&engine, &mut renderer, &scene, &lights, ShadingMode::Lists)?;
     println!(
-        "{} lights, {pairs} pairs, {} bytes uploaded; {} of {} pixels lit",
+        "{} lights, {pairs} pairs, {} bytes uploaded; {} of {} pixels lit; {prepared} pipeline(s) \
+         built at load time, {} during the frame",
         lights.x.len(),
         report.upload_bytes,
         lit_pixels(&pixels),
-        SIZE.0 * SIZE.1
+        SIZE.0 * SIZE.1,
+        renderer.pipelines_built() - built_before
     );
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! What an engine reaches of the renderer beyond a frame: a typed error for a device with too low
-//! limits, the G-buffer's depth to draw its own geometry against, and pass times after a depth
-//! prepass (audit f3).
+//! limits, the G-buffer's depth to draw its own geometry against, pass times after a depth
+//! prepass (audit f3), and pipelines built ahead of the frames that use them.
 
 use myriad::assignment::Method;
 use myriad::gpu::{GpuContext, GpuError, Renderer, wgpu};
@@ -205,4 +205,68 @@ fn pass_times_after_a_depth_prepass_include_the_prepass_gbuffer() {
     let after = renderer.last_pass_times(&ctx).unwrap().unwrap();
     assert_eq!(after.gbuffer_ms, prepass.gbuffer_ms, "{after:?}");
     assert!(after.shading_ms.is_some(), "{after:?}");
+}
+
+/// `prepare` builds exactly the pipelines a frame of that kind then uses: the frame builds none
+/// while it encodes (an engine's load-time call keeps shader compilation out of its frames), a
+/// second `prepare` builds nothing, and kinds that share pipelines (tiled and clustered shading)
+/// build them once.
+#[test]
+fn prepared_pipelines_are_the_ones_frames_use() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(200, 96, 48).unwrap();
+    // The atrium's spot lamps and blended glass: the spot variants and the forward pass.
+    assert!(scene.lights.has_spots() && scene.has_blended());
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    assert_eq!(viewer.renderer.pipelines_built(), 1, "the G-buffer's alone");
+    // (shading, heat map, pipelines `prepare` builds: deferred, and forward for a lit image)
+    let kinds = [
+        (Shading::Clustered, false, 2),
+        (Shading::Clustered, true, 1),
+        (Shading::BruteForce, false, 2),
+        (Shading::Tiled, false, 0),
+        (Shading::BruteForce, true, 1),
+    ];
+    for (shading, heat_map, want) in kinds {
+        let what = format!("{shading:?}, heat map {heat_map}");
+        assert_eq!(viewer.prepare(&scene, shading, heat_map), want, "{what}");
+        let before = viewer.renderer.pipelines_built();
+        viewer
+            .frame(&scene, shading, Method::Refined, heat_map)
+            .unwrap();
+        viewer.ctx.wait_idle().unwrap();
+        assert_eq!(
+            viewer.renderer.pipelines_built(),
+            before,
+            "{what}: the frame built pipelines while encoding"
+        );
+        assert_eq!(viewer.prepare(&scene, shading, heat_map), 0, "{what}");
+    }
+    assert_eq!(viewer.renderer.pipelines_built(), 1 + 2 + 1 + 2 + 1);
+
+    // Without lights in the description, the last upload's spot columns decide the variant:
+    // the spot variants, already built.
+    let lists = viewer.lists().clone();
+    let mut frame = myriad::gpu::FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        myriad::render::light_columns(&scene.lights),
+        myriad::render::cluster_lists(&lists),
+    );
+    frame.lights = None;
+    let (ctx, gpu_scene) = (viewer.ctx.clone(), &viewer.scene);
+    assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame), 0);
+    // Lights without spot columns are another variant, deferred and forward.
+    let mut plain = myriad::scene::Lights::new();
+    for light in scene.lights.iter() {
+        plain.push(myriad::scene::LightRecord {
+            spot: None,
+            ..light
+        });
+    }
+    assert!(!plain.has_spots());
+    frame.lights = Some(myriad::render::light_columns(&plain));
+    assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame), 2);
 }

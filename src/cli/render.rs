@@ -105,7 +105,7 @@ pub(super) struct StrategyResult {
     pub shading: &'static str,
     pub frames: usize,
     /// The one timed frame was the warm-up (a frame over the time budget, see
-    /// [`timed_frames`]): its `encode_ms` includes building its pipelines.
+    /// [`timed_frames`]); its pipelines were built before it all the same.
     pub warm_up_timed: bool,
     pub assign_ms: f64,
     pub upload_bytes: u64,
@@ -176,15 +176,15 @@ fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
 /// Time of frames per strategy after which no further timed frame is rendered.
 const FRAMES_BUDGET: Duration = Duration::from_secs(20);
 
-/// The frames of one strategy: a warm-up frame builds the pipelines and first touches the
-/// buffers, then `runs` timed frames, fewer once [`FRAMES_BUDGET`] has passed (at least one).
-/// `frame()` renders one frame and records its samples, the warm-up's too; the result is how
-/// many leading frames to drop from them: the warm-up (1), or none (0) when the warm-up alone
-/// took the whole budget. A frame that slow — brute force on the CI's software rasteriser: ~52 s
-/// at 1536×768 and 1000 lights — is its own sample: what a warm-up adds (pipelines built on the
-/// CPU before the passes, buffers touched for the first time) is far under a percent of it, the
-/// passes are timed on the GPU, and one more such frame had doubled the main job's brute-force
-/// column (107 of its 141 s).
+/// The frames of one strategy (its pipelines built before, [`Viewer::prepare`]): a warm-up
+/// frame first touches the buffers and the driver's state, then `runs` timed frames, fewer once
+/// [`FRAMES_BUDGET`] has passed (at least one). `frame()` renders one frame and records its
+/// samples, the warm-up's too; the result is how many leading frames to drop from them: the
+/// warm-up (1), or none (0) when the warm-up alone took the whole budget. A frame that slow —
+/// brute force on the CI's software rasteriser: ~52 s at 1536×768 and 1000 lights — is its own
+/// sample: what a warm-up adds (buffers grown and touched for the first time) is far under a
+/// percent of it, the passes are timed on the GPU, and one more such frame had doubled the main
+/// job's brute-force column (107 of its 141 s).
 pub(super) fn timed_frames(
     name: &str,
     runs: usize,
@@ -305,6 +305,7 @@ fn measure(
 ) -> Result<StrategyResult> {
     let mut samples = FrameSamples::default();
     let mut last = None;
+    viewer.prepare(scene, shading, false);
     let warm_ups = timed_frames(shading.name(), runs, progress, || {
         let frame = viewer.frame(scene, shading, method, false)?;
         samples.wait_and_record(viewer, frame.assign_seconds, &frame.report)?;
@@ -680,7 +681,7 @@ fn print_table(s: &Stats) {
     }
     for r in columns.iter().filter(|r| r.warm_up_timed) {
         println!(
-            "{}: one frame, its warm-up (it alone took over {} s): its encode + submit includes building its pipelines",
+            "{}: one frame, its warm-up (it alone took over {} s)",
             r.shading,
             FRAMES_BUDGET.as_secs()
         );

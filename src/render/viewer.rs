@@ -36,6 +36,14 @@ impl Shading {
         }
     }
 
+    /// Which lights the shading passes visit.
+    pub fn mode(self) -> ShadingMode {
+        match self {
+            Shading::BruteForce => ShadingMode::BruteForce,
+            Shading::Clustered | Shading::Tiled => ShadingMode::Lists,
+        }
+    }
+
     /// The grid this strategy assigns to, for a scene grid.
     pub fn grid(self, scene_grid: &ClusterGrid) -> ClusterGrid {
         match self {
@@ -138,6 +146,24 @@ impl Viewer {
         })
     }
 
+    /// Builds the pipelines [`Viewer::frame`] will use for `shading` and `heat_map` ahead of it
+    /// ([`Renderer::prepare`]), so that frame's encoding compiles no shaders; returns how many it
+    /// built. The main job calls it before each strategy's frames: brute force's one timed frame
+    /// on a slow machine is its warm-up, which would otherwise carry the compilation.
+    pub fn prepare(&mut self, scene: &RenderScene, shading: Shading, heat_map: bool) -> usize {
+        let grid = shading.grid(&scene.grid);
+        let frame = FrameDesc {
+            camera: &scene.camera,
+            grid: &grid,
+            mode: shading.mode(),
+            heat_map,
+            lights: Some(light_columns(&scene.lights)),
+            lists: None,
+            settings: self.settings,
+        };
+        self.renderer.prepare(&self.ctx, &self.scene, &frame)
+    }
+
     /// Assigns (unless brute force), uploads and submits one frame; does not wait for the GPU.
     pub fn frame(
         &mut self,
@@ -166,11 +192,7 @@ impl Viewer {
         let frame = FrameDesc {
             camera: &scene.camera,
             grid: &grid,
-            mode: if shading == Shading::BruteForce {
-                ShadingMode::BruteForce
-            } else {
-                ShadingMode::Lists
-            },
+            mode: shading.mode(),
             heat_map,
             lights: Some(light_columns(&scene.lights)),
             lists,

@@ -254,6 +254,41 @@ impl Renderer {
         ))
     }
 
+    /// Builds ahead the pipelines [`Renderer::render`] will use for `frame` on `scene`, so that
+    /// the first such frame does not compile shaders while it encodes (an engine calls this at
+    /// load time, once per kind of frame it will draw: lit, heat map, brute force): the deferred
+    /// shading variant of the frame's mode, heat map and spot lights (spot columns in
+    /// `frame.lights`, or in the last upload when it keeps them), and the forward pass's when
+    /// the frame has one (`scene` has blended geometry, or every feature is forced). Nothing is
+    /// uploaded or checked, and `frame.lists` is not read. Returns how many pipelines it built:
+    /// 0 when they all were already.
+    pub fn prepare(&mut self, ctx: &GpuContext, scene: &GpuScene, frame: &FrameDesc<'_>) -> usize {
+        let before = self.pipelines.built();
+        let has_spots = self.shades_spots(frame);
+        self.pipelines
+            .deferred(&ctx.device, frame.mode, frame.heat_map, has_spots);
+        if has_forward_pass(scene, frame) {
+            self.pipelines.forward(&ctx.device, frame.mode, has_spots);
+        }
+        self.pipelines.built() - before
+    }
+
+    /// Whether `frame` shades with the spot-cone code: its lights have spot columns (or, when it
+    /// keeps the last upload, those had), or every feature is forced. Before the frame's upload
+    /// as after it — the target check, which runs first, once built the variants of the
+    /// *previous* upload, so a first frame with spot lights compiled two pipelines it never used.
+    fn shades_spots(&self, frame: &FrameDesc<'_>) -> bool {
+        frame.lights.map_or(self.has_spots, |c| c.spot.is_some())
+            || frame.settings.force_all_features
+    }
+
+    /// Render pipelines built so far, the G-buffer's included: a frame that finds this number
+    /// higher after it than before built some while encoding ([`Renderer::prepare`] builds them
+    /// ahead).
+    pub fn pipelines_built(&self) -> usize {
+        self.pipelines.built()
+    }
+
     /// The last frame's depth buffer (one f32 per pixel, 1.0 where nothing was drawn); waits
     /// for the GPU. `None` before the first frame.
     pub fn read_depth(&self, ctx: &GpuContext) -> Result<Option<Vec<f32>>, GpuError> {
@@ -520,8 +555,7 @@ impl Renderer {
         // The last checks that can fail: the G-buffer's size against the device (a new size's
         // G-buffer changes nothing a later frame relies on), and the target against the passes.
         self.ensure_gbuffer(device, width, height)?;
-        let forward_pass =
-            (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map;
+        let forward_pass = has_forward_pass(scene, frame);
         self.check_target(device, frame, target, forward_pass)?;
         profile_span!("upload lights and lists", upload);
         let upload_start = Instant::now();
@@ -659,6 +693,12 @@ fn check_camera(camera: &Camera) -> Result<(), GpuError> {
         ))),
         None => Ok(()),
     }
+}
+
+/// Whether `frame` draws the forward pass: blended geometry to draw (or every feature forced),
+/// and a lit image (a heat map counts only the deferred pass's lights).
+fn has_forward_pass(scene: &GpuScene, frame: &FrameDesc<'_>) -> bool {
+    (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map
 }
 
 /// The uniform block for a frame. The inverse projection is taken in f64 so reconstructed

@@ -121,7 +121,7 @@ impl Renderer {
         target: &wgpu::TextureView,
     ) {
         profile_span!("encode pass: deferred shading");
-        let has_spots = self.has_spots || frame.settings.force_all_features;
+        let has_spots = self.shades_spots(frame);
         let timestamps = self.timer.writes(TimedPass::Shading);
         let pipeline = self
             .pipelines
@@ -162,8 +162,8 @@ impl Renderer {
             .as_ref()
             .expect("G-buffer created before encoding");
         scene.blended_back_to_front(frame.camera.position, &mut self.scratch_draws);
+        let has_spots = self.shades_spots(frame);
         let timestamps = self.timer.writes(TimedPass::Forward);
-        let has_spots = self.has_spots || frame.settings.force_all_features;
         let pipeline = self.pipelines.forward(device, frame.mode, has_spots);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("forward"),

@@ -48,7 +48,7 @@ impl Renderer {
         if self.checked_target.as_ref() == Some(&key) {
             return Ok(());
         }
-        let has_spots = self.has_spots || frame.settings.force_all_features;
+        let has_spots = self.shades_spots(frame);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("target check (never submitted)"),
