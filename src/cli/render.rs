@@ -107,6 +107,9 @@ pub(super) struct StrategyResult {
     /// The one timed frame was the warm-up (a frame over the time budget, see
     /// [`timed_frames`]); its pipelines were built before it all the same.
     pub warm_up_timed: bool,
+    /// Pipelines its frames built while encoding, the warm-up's included: 0 where they were
+    /// prepared ahead ([`Viewer::prepare`]), as the main job does for each strategy it compares.
+    pub pipelines_built_in_frames: usize,
     pub assign_ms: f64,
     pub upload_bytes: u64,
     pub upload_ms: f64,
@@ -221,8 +224,13 @@ fn frames_within(
 }
 
 /// Per-frame samples of one strategy, to medians.
-#[derive(Default)]
 pub(super) struct FrameSamples {
+    /// The renderer's pipeline count before the first frame ([`Renderer::pipelines_built`]).
+    ///
+    /// [`Renderer::pipelines_built`]: myriad::gpu::Renderer::pipelines_built
+    pipelines_before: usize,
+    /// The renderer's pipeline count after the last frame recorded.
+    pipelines_after: usize,
     assign: Vec<f64>,
     upload: Vec<f64>,
     encode: Vec<f64>,
@@ -234,6 +242,21 @@ pub(super) struct FrameSamples {
 }
 
 impl FrameSamples {
+    /// No samples yet; the frames to come render with `viewer`.
+    pub fn new(viewer: &Viewer) -> Self {
+        let pipelines = viewer.renderer.pipelines_built();
+        Self {
+            pipelines_before: pipelines,
+            pipelines_after: pipelines,
+            assign: Vec::new(),
+            upload: Vec::new(),
+            encode: Vec::new(),
+            wall: Vec::new(),
+            passes: Vec::new(),
+            warm_up_timed: false,
+        }
+    }
+
     /// Waits for the frame just submitted and records it: `cpu_seconds` of light assignment, its
     /// upload report, submit to idle (wall clock) and the GPU's pass times.
     pub fn wait_and_record(
@@ -251,6 +274,7 @@ impl FrameSamples {
             .push((t.elapsed().as_secs_f64() + report.encode_seconds) * 1e3);
         self.passes
             .push(viewer.renderer.last_pass_times(&viewer.ctx)?);
+        self.pipelines_after = viewer.renderer.pipelines_built();
         Ok(())
     }
 
@@ -280,6 +304,7 @@ impl FrameSamples {
             shading,
             frames: self.wall.len(),
             warm_up_timed: self.warm_up_timed,
+            pipelines_built_in_frames: self.pipelines_after - self.pipelines_before,
             assign_ms: median(self.assign.clone()),
             upload_bytes,
             upload_ms: median(self.upload.clone()),
@@ -303,9 +328,9 @@ fn measure(
     runs: usize,
     progress: &Progress,
 ) -> Result<StrategyResult> {
-    let mut samples = FrameSamples::default();
     let mut last = None;
     viewer.prepare(scene, shading, false);
+    let mut samples = FrameSamples::new(viewer);
     let warm_ups = timed_frames(shading.name(), runs, progress, || {
         let frame = viewer.frame(scene, shading, method, false)?;
         samples.wait_and_record(viewer, frame.assign_seconds, &frame.report)?;

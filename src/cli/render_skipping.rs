@@ -78,7 +78,7 @@ pub fn measure(
 ) -> Result<WithSkips> {
     // Tuned: the probes first, untimed, so the timed frames all run the choice they settle on.
     settle_tuner(viewer, scene, method, skips)?;
-    let mut samples = FrameSamples::default();
+    let mut samples = FrameSamples::new(viewer);
     let (mut prepass, mut mask) = (vec![], vec![]);
     let mut assigned: Option<SkipFrame> = None;
     let mut last: Option<SkipFrame> = None;
