@@ -28,7 +28,9 @@
 //! let ctx = GpuContext::headless()?;
 //! let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
 //! let target = HeadlessTarget::new(&ctx.device, 640, 360)?;
-//! // renderer.upload_scene(..), then renderer.render(&ctx, &scene, &frame, &target.view) per frame.
+//! // renderer.upload_scene(..) and, for each kind of frame to come, renderer.prepare(..) (its
+//! // pipelines, so no frame compiles shaders); then renderer.render(&ctx, &scene, &frame,
+//! // &target.view) per frame.
 //! # Ok::<(), myriad_gpu::GpuError>(())
 //! ```
 #![forbid(unsafe_code)]
