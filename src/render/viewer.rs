@@ -87,6 +87,26 @@ pub fn cluster_lists(lists: &LightLists) -> ClusterLists<'_> {
     }
 }
 
+/// A lit (or heat-map) frame of `scene`'s camera and lights with `shading`, on `grid`.
+fn frame_desc<'a>(
+    scene: &'a RenderScene,
+    grid: &'a ClusterGrid,
+    shading: Shading,
+    heat_map: bool,
+    lists: Option<ClusterLists<'a>>,
+    settings: ShadingSettings,
+) -> FrameDesc<'a> {
+    FrameDesc {
+        camera: &scene.camera,
+        grid,
+        mode: shading.mode(),
+        heat_map,
+        lights: Some(light_columns(&scene.lights)),
+        lists,
+        settings,
+    }
+}
+
 /// What one frame did.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewerFrame {
@@ -152,15 +172,7 @@ impl Viewer {
     /// on a slow machine is its warm-up, which would otherwise carry the compilation.
     pub fn prepare(&mut self, scene: &RenderScene, shading: Shading, heat_map: bool) -> usize {
         let grid = shading.grid(&scene.grid);
-        let frame = FrameDesc {
-            camera: &scene.camera,
-            grid: &grid,
-            mode: shading.mode(),
-            heat_map,
-            lights: Some(light_columns(&scene.lights)),
-            lists: None,
-            settings: self.settings,
-        };
+        let frame = frame_desc(scene, &grid, shading, heat_map, None, self.settings);
         self.renderer.prepare(&self.ctx, &self.scene, &frame)
     }
 
@@ -189,15 +201,7 @@ impl Viewer {
             stats = Some(s);
         }
         let lists = (shading != Shading::BruteForce).then(|| cluster_lists(&self.lists));
-        let frame = FrameDesc {
-            camera: &scene.camera,
-            grid: &grid,
-            mode: shading.mode(),
-            heat_map,
-            lights: Some(light_columns(&scene.lights)),
-            lists,
-            settings: self.settings,
-        };
+        let frame = frame_desc(scene, &grid, shading, heat_map, lists, self.settings);
         let report = self
             .renderer
             .render(&self.ctx, &self.scene, &frame, &self.target.view)?;
