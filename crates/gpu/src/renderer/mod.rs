@@ -696,7 +696,7 @@ fn check_camera(camera: &Camera) -> Result<(), GpuError> {
 }
 
 /// Whether `frame` draws the forward pass: blended geometry to draw (or every feature forced),
-/// and a lit image (a heat map counts only the deferred pass's lights).
+/// and a lit image (a heat map is the deferred pass alone).
 fn has_forward_pass(scene: &GpuScene, frame: &FrameDesc<'_>) -> bool {
     (scene.has_blended() || frame.settings.force_all_features) && !frame.heat_map
 }
