@@ -9,6 +9,7 @@
 //! heat map or the first spot light appears.
 
 use crate::layout::Vertex;
+use crate::profiling::profile_span;
 use crate::shaders::PassShader;
 use crate::targets::{ALBEDO_FORMAT, DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use std::collections::HashMap;
@@ -128,6 +129,8 @@ struct PipelineSpec<'a> {
 }
 
 fn build_pipeline(device: &wgpu::Device, spec: PipelineSpec<'_>) -> wgpu::RenderPipeline {
+    // A span of its own: a frame that builds one shows where its hitch came from.
+    profile_span!("build pipeline");
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(spec.label),
         bind_group_layouts: spec.bind_groups,
