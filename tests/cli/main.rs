@@ -68,6 +68,15 @@ fn gpu_available() -> bool {
     myriad::gpu::GpuContext::headless_for_tests().is_some()
 }
 
+/// Whether the test adapter stops shader loops (llvmpipe), so frames past its budget must be
+/// refused. Tests pick their expectation from this, never from the output they check.
+fn adapter_limits_loops() -> bool {
+    myriad::gpu::GpuContext::headless_for_tests()
+        .expect("no adapter")
+        .shader_loop_limit()
+        .is_some()
+}
+
 /// Runs `myriad` with `args`.
 fn myriad<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_myriad"))
@@ -102,16 +111,26 @@ fn myriad_ok<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     out
 }
 
-/// Runs `myriad` and asserts it failed; returns both streams.
+/// Runs `myriad` and asserts it stopped as a run that could not finish (exit code 2: bad input,
+/// unreadable or unwritable files, usage errors), not with a panic; returns both streams.
 fn myriad_fails<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
+    myriad_exits(2, args)
+}
+
+/// Runs `myriad` and asserts it exited with `code` (1: a verdict, such as a scene file with
+/// problems; 2: an error) and did not panic; returns both streams. A panic exits with 101, and
+/// its message may echo the needles a test looks for, so "failed" alone proves too little.
+fn myriad_exits<S: AsRef<std::ffi::OsStr>>(code: i32, args: &[S]) -> String {
     let out = myriad(args);
-    assert!(
-        !out.status.success(),
-        "myriad {:?} should have failed:\n{}",
+    let text = all_output(&out);
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "myriad {:?} should have exited with {code}:\n{text}",
         args.iter().map(|a| a.as_ref()).collect::<Vec<_>>(),
-        all_output(&out)
     );
-    all_output(&out)
+    assert!(!text.contains("panicked"), "myriad panicked:\n{text}");
+    text
 }
 
 fn assert_mentions(text: &str, needles: &[&str]) {

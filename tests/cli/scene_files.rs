@@ -23,7 +23,11 @@ fn validate_names_file_light_and_problem() {
         .replace(r#""radius": 1.5"#, r#""radius": -1"#);
     assert_ne!(text, GOOD_SCENE);
     let scene = write(&dir, "bad.json", &text);
-    let out = myriad_fails(&["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()]);
+    // A file that parses but has problems is a verdict (1), not a run that broke (2).
+    let out = myriad_exits(
+        1,
+        &["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()],
+    );
     assert_mentions(
         &out,
         &[

@@ -220,7 +220,8 @@ impl BufferData<'_> {
             .filter(|&c| c.checked_mul(elem).is_some_and(|b| b <= MAX_ACCESSOR_BYTES))
             .ok_or_else(|| {
                 format!(
-                    "{at}: count {} is too large (more than {MAX_ACCESSOR_BYTES} bytes)",
+                    "{at}: count {} of {elem}-byte elements is more than the {MAX_ACCESSOR_BYTES} \
+                     bytes an accessor may hold",
                     a.count.0
                 )
             })?;
