@@ -35,7 +35,8 @@ fn vs_fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f
 fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
     let pixel = vec2<u32>(frag_coord.xy);
     let depth = textureLoad(gbuffer_depth, pixel, 0);
-    if (depth >= 1.0) {
+    // Reversed Z (`Camera::clip_from_view`): the buffer clears to 0, the far plane.
+    if (depth <= 0.0) {
         if (HEAT_MAP) {
             return vec4<f32>(srgb_to_linear(heat_ramp(0.0)), 1.0);
         }
@@ -48,7 +49,7 @@ fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
     // pixel's. Unprojecting `depth` itself through the inverse matrix would cancel like the
     // textbook depth formula and land up to percents off the cluster it is shaded from.
     let view_depth = view_depth_from_ndc_depth(depth, frame.camera_near, frame.camera_far);
-    let on_near = frame.world_rel_from_clip * vec4<f32>(ndc, 0.0, 1.0);
+    let on_near = frame.world_rel_from_clip * vec4<f32>(ndc, 1.0, 1.0);
 
     var s: Surface;
     s.position = on_near.xyz / on_near.w * (view_depth / frame.camera_near);

@@ -17,10 +17,9 @@ use myriad::gpu::cluster_check::{SampleDepths, gpu_cluster_ids_of};
 use myriad::render::mark_active;
 use myriad::scene::{Camera, ClusterGrid, DepthSlicing};
 
-/// Stored depth of view depth `d` (the projection the G-buffer pass writes), in f64.
+/// Stored depth of view depth `d` (the projection the G-buffer pass writes: reversed Z).
 fn stored(camera: &Camera, d: f64) -> f32 {
-    let (n, f) = (camera.near as f64, camera.far as f64);
-    (f * (d - n) / (d * (f - n))) as f32
+    camera.ndc_depth_from_view_depth(d) as f32
 }
 
 /// Stored depths at every slice edge and the 64 f32 values either side, then `random` more.
@@ -36,14 +35,18 @@ fn samples(camera: &Camera, grid: &ClusterGrid, random: usize) -> Vec<f32> {
             depths.extend([up, down]);
         }
     }
+    // Random view depths, log-uniform over the camera's range.
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let (near, far) = (camera.near as f64, camera.far as f64);
     for _ in 0..random {
         state = state
             .wrapping_mul(6_364_136_223_846_793_005)
             .wrapping_add(1);
-        depths.push((state >> 40) as f32 / (1u64 << 24) as f32);
+        let t = (state >> 11) as f64 / (1u64 << 53) as f64;
+        depths.push(stored(camera, near * (far / near).powf(t)));
     }
-    depths.retain(|d| (0.0..1.0).contains(d));
+    // Drawn pixels only: 0 is the far plane and the background, above 1 is before the near plane.
+    depths.retain(|&d| d > 0.0 && d <= 1.0);
     depths
 }
 
@@ -85,7 +88,7 @@ fn every_cluster_the_gpu_shades_from_a_depth_buffer_is_marked_active() {
             far,
         );
         let mut buffer = depths.clone();
-        buffer.resize((width * height) as usize, 1.0);
+        buffer.resize((width * height) as usize, 0.0);
         let pixels: Vec<[u32; 2]> = (0..depths.len() as u32)
             .map(|i| [i % width, i / width])
             .collect();

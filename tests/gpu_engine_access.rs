@@ -44,9 +44,9 @@ fn a_device_below_the_required_limits_is_a_device_limits_error() {
     }
 }
 
-/// A full-screen triangle at NDC depth `DEPTH` (prepended), drawn red with a `Less` depth test
-/// and no depth writes: where the engine's geometry is behind what the frame drew, the frame shows
-/// through.
+/// A full-screen triangle at NDC depth `DEPTH` (prepended), drawn red with a `Greater` depth
+/// test (the G-buffer is reversed Z) and no depth writes: where the engine's geometry is behind
+/// what the frame drew, the frame shows through.
 const OVERLAY_WGSL: &str = "
 @vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
@@ -70,7 +70,7 @@ fn an_engine_depth_tests_its_own_geometry_against_the_gbuffer() {
     );
     let depth = viewer.renderer.read_depth(ctx).unwrap().unwrap();
     // The overlay sits at the median depth of what the frame drew.
-    let mut drawn: Vec<f32> = depth.iter().copied().filter(|&d| d < 1.0).collect();
+    let mut drawn: Vec<f32> = depth.iter().copied().filter(|&d| d > 0.0).collect();
     drawn.sort_by(f32::total_cmp);
     let overlay_depth = drawn[drawn.len() / 2];
     let module = ctx
@@ -96,7 +96,7 @@ fn an_engine_depth_tests_its_own_geometry_against_the_gbuffer() {
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: myriad::gpu::DEPTH_FORMAT,
                 depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Less),
+                depth_compare: Some(wgpu::CompareFunction::Greater),
                 stencil: Default::default(),
                 bias: Default::default(),
             }),
@@ -146,7 +146,8 @@ fn an_engine_depth_tests_its_own_geometry_against_the_gbuffer() {
         if (d - overlay_depth).abs() <= 1e-6 {
             continue;
         }
-        if d > overlay_depth {
+        // Reversed Z: a smaller stored depth is farther away.
+        if d < overlay_depth {
             assert_eq!(pixel, red, "pixel {at} (depth {d}) should show the overlay");
             behind += 1;
         } else {

@@ -42,7 +42,7 @@ fn check_heat_map(viewer: &Viewer, scene: &RenderScene, heat: &[u8]) {
         for px in 0..w {
             let at = (py * w + px) as usize;
             let d = depth[at];
-            let count = if d >= 1.0 {
+            let count = if d <= 0.0 {
                 0
             } else {
                 let view_depth = scene.camera.view_depth_from_ndc_depth(d);
@@ -131,17 +131,21 @@ fn scene_with_near(near: f32, width: u32, height: u32) -> RenderScene {
     scene.with_grid(UVec3::new(24, 12, 64), DepthSlicing::Linear)
 }
 
-/// With the scene 10⁴–10⁶ near planes deep, the stored depth's f32 value is a coarse measure of
-/// the distance; the pixel's cluster and the point it shades must still be worked out from the
-/// same view depth, or a light in the list of the neighbouring slice is missed (the textbook
-/// depth formula and the inverse matrix disagreed by percents there: 197/255 at near 1e-5).
+/// With the scene 10⁴–10¹³ near planes deep, the stored depth's f32 value must still place every
+/// pixel: the pixel's cluster and the point it shades are worked out from the same view depth, or
+/// a light in the list of the neighbouring slice is missed (the textbook depth formula and the
+/// inverse matrix disagreed by percents there: 197/255 at near 1e-5). And no geometry may drop
+/// out: with depth 0 at the near plane, everything past ~1.7e7 near planes stored exactly the
+/// cleared 1.0 — at near 1e-8 clustered and brute force agreed on an image missing most of the
+/// scene, and clustered shading read no light at all. Reversed Z keeps all of it.
 #[test]
 fn a_near_plane_far_below_the_scene_keeps_clustered_equal_to_brute_force() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
         return;
     };
     let mut viewer: Option<Viewer> = None;
-    for near in [1e-4, 1e-5, 1e-6] {
+    let mut reference_covered = None;
+    for near in [0.1, 1e-4, 1e-5, 1e-6, 1e-8, 1e-12] {
         let scene = scene_with_near(near, 256, 128);
         let v = match viewer.as_mut() {
             Some(v) => v,
@@ -152,6 +156,13 @@ fn a_near_plane_far_below_the_scene_keeps_clustered_equal_to_brute_force() {
             v.frame(&scene, shading, Method::Refined, false).unwrap();
             images.push(v.image().unwrap());
         }
+        let depth = v.renderer.read_depth(&v.ctx).unwrap().unwrap();
+        let covered = depth.iter().filter(|&&d| d > 0.0).count();
+        let reference = *reference_covered.get_or_insert(covered);
+        assert!(
+            covered >= reference && reference > 256 * 128 / 2,
+            "near {near}: {covered} pixels drawn, {reference} at near 0.1"
+        );
         let lit = images[1]
             .chunks(4)
             .filter(|p| p[..3].iter().any(|&c| c > 40))

@@ -44,10 +44,10 @@ fn cluster_of_pixel(pixel: vec2<u32>, depth: f32, target_size: vec2<u32>, dims: 
     return i + dims.x * (j + dims.y * k);
 }
 
-// View depth (distance along the view axis) of a depth-buffer value, exactly the CPU's
-// `Camera::view_depth_from_ndc_depth` formula: `1 - ndc_depth` is exact near the far end, so
-// this stays within a few ulps of the true depth however small the near plane is (the textbook
-// `far - ndc * (far - near)` cancels to percents at depth/near ~ 1e5).
+// View depth (distance along the view axis) of a reversed-Z depth-buffer value (1 at near, 0 at
+// far), exactly the CPU's `Camera::view_depth_from_ndc_depth` formula: it only adds and
+// multiplies positive numbers, so it stays within a few ulps of the true depth however small the
+// near plane is.
 fn view_depth_from_ndc_depth(ndc_depth: f32, near: f32, far: f32) -> f32 {
-    return far * near / (near + (1.0 - ndc_depth) * (far - near));
+    return far * near / (near + ndc_depth * (far - near));
 }

@@ -58,13 +58,14 @@ pub fn fitted_grid(
     depth: &[f32],
     blended: &[Aabb],
 ) -> ClusterGrid {
-    // View depth grows with the stored depth, so the extremes of the raw values are enough.
+    // View depth falls as the stored depth grows (reversed Z, 0 where nothing was drawn), so the
+    // extremes of the raw values are enough.
     let (raw_lo, raw_hi) = depth
         .par_chunks(1 << 16)
         .map(|chunk| {
             chunk
                 .iter()
-                .filter(|&&d| d < 1.0)
+                .filter(|&&d| d > 0.0)
                 .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &d| {
                     (lo.min(d), hi.max(d))
                 })
@@ -75,8 +76,8 @@ pub fn fitted_grid(
         );
     let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
     if raw_lo <= raw_hi {
-        lo = camera.view_depth_from_ndc_depth(raw_lo);
-        hi = camera.view_depth_from_ndc_depth(raw_hi);
+        lo = camera.view_depth_from_ndc_depth(raw_hi);
+        hi = camera.view_depth_from_ndc_depth(raw_lo);
     }
     for b in blended {
         if let Some((dmin, dmax, _)) = box_depths(camera, b) {
@@ -103,25 +104,30 @@ pub fn fitted_grid(
     ClusterGrid::new(grid.dims(), slicing, near, far)
 }
 
-/// The grid's slice edges as stored depth-buffer values (the projection maps view depth to stored
-/// depth monotonically), each with the band around it where the GPU's own rounding of the view
-/// depth could put a pixel on either side ([`EDGE_TOLERANCE`], relative).
+/// The grid's slice edges as keys of stored depth-buffer values, each with the band around it
+/// where the GPU's own rounding of the view depth could put a pixel on either side
+/// ([`EDGE_TOLERANCE`], relative). The key of a stored depth `d` is `−d`: the projection is
+/// reversed Z, so view depth grows as the stored depth falls, and as its key grows.
 struct SliceEdgesNdc {
-    /// Stored depth of edge k·(1 − tolerance) and of edge k·(1 + tolerance), k = 0..=Z.
+    /// Key of edge k·(1 − tolerance) and of edge k·(1 + tolerance), k = 0..=Z.
     below: Vec<f32>,
     above: Vec<f32>,
     z: u32,
 }
 
+/// The key [`SliceEdgesNdc`] orders a stored depth by: increasing with view depth.
+#[inline]
+fn depth_key(stored: f32) -> f32 {
+    -stored
+}
+
 impl SliceEdgesNdc {
     fn new(grid: &ClusterGrid, camera: &Camera) -> Self {
-        let (n, f) = (camera.near as f64, camera.far as f64);
-        let stored = |d: f64| (f * (d - n) / (d * (f - n))) as f32;
+        let stored = |d: f64| depth_key(camera.ndc_depth_from_view_depth(d) as f32);
         let z = grid.dims().z;
         let edge = |k: u32| grid.slice_start_depth(k) as f64;
         let tol = EDGE_TOLERANCE as f64;
-        // Rounded outwards to f32 (near the far plane one f32 step of stored depth is several
-        // times the tolerance), so the bands only ever grow.
+        // Rounded outwards to f32, so the bands only ever grow.
         Self {
             below: (0..=z)
                 .map(|k| stored(edge(k) * (1.0 - tol)).next_down())
@@ -133,8 +139,8 @@ impl SliceEdgesNdc {
         }
     }
 
-    /// The slices a pixel of stored depth `d` may belong to, and the interval of stored depths
-    /// that gives the same answer.
+    /// The slices a pixel of depth key `d` may belong to, and the interval of keys that gives
+    /// the same answer.
     #[inline]
     fn slices_of(&self, d: f32) -> ((u32, u32), (f32, f32)) {
         let last = self.z - 1;
@@ -195,10 +201,11 @@ pub fn mark_active(
                 // The slice range of the previous pixel, valid while the depth stays in `run`.
                 let mut run = (f32::NAN, f32::NAN);
                 let mut slices = (0, 0);
-                for (px, &d) in row.iter().enumerate() {
-                    if d >= 1.0 {
-                        continue;
+                for (px, &stored) in row.iter().enumerate() {
+                    if stored <= 0.0 {
+                        continue; // Reversed Z: nothing drawn.
                     }
+                    let d = depth_key(stored);
                     if !(d >= run.0 && d < run.1) {
                         (slices, run) = edges.slices_of(d);
                     }
@@ -261,11 +268,8 @@ mod tests {
             (UVec3::new(3, 3, 1), DepthSlicing::Log),
         ] {
             let grid = ClusterGrid::new(dims, slicing, 0.1, 100.0);
-            let stored = |v: f32| {
-                let (n, f) = (0.1f64, 100.0f64);
-                (f * (v as f64 - n) / (v as f64 * (f - n))) as f32
-            };
-            // Depths: background, random, and exactly at every slice edge.
+            let stored = |v: f32| camera.ndc_depth_from_view_depth(v as f64) as f32;
+            // Stored depths (reversed Z): background, random, and exactly at every slice edge.
             let mut state = 7u64;
             let mut next = || {
                 state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
@@ -276,9 +280,10 @@ mod tests {
                 .collect();
             let depth: Vec<f32> = (0..97 * 61)
                 .map(|i| match i % 5 {
-                    0 => 1.0,
+                    0 => 0.0, // Reversed Z: nothing drawn.
                     1 => edges[i % edges.len()],
-                    _ => next() * 0.9999,
+                    // Log-uniform in view depth over [near, far).
+                    _ => stored(0.1 * 1000f32.powf(next())),
                 })
                 .collect();
             let mut mask = ActiveClusters::new(&grid);
@@ -287,7 +292,7 @@ mod tests {
             for py in 0..61u32 {
                 for px in 0..97u32 {
                     let d = depth[(py * 97 + px) as usize];
-                    if d >= 1.0 {
+                    if d <= 0.0 {
                         continue;
                     }
                     let v = camera.view_depth_from_ndc_depth(d);

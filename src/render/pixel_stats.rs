@@ -39,8 +39,8 @@ pub fn pixel_stats(
     for py in 0..h {
         for px in 0..w {
             let d = depth[(py * w + px) as usize];
-            if d >= 1.0 {
-                continue;
+            if d <= 0.0 {
+                continue; // Reversed Z: nothing drawn.
             }
             let view_depth = camera.view_depth_from_ndc_depth(d);
             let n = counts[grid.cluster_of_pixel(px, py, view_depth, w, h) as usize];
@@ -71,10 +71,12 @@ mod tests {
         let grid = ClusterGrid::new(UVec3::new(2, 1, 2), DepthSlicing::Linear, 0.1, 10.0);
         // Clusters: (0,0,0)=0, (1,0,0)=1, (0,0,1)=2, (1,0,1)=3.
         let counts = [1, 2, 3, 4];
-        // Row 0: near left, near right, far right, background; row 1: background everywhere.
-        let near = 0.0; // view depth = near
-        let far = 0.999; // deep into the second slice
-        let depth = [near, near, near, 1.0, 1.0, 1.0, 1.0, far];
+        // Row 0: near left, near right, near right, background; row 1: background but the last
+        // pixel, deep into the second slice. Stored depths are reversed Z: 1 at near, 0 for
+        // nothing drawn.
+        let near = 1.0;
+        let far = camera.ndc_depth_from_view_depth(9.0) as f32;
+        let depth = [near, near, near, 0.0, 0.0, 0.0, 0.0, far];
         let s = pixel_stats(&depth, &camera, &grid, &counts, 10);
         assert_eq!(s.covered_pixels, 4);
         assert_eq!(s.evaluations, 1 + 1 + 2 + 4);

@@ -166,9 +166,24 @@ impl Camera {
         Mat4::from_mat3(self.view_rotation()) * Mat4::from_translation(-self.position)
     }
 
-    /// `clip_from_view`: right-handed perspective with depth 0 at `near` and 1 at `far`.
+    /// `clip_from_view`: right-handed perspective with **reversed Z**, depth 1 at `near` and 0 at
+    /// `far` (wgpu's 0..1 range; depth tests compare `Greater`, the depth buffer clears to 0).
+    ///
+    /// Why reversed: the stored depth is then `n(f − d)/(d(f − n))` ≈ `n/d`, which an f32 (and
+    /// `Depth32Float`) keeps to ~7 significant digits at every distance. With depth 0 at `near`
+    /// the stored value is `1 − n/d`, and beyond `d ≈ 1.7·10⁷·n` it rounds to exactly 1.0, the
+    /// cleared background: with `near = 1e-8` everything past 0.17 m vanished and clustered shading
+    /// read no light at all, and with `near = 1e-6` a 30 m courtyard lost its far walls.
+    /// `B = f·n/(f − n)` is computed in f64 so the near plane maps to 1 to the last bit.
     pub fn clip_from_view(&self) -> Mat4 {
-        glam::camera::rh::proj::directx::perspective(self.fov_y, self.aspect(), self.near, self.far)
+        let (n, f) = (self.near as f64, self.far as f64);
+        let t = self.tan_half_fov();
+        Mat4::from_cols(
+            glam::Vec4::new(1.0 / t.x, 0.0, 0.0, 0.0),
+            glam::Vec4::new(0.0, 1.0 / t.y, 0.0, 0.0),
+            glam::Vec4::new(0.0, 0.0, (n / (f - n)) as f32, -1.0),
+            glam::Vec4::new(0.0, 0.0, (f * n / (f - n)) as f32, 0.0),
+        )
     }
 
     /// `clip_from_world = clip_from_view * view_from_world`.
@@ -188,19 +203,25 @@ impl Camera {
     }
 
     /// View depth (positive distance along the view direction) of a wgpu depth-buffer value
-    /// produced by [`Self::clip_from_view`]: `depth = f·n / (n + (1 − ndc)·(f − n))`. Infinite
-    /// when `f·n` overflows f32, a camera [`Self::problem`] refuses.
+    /// produced by [`Self::clip_from_view`] (reversed Z): `depth = f·n / (n + ndc·(f − n))`.
+    /// Infinite when `f·n` overflows f32, a camera [`Self::problem`] refuses.
     ///
-    /// Written so that f32 keeps it to a few ulps however small the near plane: the textbook
-    /// `f·n / (f − ndc·(f − n))` subtracts two numbers that agree to 1 − n/depth, so at
-    /// depth/near ≈ 10⁵ it was off by percents, and differently on the GPU (which may fuse the
-    /// multiply-add) than here. Here `1 − ndc` is exact for ndc ≥ ½ (Sterbenz) and the rest adds
-    /// and multiplies positive numbers. The shading passes (`shaders/common/cluster.wgsl`) use
-    /// this same formula, and shade the point at this depth on the pixel's ray, so the cluster a
-    /// pixel reads is the cluster of the position it lights.
+    /// Only positive numbers are added and multiplied, so f32 keeps it to a few ulps of the
+    /// stored value's exact depth for any near plane, also where a GPU fuses the multiply-add.
+    /// The shading passes (`shaders/common/cluster.wgsl`) use this same formula, and shade the
+    /// point at this depth on the pixel's ray, so the cluster a pixel reads is the cluster of the
+    /// position it lights.
     pub fn view_depth_from_ndc_depth(&self, ndc_depth: f32) -> f32 {
         let (n, f) = (self.near, self.far);
-        f * n / (n + (1.0 - ndc_depth) * (f - n))
+        f * n / (n + ndc_depth * (f - n))
+    }
+
+    /// The exact depth-buffer value of view depth `depth` (the inverse of
+    /// [`Self::view_depth_from_ndc_depth`], in f64): `n(f − depth) / (depth(f − n))`, 1 at `near`,
+    /// 0 at `far`. For code that compares stored depths with view depths, such as slice edges.
+    pub fn ndc_depth_from_view_depth(&self, depth: f64) -> f64 {
+        let (n, f) = (self.near as f64, self.far as f64);
+        n * (f - depth) / (depth * (f - n))
     }
 }
 
@@ -257,16 +278,35 @@ mod tests {
 
     #[test]
     fn ndc_depth_round_trips_through_projection() {
-        let c = cam(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
-        for depth in [0.1f32, 0.5, 1.0, 7.3, 50.0, 100.0] {
-            let clip = c.clip_from_view() * glam::Vec4::new(0.3, -0.2, -depth, 1.0);
-            let ndc = clip.z / clip.w;
-            assert!((0.0..=1.0).contains(&ndc));
-            let back = c.view_depth_from_ndc_depth(ndc);
-            assert!(
-                (back - depth).abs() <= 1e-3 * depth,
-                "{depth} -> {ndc} -> {back}"
-            );
+        // Reversed Z: near stores 1, far 0, and every depth in between round-trips to a few ulps
+        // however small the near plane (depth 0 at near lost everything past ~1.7e7·near).
+        for (near, far) in [
+            (0.1f32, 100.0f32),
+            (1e-8, 100.0),
+            (1e-12, 1e6),
+            (10.0, 1e30),
+        ] {
+            let c = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64, near, far);
+            let project = |depth: f32| {
+                let clip = c.clip_from_view() * glam::Vec4::new(0.3, -0.2, -depth, 1.0);
+                clip.z / clip.w
+            };
+            assert_eq!(project(near), 1.0, "near {near}");
+            assert_eq!(project(far), 0.0, "far {far}");
+            for t in [1e-6f64, 1e-3, 0.01, 0.3, 0.9, 0.999] {
+                let depth = ((near as f64).ln() * (1.0 - t) + (far as f64).ln() * t).exp() as f32;
+                let ndc = project(depth);
+                assert!(ndc > 0.0 && ndc < 1.0, "{depth} -> {ndc}");
+                assert!(
+                    (ndc as f64 / c.ndc_depth_from_view_depth(depth as f64) - 1.0).abs() < 1e-5,
+                    "{depth} -> {ndc}"
+                );
+                let back = c.view_depth_from_ndc_depth(ndc);
+                assert!(
+                    (back - depth).abs() <= 1e-5 * depth,
+                    "near {near} far {far}: {depth} -> {ndc} -> {back}"
+                );
+            }
         }
     }
 
@@ -280,15 +320,16 @@ mod tests {
             let c = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64, near, far);
             let (n, f) = (near as f64, far as f64);
             let mut worst = 0.0f64;
-            let mut d = 0.0f32;
-            while d < 1.0 {
-                let exact = f * n / (f - d as f64 * (f - n));
-                let fused = f32::mul_add(1.0 - d, far - near, near);
+            let mut d = f32::MIN_POSITIVE;
+            while d <= 1.0 {
+                let exact = f * n / (n + d as f64 * (f - n));
+                let fused = f32::mul_add(d, far - near, near);
                 for got in [c.view_depth_from_ndc_depth(d), far * near / fused] {
                     worst = worst.max(((got as f64 - exact) / exact).abs());
                 }
-                // Dense near 1, where the depth of most of the scene is stored.
-                d = if d < 0.999 { d + 1e-3 } else { d.next_up() };
+                // Every binade down to the smallest normal, where the far scene is stored, and
+                // dense near 1 (the near plane).
+                d = if d < 0.999 { d * 1.37 } else { d.next_up() };
             }
             assert!(worst < 1e-6, "near {near} far {far}: off by {worst:e}");
         }

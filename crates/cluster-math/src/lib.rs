@@ -7,7 +7,7 @@
 //!
 //! ## What lives here
 //! * [`Camera`]: position/target/up, vertical field of view, resolution, near/far, and the matrices
-//!   `view_from_world` and `clip_from_view` (wgpu depth range 0..1, glam `camera::rh::proj::directx`). Lights are brought to view space
+//!   `view_from_world` and `clip_from_view` (wgpu depth range 0..1, reversed Z: 1 at near, 0 at far). Lights are brought to view space
 //!   *camera-relative* ([`Camera::view_from_world_point`]) so huge world coordinates lose no precision.
 //! * [`ClusterGrid`]: X×Y×Z clusters. Tiles are uniform in NDC; depth is cut by [`DepthSlicing`]
 //!   (linear, logarithmic, or logarithmic with a special first slice). The grid's depth range defaults

@@ -162,12 +162,13 @@ fn build_pipeline(device: &wgpu::Device, spec: PipelineSpec<'_>) -> wgpu::Render
     })
 }
 
-/// Depth-tested against the G-buffer depth (`Less`), writing it or not.
+/// Depth-tested against the G-buffer depth (`Greater`: reversed Z, see
+/// `Camera::clip_from_view`), writing it or not.
 fn depth_test(write: bool) -> Option<wgpu::DepthStencilState> {
     Some(wgpu::DepthStencilState {
         format: DEPTH_FORMAT,
         depth_write_enabled: Some(write),
-        depth_compare: Some(wgpu::CompareFunction::Less),
+        depth_compare: Some(wgpu::CompareFunction::Greater),
         stencil: Default::default(),
         bias: Default::default(),
     })

@@ -10,8 +10,10 @@ pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSr
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// See [`ALBEDO_FORMAT`].
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-/// The G-buffer's depth (f32, 0 at the near plane, 1.0 where nothing was drawn): what an engine
-/// drawing against [`crate::Renderer::gbuffer`]'s depth builds its pipelines with.
+/// The G-buffer's depth (f32, reversed Z: 1 at the near plane, 0 at the far plane and where
+/// nothing was drawn): what an engine drawing against [`crate::Renderer::gbuffer`]'s depth builds
+/// its pipelines with, comparing `Greater`. Reversed Z keeps ~7 significant digits of depth at
+/// every distance, so no near plane is too small for the buffer (`Camera::clip_from_view`).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The colour format headless targets use (and read back as RGBA8).

@@ -595,7 +595,7 @@ mod tests {
             // Absurd count.
             (
                 r#"{"bufferView": 0, "componentType": 5126, "count": 18446744073709551615, "type": "VEC3"}"#,
-                "is too large",
+                "of 12-byte elements is more than the 1073741824 bytes an accessor may hold",
             ),
             // Infinity in the data.
             (

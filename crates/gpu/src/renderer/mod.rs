@@ -289,8 +289,9 @@ impl Renderer {
         self.pipelines.built()
     }
 
-    /// The last frame's depth buffer (one f32 per pixel, 1.0 where nothing was drawn); waits
-    /// for the GPU. `None` before the first frame.
+    /// The last frame's depth buffer (one f32 per pixel, reversed Z: 1 at the near plane, 0 where
+    /// nothing was drawn; `Camera::view_depth_from_ndc_depth` turns it into view depth); waits for
+    /// the GPU. `None` before the first frame.
     pub fn read_depth(&self, ctx: &GpuContext) -> Result<Option<Vec<f32>>, GpuError> {
         self.gbuffer
             .as_ref()
@@ -300,7 +301,8 @@ impl Renderer {
 
     /// The G-buffer the last frame or prepass drew, at the camera's size (`None` before the
     /// first): an engine can depth-test what it draws after the frame against its `depth`
-    /// ([`crate::DEPTH_FORMAT`], 0 at the near plane, 1.0 where nothing was drawn), or sample
+    /// ([`crate::DEPTH_FORMAT`], reversed Z: 1 at the near plane, 0 where nothing was drawn, so
+    /// its pipelines compare `Greater`), or sample
     /// its normals. It stays until a frame of another size replaces it; drawing into it changes
     /// what a following [`Renderer::render_after_prepass`] shades.
     pub fn gbuffer(&self) -> Option<&GBuffer> {
