@@ -5,13 +5,13 @@ use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::progress::Progress;
 use super::render_skipping::{self, WithSkips};
-use super::source::check_memory;
+use super::source::{check_memory, check_memory_for};
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{FrameReport, GpuContext, GpuError, PassTimes, encode_png};
-use myriad::render::{PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
+use myriad::render::{DEFAULT_GRID, PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
 use myriad::scene::{LoadOptions, replace_file};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -555,6 +555,12 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         (None, None) => {
             let (w, h) = size.unwrap_or((1536, 768));
             let lights = args.lights.unwrap_or(1000);
+            // Before generating them: placing the lights is the allocation that aborts.
+            let dims = match &args.grid {
+                Some(g) => parse_grid("--grid", g)?,
+                None => DEFAULT_GRID,
+            };
+            check_memory_for(dims, lights)?;
             if lights < model.lights.len() {
                 eprintln!(
                     "note: --lights {lights} keeps the first {lights} of the model's {} own lights",
@@ -585,6 +591,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
             None => scene.grid.slicing(),
         };
         check_slicing(slicing, dims.z, scene.grid.near(), scene.grid.far())?;
+        check_memory_for(dims, scene.lights.len())?;
         scene = scene.with_grid(dims, slicing);
     }
     Ok((scene, skipped))

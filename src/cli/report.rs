@@ -15,7 +15,7 @@
 
 use super::grid_options::parse_grid;
 use super::oracle_check::independent_lists;
-use super::source::thread_pool;
+use super::source::{check_memory_for, thread_pool};
 use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::UVec3;
@@ -103,6 +103,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .map(|g| parse_grid("--grids", g.trim()))
         .collect::<Result<Vec<UVec3>>>()?;
     ensure!(!grids.is_empty(), "--grids: give at least one grid");
+    for &dims in &grids {
+        check_memory_for(dims, args.lights)?;
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
