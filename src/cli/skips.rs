@@ -4,6 +4,7 @@
 //! proof that the image did not change.
 
 use super::assign::parse_method;
+use super::list_options::refuse_repeats;
 use super::render::parse_size;
 use super::render_skipping::settle_tuner;
 use super::source::check_memory_for;
@@ -247,6 +248,7 @@ fn scene_report(
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
+    refuse_repeats("--gltf", &args.gltf, |p| p.display().to_string())?;
     check_memory_for(DEFAULT_GRID, args.lights)?;
     let ctx = GpuContext::headless()?;
     let mut scenes = Vec::new();

@@ -132,3 +132,33 @@ fn a_light_count_beyond_memory_is_refused_before_generating() {
         assert_mentions(&text, &[&format!("{max} lights needs at least"), "GiB"]);
     }
 }
+
+#[test]
+fn a_list_option_naming_an_item_twice_is_refused() {
+    // `report --grids 4x4x4,4x4x4` timed and reported every row twice, where `bench --methods`
+    // already refused a repeat; compared as parsed, so a second spelling is a repeat too.
+    let dir = work_dir("list_repeats");
+    let out = dir.join("report");
+    let out = out.to_str().unwrap();
+    assert_rejected(&[
+        (
+            &["report", "--grids", "4x4x4,4x4x4", "--out", out],
+            &["--grids lists 4x4x4 twice"],
+        ),
+        (
+            &["report", "--grids", "4x4x4,2x2x2,04x4x4", "--out", out],
+            &["--grids lists 4x4x4 twice"],
+        ),
+        (
+            &[
+                "skips",
+                "--gltf",
+                "assets/atrium.glb",
+                "--gltf",
+                "assets/atrium.glb",
+            ],
+            &["--gltf lists assets/atrium.glb twice"],
+        ),
+    ]);
+    assert!(!dir.join("report").exists(), "nothing is written");
+}
