@@ -351,6 +351,43 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
 }
 
 #[test]
+fn render_writes_no_file_of_a_set_it_cannot_write_whole() {
+    // stats.json cannot be written (a folder holds its name): frame.png and heatmap.png were
+    // replaced before that failed, leaving a set no run produced. Now the set is refused whole,
+    // before the render, and the old frame stays.
+    let dir = work_dir("render_set_blocked");
+    let out = dir.join("m");
+    std::fs::create_dir_all(out.join("stats.json")).unwrap();
+    write(&out, "frame.png", "old frame");
+    let text = myriad_fails(&[
+        "render".as_ref(),
+        "--runs".as_ref(),
+        "1".as_ref(),
+        "--size".as_ref(),
+        "32x16".as_ref(),
+        "--lights".as_ref(),
+        "10".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_mentions(&text, &["cannot write", "stats.json", "is a folder"]);
+    assert!(
+        std::fs::read(out.join("frame.png")).unwrap() == b"old frame",
+        "frame.png was replaced"
+    );
+    let mut left: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["frame.png", "stats.json"],
+        "no new or temporary file"
+    );
+}
+
+#[test]
 fn render_skips_a_baseline_the_adapter_cannot_draw_and_keeps_the_rest() {
     if !gpu_available() {
         return;
