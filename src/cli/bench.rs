@@ -1,9 +1,10 @@
 //! `myriad bench`: the time-against-error table, with the thread link measured around it.
 
 use super::assign::parse_method;
+use super::list_options::refuse_repeats;
 use super::oracle_check::independent_lists;
 use super::source::{SceneSource, thread_pool};
-use anyhow::{Result, ensure};
+use anyhow::Result;
 use myriad::assignment::{Method, Parallelism};
 use myriad::core_link::{self, CoreLink, HANDOFF_BYTES};
 use myriad::evaluate::{Idle, MethodResult, Timing, measure};
@@ -73,13 +74,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             .iter()
             .map(|m| parse_method(m))
             .collect::<Result<_>>()?;
-        for (i, method) in methods.iter().enumerate() {
-            ensure!(
-                !methods[..i].contains(method),
-                "--methods lists {} twice",
-                method.name()
-            );
-        }
+        refuse_repeats("--methods", &methods, |m| m.name().to_string())?;
         methods
     };
     let (scene, name) = args.source.load()?;

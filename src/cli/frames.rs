@@ -4,9 +4,10 @@
 
 use super::assign::parse_method;
 use super::render::parse_size;
+use super::source::check_memory_for;
 use anyhow::Result;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer};
-use myriad::render::{GpuStage, LoopReport, RenderScene, run_frames};
+use myriad::render::{DEFAULT_GRID, GpuStage, LoopReport, RenderScene, run_frames};
 use serde::Serialize;
 use std::process::ExitCode;
 
@@ -87,6 +88,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     );
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
+    check_memory_for(DEFAULT_GRID, args.lights)?;
     let scene = RenderScene::default_scene(args.lights, width, height)?;
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);

@@ -7,6 +7,7 @@ mod check;
 mod frames;
 mod grid_options;
 mod info;
+mod list_options;
 mod oracle_check;
 mod outputs;
 mod paper;

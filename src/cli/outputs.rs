@@ -5,20 +5,25 @@
 //! scene with its dump, and `scene --gltf m.glb --out m.glb` the model with a scene file (audit
 //! g2). Each command checks its outputs against its inputs before any work, through links and
 //! other names of the same file (`same_file` compares the files themselves).
+//!
+//! The check must never wait. `same_file` opens both paths, and opening a FIFO waits for the
+//! other end, which is this very run: an input naming a FIFO hung the check forever whenever the
+//! output already existed (audit: `assign --scene fifo --out existing.json`). So both kinds are
+//! looked at first, without opening anything, and only two regular files are compared; anything
+//! else cannot be the same file as a regular output, and the readers refuse a non-regular input
+//! with their own message.
 
 use anyhow::{Result, bail};
 use std::path::Path;
 
 /// Refuses when `output` is the same file as one of `inputs` (an output that does not exist yet,
-/// or is no regular file, is never an input).
+/// or is no regular file, is never an input). Never opens a path that is not a regular file.
 pub fn refuse_overwriting_inputs(output: &Path, inputs: &[&Path]) -> Result<()> {
-    // Inputs are regular files (the readers refuse anything else), and `same_file` opens both
-    // files: opening a FIFO to compare would wait for its writer, which is this run.
-    if !std::fs::metadata(output).is_ok_and(|m| m.is_file()) {
+    if !is_regular_file(output) {
         return Ok(());
     }
     for input in inputs {
-        if same_file::is_same_file(input, output).unwrap_or(false) {
+        if is_regular_file(input) && same_file::is_same_file(input, output).unwrap_or(false) {
             bail!(
                 "the output {} is the input {}: refusing to overwrite it (name another output)",
                 output.display(),
@@ -27,4 +32,10 @@ pub fn refuse_overwriting_inputs(output: &Path, inputs: &[&Path]) -> Result<()> 
         }
     }
     Ok(())
+}
+
+/// Whether `path`, links followed, is a regular file: `metadata` is a `stat`, which never opens
+/// (and so never waits on) a FIFO or a device.
+fn is_regular_file(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.is_file())
 }

@@ -5,14 +5,14 @@ use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
 use super::progress::Progress;
 use super::render_skipping::{self, WithSkips};
-use super::source::check_memory;
+use super::source::{check_memory, check_memory_for};
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{FrameReport, GpuContext, GpuError, PassTimes, encode_png};
-use myriad::render::{PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
-use myriad::scene::{LoadOptions, replace_file};
+use myriad::render::{DEFAULT_GRID, PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
+use myriad::scene::{LoadOptions, check_replaceable, replace_file, replace_files};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -375,9 +375,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .flatten()
         .map(|p| p.as_path())
         .collect();
-    for output in OUTPUTS {
-        super::outputs::refuse_overwriting_inputs(&args.out.join(output), &inputs)?;
+    let outputs = OUTPUTS.map(|output| args.out.join(output));
+    for output in &outputs {
+        super::outputs::refuse_overwriting_inputs(output, &inputs)?;
     }
+    // A folder or a read-only file in the set's place: said now, not after the render.
+    check_replaceable(&outputs.each_ref().map(|p| p.as_path()))?;
     let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
     let dims = scene.grid.dims();
@@ -487,12 +490,21 @@ pub fn run(args: Args) -> Result<ExitCode> {
         speedup_vs_brute_force: speedup,
         with_skips,
     };
+    // The three files describe one run: all of them are replaced, or none.
+    let mut files = Vec::new();
     for (name, rgba, h) in &images {
-        write_png(&args.out.join(name), rgba, width, *h)?;
+        let png = encode_png(rgba, width, *h).with_context(|| format!("cannot encode {name}"))?;
+        files.push((args.out.join(name), png));
     }
     let json_path = args.out.join("stats.json");
-    myriad::scene::replace_file(&json_path, serde_json::to_string_pretty(&stats)?.as_bytes())
-        .with_context(|| format!("cannot write {}", json_path.display()))?;
+    files.push((
+        json_path.clone(),
+        serde_json::to_string_pretty(&stats)?.into_bytes(),
+    ));
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let set: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (p.as_path(), &b[..])).collect();
+    replace_files(&set)?;
     print_table(&stats);
     println!(
         "wrote {}, {} and {}",
@@ -555,6 +567,12 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         (None, None) => {
             let (w, h) = size.unwrap_or((1536, 768));
             let lights = args.lights.unwrap_or(1000);
+            // Before generating them: placing the lights is the allocation that aborts.
+            let dims = match &args.grid {
+                Some(g) => parse_grid("--grid", g)?,
+                None => DEFAULT_GRID,
+            };
+            check_memory_for(dims, lights)?;
             if lights < model.lights.len() {
                 eprintln!(
                     "note: --lights {lights} keeps the first {lights} of the model's {} own lights",
@@ -585,6 +603,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
             None => scene.grid.slicing(),
         };
         check_slicing(slicing, dims.z, scene.grid.near(), scene.grid.far())?;
+        check_memory_for(dims, scene.lights.len())?;
         scene = scene.with_grid(dims, slicing);
     }
     Ok((scene, skipped))

@@ -14,8 +14,9 @@
 //! sets in its own fonts, so nothing here needs system fonts or a rasteriser.
 
 use super::grid_options::parse_grid;
+use super::list_options::refuse_repeats;
 use super::oracle_check::independent_lists;
-use super::source::thread_pool;
+use super::source::{check_memory_for, thread_pool};
 use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::UVec3;
@@ -103,6 +104,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .map(|g| parse_grid("--grids", g.trim()))
         .collect::<Result<Vec<UVec3>>>()?;
     ensure!(!grids.is_empty(), "--grids: give at least one grid");
+    refuse_repeats("--grids", &grids, |d| format!("{}x{}x{}", d.x, d.y, d.z))?;
+    for &dims in &grids {
+        check_memory_for(dims, args.lights)?;
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 

@@ -4,12 +4,14 @@
 //! proof that the image did not change.
 
 use super::assign::parse_method;
+use super::list_options::refuse_repeats;
 use super::render::parse_size;
 use super::render_skipping::settle_tuner;
+use super::source::check_memory_for;
 use anyhow::Result;
 use myriad::gpu::GpuContext;
 use myriad::render::{
-    PrepassDecision, RenderScene, SkipFrame, Skips, Viewer, max_channel_difference,
+    DEFAULT_GRID, PrepassDecision, RenderScene, SkipFrame, Skips, Viewer, max_channel_difference,
 };
 use myriad::scene::LoadOptions;
 use serde::Serialize;
@@ -246,6 +248,8 @@ fn scene_report(
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
+    refuse_repeats("--gltf", &args.gltf, |p| p.display().to_string())?;
+    check_memory_for(DEFAULT_GRID, args.lights)?;
     let ctx = GpuContext::headless()?;
     let mut scenes = Vec::new();
     if args.gltf.is_empty() {

@@ -1,6 +1,7 @@
 //! Where a command's scene comes from: a scene file or a generated preset; and thread pools.
 
 use anyhow::{Context, Result, bail, ensure};
+use myriad::cluster_math::glam::UVec3;
 use myriad::scene::{ClusterGrid, LightPolicy, LoadOptions, Model, Preset, Scene};
 use std::path::{Path, PathBuf};
 
@@ -126,27 +127,35 @@ fn worker_name(index: usize) -> String {
     format!("rayon {index}")
 }
 
-/// Bytes a frame of `grid` with `lights` lights needs at the least, before a single pair: per
-/// cluster the CSR `offsets` and `counts` plus the assigner's per-cluster scratch (16 bytes), per
-/// light its columns and records (64 bytes).
-pub fn minimum_frame_bytes(grid: &ClusterGrid, lights: usize) -> u64 {
-    16 * grid.cluster_count() as u64 + 64 * lights as u64
+/// Bytes a frame of a `dims` grid with `lights` lights needs at the least, before a single pair:
+/// per cluster the CSR `offsets` and `counts` plus the assigner's per-cluster scratch (16 bytes),
+/// per light its columns and records (64 bytes).
+pub fn minimum_frame_bytes(dims: UVec3, lights: usize) -> u64 {
+    let clusters = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
+    16 * clusters + 64 * lights as u64
 }
 
 /// Refuses a grid and light count whose minimum frame does not fit in the memory the OS says is
 /// available (Linux `MemAvailable`; no check where it is unknown). Without this, a valid scene
 /// file of a few bytes with a 65535×65535 grid makes the process grow until the OS kills it.
 pub fn check_memory(grid: &ClusterGrid, lights: usize) -> Result<()> {
-    let needed = minimum_frame_bytes(grid, lights);
+    check_memory_for(grid.dims(), lights)
+}
+
+/// [`check_memory`] before the scene exists: the commands that generate their lights (`render`,
+/// `frames`, `stress`, `skips`, `report`) check the count they were given against the grid they
+/// will use *before* generating, since generating `--lights 4294967295` is itself the
+/// allocation that aborts the process (audit: "memory allocation of 17179869132 bytes failed").
+pub fn check_memory_for(dims: UVec3, lights: usize) -> Result<()> {
+    let needed = minimum_frame_bytes(dims, lights);
     if let Some(available) = available_memory_bytes() {
-        let d = grid.dims();
         ensure!(
             needed <= available,
             "a {}x{}x{} grid with {lights} lights needs at least {:.1} GiB, but only {:.1} GiB of \
              memory is available",
-            d.x,
-            d.y,
-            d.z,
+            dims.x,
+            dims.y,
+            dims.z,
             needed as f64 / (1u64 << 30) as f64,
             available as f64 / (1u64 << 30) as f64
         );
@@ -165,7 +174,6 @@ fn available_memory_bytes() -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use myriad::cluster_math::glam::UVec3;
     use myriad::scene::DepthSlicing;
 
     #[test]
@@ -173,7 +181,7 @@ mod tests {
         let grid = |x, y, z| ClusterGrid::new(UVec3::new(x, y, z), DepthSlicing::Log, 0.1, 100.0);
         // 2^32 - 2^17 + 1 clusters: 64 GiB of offsets and counts before a single pair.
         let huge = grid(65_535, 65_535, 1);
-        let needed = minimum_frame_bytes(&huge, 10);
+        let needed = minimum_frame_bytes(huge.dims(), 10);
         assert_eq!(needed, 16 * 65_535 * 65_535 + 640);
         match available_memory_bytes() {
             Some(available) if available < needed => {
@@ -186,6 +194,15 @@ mod tests {
             _ => check_memory(&huge, 10).unwrap(),
         }
         check_memory(&grid(32, 18, 48), 100_000).unwrap();
+        // A light count alone, before any grid or light exists (`frames`, `stress`, `render`):
+        // u32::MAX lights need 256 GiB of columns.
+        let lights = u32::MAX as usize;
+        let needed = minimum_frame_bytes(UVec3::new(24, 12, 16), lights);
+        assert_eq!(needed, 16 * 24 * 12 * 16 + 64 * u64::from(u32::MAX));
+        if available_memory_bytes().is_some_and(|a| a < needed) {
+            let e = check_memory_for(UVec3::new(24, 12, 16), lights).unwrap_err();
+            assert!(e.to_string().contains("needs at least 256.0 GiB"), "{e}");
+        }
     }
 
     #[test]

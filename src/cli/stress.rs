@@ -50,6 +50,7 @@ use super::grid_options::parse_grid;
 use super::oracle_check::{CheckReport, OracleLights, check_all, check_clusters, sample_clusters};
 use super::progress::Progress;
 use super::render::parse_size;
+use super::source::check_memory_for;
 use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
@@ -158,6 +159,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         args.sample >= 1,
         "--sample must be at least 1 (clusters checked against the oracle)"
     );
+    check_memory_for(dims, args.lights)?;
     let progress = Progress::new("stress");
     let mut stages = Stages::default();
 

@@ -85,6 +85,30 @@ fn myriad<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
         .expect("cannot run the myriad binary")
 }
 
+/// Runs `myriad` with `args`, killing it and failing the test if it has not finished within
+/// `seconds` (for runs that once hung, such as an input naming a FIFO).
+fn myriad_within<S: AsRef<std::ffi::OsStr>>(seconds: u64, args: &[S]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("cannot run the myriad binary");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!(
+                "myriad {:?} still ran after {seconds} s",
+                args.iter().map(|a| a.as_ref()).collect::<Vec<_>>()
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
 fn stdout(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }

@@ -84,3 +84,81 @@ fn bad_options_fail_with_a_helpful_message() {
     let out = myriad_fails(&["check", "--frobnicate"]);
     assert_mentions(&out, &["--frobnicate"]);
 }
+
+/// `MemAvailable` from `/proc/meminfo` in bytes (the figure the memory check uses), if known.
+fn available_memory_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+#[cfg(unix)]
+#[test]
+fn a_light_count_beyond_memory_is_refused_before_generating() {
+    // u32::MAX lights need 256 GiB of columns alone: refused up front, as `assign` and `scene`
+    // refuse them. Generating them first aborted with "memory allocation of 17179869132 bytes
+    // failed" under an address-space cap, and ground on without one.
+    let needed = 64 * u64::from(u32::MAX);
+    if available_memory_bytes().is_none_or(|a| a >= needed) {
+        return;
+    }
+    let max = u32::MAX.to_string();
+    let runs: [&[&str]; 5] = [
+        &[
+            "frames", "--frames", "2", "--size", "16x16", "--lights", &max,
+        ],
+        &["stress", "--size", "16x16", "--lights", &max],
+        &["render", "--size", "16x16", "--runs", "1", "--lights", &max],
+        &["skips", "--size", "16x16", "--lights", &max],
+        &["report", "--grids", "4x4x4", "--lights", &max],
+    ];
+    for args in runs {
+        // Under a 6 GB address-space cap, so that a regression aborts at once instead of
+        // swapping the machine; the check itself needs next to nothing.
+        let capped = [
+            &[
+                "-c",
+                r#"ulimit -v 6000000 && exec "$0" "$@""#,
+                env!("CARGO_BIN_EXE_myriad"),
+            ][..],
+            args,
+        ]
+        .concat();
+        let out = Command::new("sh").args(&capped).output().unwrap();
+        let text = all_output(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}:\n{text}");
+        assert!(!text.contains("panicked"), "{text}");
+        assert_mentions(&text, &[&format!("{max} lights needs at least"), "GiB"]);
+    }
+}
+
+#[test]
+fn a_list_option_naming_an_item_twice_is_refused() {
+    // `report --grids 4x4x4,4x4x4` timed and reported every row twice, where `bench --methods`
+    // already refused a repeat; compared as parsed, so a second spelling is a repeat too.
+    let dir = work_dir("list_repeats");
+    let out = dir.join("report");
+    let out = out.to_str().unwrap();
+    assert_rejected(&[
+        (
+            &["report", "--grids", "4x4x4,4x4x4", "--out", out],
+            &["--grids lists 4x4x4 twice"],
+        ),
+        (
+            &["report", "--grids", "4x4x4,2x2x2,04x4x4", "--out", out],
+            &["--grids lists 4x4x4 twice"],
+        ),
+        (
+            &[
+                "skips",
+                "--gltf",
+                "assets/atrium.glb",
+                "--gltf",
+                "assets/atrium.glb",
+            ],
+            &["--gltf lists assets/atrium.glb twice"],
+        ),
+    ]);
+    assert!(!dir.join("report").exists(), "nothing is written");
+}

@@ -257,6 +257,60 @@ fn outputs_never_replace_their_inputs_or_fifos() {
     }
 }
 
+#[cfg(unix)]
+#[test]
+fn a_fifo_input_is_refused_at_once_even_when_the_output_exists() {
+    let dir = work_dir("fifo_input_existing_output");
+    let (scene, model) = (dir.join("f.json"), dir.join("f.glb"));
+    for fifo in [&scene, &model] {
+        let made = Command::new("mkfifo").arg(fifo).status();
+        if !made.is_ok_and(|s| s.success()) {
+            return;
+        }
+    }
+    // Existing outputs: the check that an output is not an input once opened the input to
+    // compare, and a FIFO's open waits for a writer that never comes.
+    let dump = write(&dir, "e.json", "old");
+    let out_dir = dir.join("d");
+    std::fs::create_dir(&out_dir).unwrap();
+    write(&out_dir, "stats.json", "old");
+    let (d, e) = (out_dir.as_os_str(), dump.as_os_str());
+    let runs: [&[&std::ffi::OsStr]; 3] = [
+        &[
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            e,
+        ],
+        &[
+            "scene".as_ref(),
+            "--gltf".as_ref(),
+            model.as_os_str(),
+            "--out".as_ref(),
+            e,
+        ],
+        &[
+            "render".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            d,
+        ],
+    ];
+    for args in runs {
+        let out = myriad_within(30, args);
+        let text = all_output(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}:\n{text}");
+        assert!(!text.contains("panicked"), "{text}");
+        // The reader's refusal, naming the FIFO (the argument after the subcommand's flag).
+        let fifo = args[2].to_string_lossy();
+        assert_mentions(&text, &[&fifo, "not a regular file"]);
+    }
+    assert_eq!(std::fs::read(&dump).unwrap(), b"old");
+    assert_eq!(std::fs::read(out_dir.join("stats.json")).unwrap(), b"old");
+}
+
 #[test]
 fn a_failed_render_leaves_the_old_output_set_whole() {
     if !gpu_available() {
@@ -294,6 +348,43 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
         let stats: Value = serde_json::from_slice(&read_all()[2]).unwrap();
         assert_eq!(stats["grid"], serde_json::json!([1, 1, 1]));
     }
+}
+
+#[test]
+fn render_writes_no_file_of_a_set_it_cannot_write_whole() {
+    // stats.json cannot be written (a folder holds its name): frame.png and heatmap.png were
+    // replaced before that failed, leaving a set no run produced. Now the set is refused whole,
+    // before the render, and the old frame stays.
+    let dir = work_dir("render_set_blocked");
+    let out = dir.join("m");
+    std::fs::create_dir_all(out.join("stats.json")).unwrap();
+    write(&out, "frame.png", "old frame");
+    let text = myriad_fails(&[
+        "render".as_ref(),
+        "--runs".as_ref(),
+        "1".as_ref(),
+        "--size".as_ref(),
+        "32x16".as_ref(),
+        "--lights".as_ref(),
+        "10".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_mentions(&text, &["cannot write", "stats.json", "is a folder"]);
+    assert!(
+        std::fs::read(out.join("frame.png")).unwrap() == b"old frame",
+        "frame.png was replaced"
+    );
+    let mut left: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["frame.png", "stats.json"],
+        "no new or temporary file"
+    );
 }
 
 #[test]

@@ -123,6 +123,7 @@ mod profiling;
 mod read;
 mod read_file;
 mod replace_file;
+mod replace_files;
 mod scene_file;
 pub mod systems;
 mod tangents;
@@ -143,6 +144,7 @@ pub use model::{
 pub use presets::Preset;
 pub use read_file::read_regular_file;
 pub use replace_file::replace_file;
+pub use replace_files::{ReplaceFilesError, check_replaceable, replace_files};
 pub use scene_file::{LightPolicy, Scene, SkippedLight};
 pub use validate::{ValidationReport, validate_file, validate_json_slice, validate_json_str};
 

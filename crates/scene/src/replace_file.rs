@@ -24,55 +24,123 @@ use std::path::{Path, PathBuf};
 /// old file (if any) is untouched and no temporary file is left. Links are followed, devices
 /// and FIFOs written in place, read-only files and folders refused (see the module docs).
 pub fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    // `metadata` follows links, as the OS does for a write.
-    let existing = match std::fs::metadata(path) {
-        Ok(metadata) => Some(metadata),
-        Err(e) if e.kind() == ErrorKind::NotFound => None,
-        Err(e) => return Err(e),
-    };
-    let path = match &existing {
-        Some(metadata) if metadata.is_dir() => {
-            return Err(Error::new(
-                ErrorKind::IsADirectory,
-                format!("{} is a folder", path.display()),
-            ));
-        }
-        // Through the links as given: `/dev/stdout`'s last link (`pipe:[…]`) names no path.
-        Some(metadata) if !metadata.is_file() => {
-            return std::fs::OpenOptions::new()
-                .write(true)
-                .open(path)?
-                .write_all(bytes);
-        }
-        Some(metadata) if metadata.permissions().readonly() => {
-            return Err(Error::new(
-                ErrorKind::PermissionDenied,
-                format!("{} is read-only", path.display()),
-            ));
-        }
-        Some(_) => std::fs::canonicalize(path)?,
-        None => follow_links(path)?,
-    };
-    let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".myriad-");
-    // A temporary file is private (0600); the output should be what a plain write makes: the old
-    // file's mode, or for a new file 0666 less the umask.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let mode = existing.map_or(0o666, |m| m.permissions().mode() & 0o7777);
-        builder.permissions(std::fs::Permissions::from_mode(mode));
+    match Target::of(path)? {
+        Target::InPlace(path) => write_in_place(path, bytes),
+        Target::Replace(replacement) => replacement.stage(bytes)?.persist(),
     }
-    let mut temp = builder.tempfile_in(dir).map_err(without_temp_name)?;
-    temp.write_all(bytes).map_err(without_temp_name)?;
-    temp.as_file().sync_all().map_err(without_temp_name)?;
-    temp.persist(&path)
-        .map_err(|e| without_temp_name(e.error))?;
-    Ok(())
+}
+
+/// What writing `bytes` to a path will do, decided before a byte is written (so that a set of
+/// files, `replace_files`, can refuse any one of them before touching the others).
+pub(crate) enum Target<'a> {
+    /// A device, FIFO or socket: written in place, through the links as given (`/dev/stdout`'s
+    /// last link, `pipe:[…]`, names no path).
+    InPlace(&'a Path),
+    /// A regular file, existing or new, replaced by a rename.
+    Replace(Replacement),
+}
+
+/// A regular file to replace: the name links lead to, and the mode the new file gets (the old
+/// file's, or for a new file 0666 less the umask).
+pub(crate) struct Replacement {
+    path: PathBuf,
+    #[cfg_attr(not(unix), allow(dead_code))]
+    mode: u32,
+}
+
+impl<'a> Target<'a> {
+    /// Looks at `path`: a folder or a read-only file is an error.
+    pub(crate) fn of(path: &'a Path) -> std::io::Result<Self> {
+        // `metadata` follows links, as the OS does for a write.
+        let existing = match std::fs::metadata(path) {
+            Ok(metadata) => Some(metadata),
+            Err(e) if e.kind() == ErrorKind::NotFound => None,
+            Err(e) => return Err(e),
+        };
+        Ok(match &existing {
+            Some(metadata) if metadata.is_dir() => {
+                return Err(Error::new(
+                    ErrorKind::IsADirectory,
+                    format!("{} is a folder", path.display()),
+                ));
+            }
+            Some(metadata) if !metadata.is_file() => Target::InPlace(path),
+            Some(metadata) if metadata.permissions().readonly() => {
+                return Err(Error::new(
+                    ErrorKind::PermissionDenied,
+                    format!("{} is read-only", path.display()),
+                ));
+            }
+            Some(metadata) => Target::Replace(Replacement {
+                path: std::fs::canonicalize(path)?,
+                mode: mode_of(metadata),
+            }),
+            None => Target::Replace(Replacement {
+                path: follow_links(path)?,
+                mode: 0o666,
+            }),
+        })
+    }
+}
+
+impl Replacement {
+    /// `bytes` written whole, and synced, to a temporary file beside the target.
+    pub(crate) fn stage(self, bytes: &[u8]) -> std::io::Result<Staged> {
+        let Replacement { path, mode } = self;
+        let dir = match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".myriad-");
+        // A temporary file is private (0600); the output should be what a plain write makes.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(mode));
+        }
+        let mut temp = builder.tempfile_in(dir).map_err(without_temp_name)?;
+        temp.write_all(bytes).map_err(without_temp_name)?;
+        temp.as_file().sync_all().map_err(without_temp_name)?;
+        Ok(Staged { temp, path })
+    }
+}
+
+/// A replaced target's complete new content, waiting beside it; dropped, it is deleted.
+pub(crate) struct Staged {
+    temp: tempfile::NamedTempFile,
+    path: PathBuf,
+}
+
+impl Staged {
+    /// Renames the new content over the target.
+    pub(crate) fn persist(self) -> std::io::Result<()> {
+        self.temp
+            .persist(&self.path)
+            .map_err(|e| without_temp_name(e.error))?;
+        Ok(())
+    }
+}
+
+/// Writes `bytes` into a device, FIFO or socket (opening a FIFO waits for its reader, as a
+/// plain write does).
+pub(crate) fn write_in_place(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)?
+        .write_all(bytes)
+}
+
+/// The permission bits an existing file keeps when it is replaced.
+#[cfg(unix)]
+fn mode_of(metadata: &std::fs::Metadata) -> u32 {
+    use std::os::unix::fs::PermissionsExt;
+    metadata.permissions().mode() & 0o7777
+}
+
+#[cfg(not(unix))]
+fn mode_of(_: &std::fs::Metadata) -> u32 {
+    0o666
 }
 
 /// The OS error alone: `tempfile` names its hidden temporary file in its errors ("… at path
