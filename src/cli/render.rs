@@ -11,7 +11,10 @@ use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{FrameReport, GpuContext, GpuError, PassTimes, encode_png};
-use myriad::render::{DEFAULT_GRID, PixelStats, RenderScene, Shading, Skips, Viewer, pixel_stats};
+use myriad::render::{
+    DEFAULT_GRID, PixelStats, RenderScene, Shading, Skips, Viewer, max_channel_difference,
+    pixel_stats,
+};
 use myriad::scene::{LoadOptions, check_replaceable, replace_file, replace_files};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -146,9 +149,18 @@ struct Stats {
     /// shading is never skipped: its refusal fails the run.
     skipped: Vec<SkippedStrategy>,
     speedup_vs_brute_force: Option<f64>,
+    /// The largest channel difference (of 255) of each strategy's lit image from brute force's,
+    /// which shades every light with every pixel: a light a strategy's lists missed, or a pixel
+    /// placed in the wrong cluster, shows here. The run fails above 1 (float rounding). `None`
+    /// where brute force was skipped.
+    max_difference_from_brute_force: Option<std::collections::BTreeMap<&'static str, u8>>,
     /// Clustered shading with savings (`--skips`), beside the three strategies.
     with_skips: Option<WithSkips>,
 }
+
+/// The most a strategy's image may differ from brute force's, per channel (of 255): the lights
+/// are summed in the same order, so only the GPU's rounding differs.
+const MAX_DIFFERENCE_FROM_BRUTE_FORCE: u8 = 1;
 
 #[derive(Serialize, Debug)]
 struct SkippedStrategy {
@@ -395,6 +407,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // The images are kept until every strategy has run: a failure later (brute force past a
     // driver's loop limit, say) then leaves the old output set as it was, not half replaced.
     let mut images = Vec::new();
+    // Tiled's and brute force's lit images (clustered's is `images[0]`).
+    let mut lit_images: Vec<(Shading, Vec<u8>)> = Vec::new();
     let progress = Progress::new("render");
     let mut skipped = Vec::new();
     let skips = args.skips.unwrap_or(Skips::PER_FRAME);
@@ -415,6 +429,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
             Err(e) => return Err(e),
         };
         progress.done(shading.name(), started.elapsed().as_secs_f64());
+        if shading != Shading::Clustered {
+            // Its last timed frame, lit: compared with brute force's below.
+            lit_images.push((shading, viewer.image()?));
+        }
         if shading == Shading::Clustered {
             first_stats = viewer.frame(&scene, shading, method, false)?.stats;
             viewer.ctx.wait_idle()?;
@@ -462,6 +480,22 @@ pub fn run(args: Args) -> Result<ExitCode> {
         strategies.push(result);
     }
     let assign_stats = first_stats.context("clustered frame has statistics")?;
+    let max_difference_from_brute_force = lit_images
+        .iter()
+        .find(|(s, _)| *s == Shading::BruteForce)
+        .map(|(_, brute)| {
+            let mut others = vec![(Shading::Clustered, &images[0].1)];
+            others.extend(
+                lit_images
+                    .iter()
+                    .filter(|(s, _)| *s != Shading::BruteForce)
+                    .map(|(s, image)| (*s, image)),
+            );
+            others
+                .into_iter()
+                .map(|(s, image)| (s.name(), max_channel_difference(image, brute)))
+                .collect()
+        });
     let time_of = |name: &str| {
         let s = strategies.iter().find(|s| s.shading == name)?;
         Some(s.gpu_shading_ms.unwrap_or(s.gpu_frame_wall_ms))
@@ -488,6 +522,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         strategies,
         skipped,
         speedup_vs_brute_force: speedup,
+        max_difference_from_brute_force,
         with_skips,
     };
     // The three files describe one run: all of them are replaced, or none.
@@ -512,6 +547,21 @@ pub fn run(args: Args) -> Result<ExitCode> {
         args.out.join("heatmap.png").display(),
         json_path.display()
     );
+    let differing: Vec<String> = stats
+        .max_difference_from_brute_force
+        .iter()
+        .flatten()
+        .filter(|&(_, &d)| d > MAX_DIFFERENCE_FROM_BRUTE_FORCE)
+        .map(|(s, d)| format!("{s} by {d}/255"))
+        .collect();
+    if !differing.is_empty() {
+        eprintln!(
+            "error: the image differs from brute force's (every light at every pixel): {} (at \
+             most {MAX_DIFFERENCE_FROM_BRUTE_FORCE} allowed)",
+            differing.join(", ")
+        );
+        return Ok(ExitCode::FAILURE);
+    }
     if let Some(w) = stats
         .with_skips
         .as_ref()
@@ -732,6 +782,16 @@ fn print_table(s: &Stats) {
     }
     for skip in &s.skipped {
         println!("{} skipped: {}", skip.shading, skip.reason);
+    }
+    if let Some(differences) = &s.max_difference_from_brute_force {
+        let each: Vec<String> = differences
+            .iter()
+            .map(|(s, d)| format!("{s} {d}/255"))
+            .collect();
+        println!(
+            "largest difference from the brute-force image (every light at every pixel): {}",
+            each.join(", ")
+        );
     }
     if let Some(x) = s.speedup_vs_brute_force {
         let with_skips = s

@@ -49,6 +49,22 @@ fn no_arguments_runs_the_main_job() {
         strategies[2]["pixels"]["mean_lights"].as_f64().unwrap(),
         1000.0
     );
+    // Clustered and tiled images against brute force's (every light at every pixel): a missed
+    // light or a misplaced pixel would show (the run fails above 1/255 and says so).
+    let differences = &stats["max_difference_from_brute_force"];
+    for name in ["clustered", "tiled"] {
+        let d = differences[name]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{differences}"));
+        assert!(d <= 1, "{name} differs from brute force by {d}/255");
+    }
+    assert_mentions(
+        &text,
+        &[
+            "largest difference from the brute-force image",
+            "clustered ",
+        ],
+    );
     // Beside them, clustered shading with every saving but reuse, which must not change the
     // image and must do less: lights culled, clusters masked, so fewer pairs.
     let skipping = &stats["with_skips"];
