@@ -23,15 +23,15 @@
 use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_slicing};
 use super::progress::Progress;
-use super::render::{parse_size, write_png};
+use super::render::parse_size;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
-use myriad::gpu::GpuContext;
 use myriad::gpu::layout::GpuLight;
 use myriad::gpu::legend::with_heat_legend;
+use myriad::gpu::{GpuContext, encode_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
-use myriad::scene::{LoadOptions, Model};
+use myriad::scene::{LoadOptions, Model, check_replaceable, replace_files};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -362,6 +362,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
         check_slicing(slicing, z, scene.grid.near(), scene.grid.far())?;
     }
 
+    let heat_path = args.out.join("paper_heatmap.png");
+    let json_path = args.out.join("paper.json");
+    // The heat map and the JSON describe one run: a target neither can replace (a folder, a
+    // read-only file) is said before the minutes of rendering, and both are written at the end
+    // as one set.
+    check_replaceable(&[&heat_path, &json_path])?;
+
     let ctx = GpuContext::headless()?;
     let adapter = ctx.describe();
     let timestamps = ctx.has_timestamps();
@@ -369,7 +376,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     let configs: Vec<Option<u32>> = Z_SLICES.iter().map(|&z| Some(z)).chain([None]).collect();
     let total_rows = LIGHT_COUNTS.len() * configs.len();
-    let heat_path = args.out.join("paper_heatmap.png");
     let mut heat_map = None;
     let mut rows = Vec::new();
     let progress = Progress::new("paper");
@@ -432,7 +438,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 if row.frames == 1 { "" } else { "s" }
             ));
             if clustered && lights == 1000 && *config == Some(HEAT_MAP_Z) {
-                heat_map = Some(write_heat_map(
+                heat_map = Some(render_heat_map(
                     &mut viewer,
                     &scene,
                     method,
@@ -443,6 +449,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             rows.push(row);
         }
     }
+    let (heat_map, heat_png) = heat_map.context("the heat-map configuration was measured")?;
     let light_buffer_bytes = LIGHT_COUNTS
         .iter()
         .map(|&n| (n, (n * size_of::<GpuLight>()) as u64))
@@ -460,29 +467,26 @@ pub fn run(args: Args) -> Result<ExitCode> {
         runs: args.runs,
         light_buffer_bytes,
         rows,
-        heat_map: heat_map.context("the heat-map configuration was measured")?,
+        heat_map,
     };
-    let json_path = args.out.join("paper.json");
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    myriad::scene::replace_file(
-        &json_path,
-        serde_json::to_string_pretty(&report)?.as_bytes(),
-    )
-    .with_context(|| format!("cannot write {}", json_path.display()))?;
+    let json = serde_json::to_string_pretty(&report)?;
+    replace_files(&[(&heat_path, &heat_png), (&json_path, json.as_bytes())])?;
     print_report(&report, source.note.as_deref());
     println!("wrote {} and {}", heat_path.display(), json_path.display());
     Ok(ExitCode::SUCCESS)
 }
 
-/// Renders the heat map of the lists just built (the paper's Figure 4) with its legend.
-fn write_heat_map(
+/// Renders the heat map of the lists just built (the paper's Figure 4) with its legend; returns
+/// its description and the PNG, which the run writes with its JSON.
+fn render_heat_map(
     viewer: &mut Viewer,
     scene: &RenderScene,
     method: Method,
     pixels: &PixelStats,
     path: &Path,
-) -> Result<HeatMap> {
+) -> Result<(HeatMap, Vec<u8>)> {
     let scale_max = PAPER_HEAT_MAX.max(pixels.max_lights);
     let saved = viewer.settings;
     viewer.settings.heat_max = Some(scale_max);
@@ -492,15 +496,17 @@ fn write_heat_map(
     viewer.ctx.wait_idle()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (image, legend_h) = with_heat_legend(&viewer.image()?, w, h, scale_max);
-    write_png(path, &image, w, legend_h)?;
-    Ok(HeatMap {
+    let png = encode_png(&image, w, legend_h)
+        .with_context(|| format!("cannot encode {}", path.display()))?;
+    let described = HeatMap {
         path: path.display().to_string(),
         lights: scene.lights.len(),
         grid: scene.grid.dims().to_array(),
         scale_max,
         max_lights_per_pixel: pixels.max_lights,
         mean_lights_per_pixel: pixels.mean_lights,
-    })
+    };
+    Ok((described, png))
 }
 
 fn print_report(r: &Report, note: Option<&str>) {

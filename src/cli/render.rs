@@ -15,7 +15,7 @@ use myriad::render::{
     DEFAULT_GRID, PixelStats, RenderScene, Shading, Skips, Viewer, max_channel_difference,
     pixel_stats,
 };
-use myriad::scene::{LoadOptions, check_replaceable, replace_file, replace_files};
+use myriad::scene::{LoadOptions, check_replaceable, replace_files};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -657,18 +657,6 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         scene = scene.with_grid(dims, slicing);
     }
     Ok((scene, skipped))
-}
-
-pub(super) fn write_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
-    let write = || -> Result<()> {
-        let png = encode_png(rgba, width, height)?;
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
-        replace_file(path, &png)?;
-        Ok(())
-    };
-    write().with_context(|| format!("cannot write {}", path.display()))
 }
 
 fn print_table(s: &Stats) {

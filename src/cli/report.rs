@@ -21,7 +21,7 @@ use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::UVec3;
 use myriad::evaluate::{MethodResult, Timing, measure};
-use myriad::scene::{ClusterGrid, Preset};
+use myriad::scene::{ClusterGrid, Preset, check_replaceable, replace_files};
 use plotters::coord::Shift;
 use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
@@ -110,6 +110,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let paths = [
+        args.out.join("report.md"),
+        args.out.join("report.json"),
+        args.out.join("report.svg"),
+    ];
+    // The three files describe one run: a target none can replace is said before the
+    // measurement, and all three are written at the end as one set, or none.
+    check_replaceable(&paths.each_ref().map(|p| p.as_path()))?;
 
     let pool = thread_pool(args.threads)?;
     let mut report = pool.install(|| measure_all(&args, &grids))?;
@@ -117,18 +125,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     let markdown = markdown(&report);
     print!("{markdown}");
-    let paths = [
-        args.out.join("report.md"),
-        args.out.join("report.json"),
-        args.out.join("report.svg"),
-    ];
-    let write = |path: &PathBuf, text: &str| {
-        myriad::scene::replace_file(path, text.as_bytes())
-            .with_context(|| format!("cannot write {}", path.display()))
-    };
-    write(&paths[0], &markdown)?;
-    write(&paths[1], &serde_json::to_string_pretty(&report)?)?;
-    write(&paths[2], &plot(&report)?)?;
+    let json = serde_json::to_string_pretty(&report)?;
+    let svg = plot(&report)?;
+    replace_files(&[
+        (&paths[0], markdown.as_bytes()),
+        (&paths[1], json.as_bytes()),
+        (&paths[2], svg.as_bytes()),
+    ])?;
     eprintln!(
         "wrote {}, {} and {}",
         paths[0].display(),

@@ -143,6 +143,39 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     ]);
 }
 
+/// `report` and `paper` write sets of files that describe one run: a target that cannot be
+/// replaced (here a folder in the place of the last file) is refused before any measuring, and
+/// the other files of the set are left as they were.
+#[test]
+fn report_and_paper_refuse_a_set_they_cannot_write_whole_before_measuring() {
+    for (command, files) in [
+        ("report", &["report.md", "report.json", "report.svg"][..]),
+        ("paper", &["paper_heatmap.png", "paper.json"][..]),
+    ] {
+        let dir = work_dir(&format!("unwritable_{command}_set"));
+        let (last, others) = files.split_last().unwrap();
+        for file in others {
+            std::fs::write(dir.join(file), b"old").unwrap();
+        }
+        std::fs::create_dir_all(dir.join(last)).unwrap();
+        let out = myriad_fails(&[command, "--out", dir.to_str().unwrap()]);
+        assert_mentions(
+            &out,
+            &[&dir.join(last).display().to_string(), "is a folder"],
+        );
+        for file in others {
+            assert_eq!(
+                std::fs::read(dir.join(file)).unwrap(),
+                b"old",
+                "{command}: {file}"
+            );
+        }
+        // Refused up front: the measuring (minutes for `paper`), whose progress lines count
+        // its configurations as "[1/N]", never started.
+        assert!(!out.contains("[1/"), "{command} measured first:\n{out}");
+    }
+}
+
 #[test]
 fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
     let dir = work_dir("report");
