@@ -118,10 +118,10 @@ proptest! {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
 
-    /// Hostile frames whose tasks hold 8192 lights or more, past `LARGE_BLOCK_TASK` (2048), which walk
-    /// them in blocks of `LARGE_BLOCK` (1088) instead of 256 (`phases.rs`): on a one-worker pool
-    /// a frame is four tasks, so 32 768 lights and up. (The suites above run tasks of at most a
-    /// few hundred lights.)
+    /// Hostile frames whose tasks hold 8192 lights or more, past `LARGE_BLOCK_TASK` (2048),
+    /// which walk them in blocks of `LARGE_BLOCK` (1088) instead of 256 (`phases.rs`): on a
+    /// one-worker pool a frame is four tasks, so 32 768 lights and up. (The suites above run
+    /// tasks of at most a few hundred lights.)
     #[test]
     fn frames_of_large_tasks_cover_the_oracle(
         params in hostile_params(UVec3::new(9, 7, 9), 32_768..33_300),
