@@ -39,30 +39,45 @@ pub struct WithSkips {
     pub max_image_difference: u8,
 }
 
-/// With `tune` among `skips`: renders untimed frames until the viewer's prepass tuner has
-/// decided (its probes plus one frame that did not count, at most), so timed frames after it all
-/// run the choice it settled on. Returns that choice; `None` without `tune`.
+/// What [`settle_tuner`] leaves: the tuner's choice and the last untimed frame that assigned.
+#[derive(Default)]
+pub struct Settled {
+    pub decision: Option<PrepassDecision>,
+    /// With `reuse`, the timed frames after the probes may all reuse these lists.
+    pub assigned: Option<SkipFrame>,
+}
+
+/// When `skips` tunes the prepass ([`Skips::tunes_prepass`]): renders untimed frames until the
+/// viewer's prepass tuner has decided (its probes plus one frame that did not count, at most),
+/// so timed frames after it all run the choice it settled on. Returns that choice and the last
+/// of those frames that assigned; nothing without tuning.
 pub fn settle_tuner(
     viewer: &mut Viewer,
     scene: &RenderScene,
     method: Method,
     skips: Skips,
-) -> Result<Option<PrepassDecision>> {
-    if !skips.tune_prepass {
-        return Ok(None);
+) -> Result<Settled> {
+    let mut settled = Settled::default();
+    if !skips.tunes_prepass() {
+        return Ok(settled);
     }
     let frames = 2 * viewer.prepass_tuner_settings().probe_frames + 1;
     for _ in 0..frames {
         if viewer.prepass_decision().is_some() {
             break;
         }
-        viewer.frame_with_skips(scene, method, skips)?;
+        let frame = viewer.frame_with_skips(scene, method, skips)?;
         viewer.ctx.wait_idle()?;
+        if frame.stats.is_some() {
+            settled.assigned = Some(frame);
+        }
     }
-    let decision = viewer
-        .prepass_decision()
-        .context("the prepass tuner decided within its probe frames")?;
-    Ok(Some(decision))
+    settled.decision = Some(
+        viewer
+            .prepass_decision()
+            .context("the prepass tuner decided within its probe frames")?,
+    );
+    Ok(settled)
 }
 
 /// Times `runs` frames with `skips` (after one untimed frame, which also builds the pipeline
@@ -77,10 +92,11 @@ pub fn measure(
     progress: &Progress,
 ) -> Result<WithSkips> {
     // Tuned: the probes first, untimed, so the timed frames all run the choice they settle on.
-    settle_tuner(viewer, scene, method, skips)?;
+    let settled = settle_tuner(viewer, scene, method, skips)?;
     let mut samples = FrameSamples::new(viewer);
     let (mut prepass, mut mask) = (vec![], vec![]);
-    let mut assigned: Option<SkipFrame> = None;
+    // With `reuse`, the timed frames may all keep the lists the probes built.
+    let mut assigned: Option<SkipFrame> = settled.assigned;
     let mut last: Option<SkipFrame> = None;
     let warm_ups = timed_frames(SHADING, runs, progress, || {
         let frame = viewer.frame_with_skips(scene, method, skips)?;
@@ -132,7 +148,7 @@ pub fn measure(
         fitted_depth_range: (skips.fitted_depth && frame.tuning.is_none_or(|t| t.plan.use_prepass))
             .then(|| [frame.grid.near(), frame.grid.far()]),
         prepass_decision: skips
-            .tune_prepass
+            .tunes_prepass()
             .then(|| viewer.prepass_decision())
             .flatten(),
         prepass_ms: median(prepass),

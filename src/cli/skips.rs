@@ -213,7 +213,7 @@ fn scene_report(
     for (name, skips) in savings() {
         // Before and after frames alternate, so drift in the machine's load hits both alike.
         let mut fresh = Viewer::new(ctx.clone(), scene)?;
-        let prepass_decision = settle_tuner(&mut fresh, scene, method, skips)?;
+        let prepass_decision = settle_tuner(&mut fresh, scene, method, skips)?.decision;
         let (mut before, mut after) = (Samples::default(), Samples::default());
         for run in 0..=runs {
             before.frame(&mut viewer, scene, method, Skips::NONE, run > 0)?;

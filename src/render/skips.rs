@@ -121,6 +121,12 @@ impl Skips {
         self.active_clusters || self.fitted_depth
     }
 
+    /// Whether frames with these savings are tuned: [`Self::tune_prepass`] with `active` or
+    /// `depth` to decide on (without either there is no prepass to keep or drop).
+    pub fn tunes_prepass(self) -> bool {
+        self.tune_prepass && self.needs_prepass()
+    }
+
     /// These savings without the two that need the prepass (and without tuning them).
     fn without_prepass(self) -> Skips {
         Skips {
@@ -158,6 +164,13 @@ impl std::str::FromStr for Skips {
                     ));
                 }
             }
+        }
+        if skips.tune_prepass && !skips.needs_prepass() {
+            return Err(format!(
+                "{:?} in {text:?} decides whether \"active\" and \"depth\" pay for their depth \
+                 prepass: name at least one of them",
+                Skips::TUNE
+            ));
         }
         Ok(skips)
     }
@@ -234,7 +247,7 @@ impl Viewer {
             ..self.settings
         };
         let mut state = std::mem::take(&mut self.skip_state);
-        let result = if skips.tune_prepass && skips.needs_prepass() {
+        let result = if skips.tunes_prepass() {
             self.tuned_frame(scene, method, skips, settings, &mut state)
         } else {
             self.skipping_frame(scene, method, skips, settings, &mut state)
@@ -509,6 +522,22 @@ mod tests {
                 ..Skips::NONE
             }
         );
+    }
+
+    #[test]
+    fn tune_needs_a_saving_to_decide_on() {
+        for text in ["tune", "cull,tune", "reuse,variants,tune"] {
+            let e = text.parse::<Skips>().unwrap_err();
+            assert!(e.contains("name at least one of them"), "{text}: {e}");
+        }
+        for text in ["active,tune", "depth,reuse,tune"] {
+            assert!(text.parse::<Skips>().unwrap().tunes_prepass(), "{text}");
+        }
+        let untuned = Skips {
+            tune_prepass: true,
+            ..Skips::NONE
+        };
+        assert!(!untuned.tunes_prepass(), "built by hand: nothing to tune");
     }
 
     #[test]
