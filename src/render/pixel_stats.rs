@@ -1,7 +1,7 @@
 //! Lights evaluated per pixel, from the depth buffer and the lists: the numbers behind the heat
 //! map and the "lighting calculations skipped" figure.
 //!
-//! A pixel with geometry (depth < 1) evaluates every light of its cluster (clustered, tiled) or
+//! A pixel with geometry (stored depth > 0: reversed Z clears to 0) evaluates every light of its cluster (clustered, tiled) or
 //! every light (brute force); background pixels evaluate none in either case.
 
 use myriad_scene::{Camera, ClusterGrid};
@@ -71,7 +71,7 @@ mod tests {
         let grid = ClusterGrid::new(UVec3::new(2, 1, 2), DepthSlicing::Linear, 0.1, 10.0);
         // Clusters: (0,0,0)=0, (1,0,0)=1, (0,0,1)=2, (1,0,1)=3.
         let counts = [1, 2, 3, 4];
-        // Row 0: near left, near right, near right, background; row 1: background but the last
+        // Row 0: near left, near left, near right, background; row 1: background but the last
         // pixel, deep into the second slice. Stored depths are reversed Z: 1 at near, 0 for
         // nothing drawn.
         let near = 1.0;

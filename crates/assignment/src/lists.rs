@@ -66,7 +66,8 @@ impl LightLists {
         self.counts.resize(clusters, 0);
     }
 
-    /// Checks the CSR invariants; used by tests and debug builds.
+    /// Checks the CSR invariants (panics naming the first broken one); for tests and for callers
+    /// who build or edit lists themselves. `assign` does not call it.
     pub fn assert_well_formed(&self, light_count: usize) {
         assert_eq!(self.offsets.len(), self.counts.len());
         let mut running = 0u64;

@@ -1,5 +1,5 @@
 //! Steady-state frames allocate nothing: a counting global allocator watches a third frame after
-//! two warm-up frames with the same sizes, on `linear`, `binary` and `refined` (not `exact`, the slow
+//! two warm-up frames with the same sizes, on `linear`, `binary`, `refined` and `cone` (not `exact`, the slow
 //! oracle-backed reference, which is not meant for per-frame use), called inside a thread pool
 //! and from outside one (where the assigner hands the frame to the global pool).
 

@@ -66,7 +66,7 @@ impl ClusterGrid {
     /// below it the squared lengths of a light at the near plane (its view-space coordinates and
     /// padded radius, `4e-6` of its extent) leave f32's normal range: at near ≈ 1e-21 lists lost
     /// lights that the same scene scaled up kept. At `1e-12` they stay normal, and a scene scaled
-    /// down to it gets the lists of the unscaled one (`tests/stability.rs`).
+    /// down to it gets the lists of the unscaled one (`crates/assignment/tests/stability.rs`).
     pub const MIN_NEAR: f32 = 1e-12;
 
     /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range

@@ -18,7 +18,8 @@
 //!   `pollster`).
 //! - `image` (default): PNG read-back ([`save_png`], [`encode_png`]) and
 //!   [`SceneGeometry::fit_textures`], through `image`.
-//! - `tracy`: Tracy spans for upload and encoding (each pass's CPU-side encode on its own).
+//! - `tracy`: Tracy spans for upload and encoding (each pass's CPU-side encode on its own) and
+//!   for each pipeline build.
 //!
 //! An engine that brings its device and does its own image I/O can set
 //! `default-features = false` and depends on neither `pollster` nor `image`.

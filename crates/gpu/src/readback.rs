@@ -118,7 +118,8 @@ pub(crate) fn map_and_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Ve
 /// Saves tightly packed RGBA8 pixels as a PNG, creating the parent directory. It writes in
 /// place; to replace an existing file only once the new one is whole, write [`encode_png`]'s
 /// bytes to a temporary file and rename it (the `myriad` tool does, with
-/// `myriad_scene::replace_file`).
+/// `myriad_scene::replace_files`, so an image and the files written beside it are replaced as a
+/// set).
 pub fn save_png(
     path: &std::path::Path,
     rgba: &[u8],

@@ -29,8 +29,9 @@ pub(super) struct CheckedTarget {
 }
 
 impl Renderer {
-    /// Checks that `target` works as the colour attachment of the deferred pass and, when it
-    /// runs (`forward`), of the forward pass with the G-buffer's depth. Call after the G-buffer
+    /// Checks that `target` works as the colour attachment of the deferred pass and of the
+    /// forward pass with the G-buffer's depth (both attachments are always checked; only the
+    /// forward pipeline is left out without `forward`). Call after the G-buffer
     /// exists at the frame's size and before anything is staged.
     pub(super) fn check_target(
         &mut self,
