@@ -38,9 +38,9 @@ fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
     // Reversed Z (`Camera::clip_from_view`): the buffer clears to 0, the far plane.
     if (depth <= 0.0) {
         if (HEAT_MAP) {
-            return vec4<f32>(srgb_to_linear(heat_ramp(0.0)), 1.0);
+            return vec4<f32>(srgb_to_target(heat_ramp(0.0)), 1.0);
         }
-        return vec4<f32>(BACKGROUND, 1.0);
+        return vec4<f32>(to_target(BACKGROUND), 1.0);
     }
     let size = vec2<f32>(frame.target_size);
     let ndc = vec2<f32>(frag_coord.x / size.x * 2.0 - 1.0, 1.0 - frag_coord.y / size.y * 2.0);
@@ -80,7 +80,7 @@ fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
     }
     if (HEAT_MAP) {
         let t = f32(evaluated) / f32(max(frame.heat_max, 1u));
-        return vec4<f32>(srgb_to_linear(heat_ramp(t)), 1.0);
+        return vec4<f32>(srgb_to_target(heat_ramp(t)), 1.0);
     }
-    return vec4<f32>(tone_map(color, frame.exposure), 1.0);
+    return vec4<f32>(to_target(tone_map(color, frame.exposure)), 1.0);
 }

@@ -65,5 +65,5 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @locatio
             color += shade_light(lights[light_indices[start + i]], s);
         }
     }
-    return vec4<f32>(tone_map(color, frame.exposure), base.a);
+    return vec4<f32>(to_target(tone_map(color, frame.exposure)), base.a);
 }

@@ -271,3 +271,75 @@ fn prepared_pipelines_are_the_ones_frames_use() {
     frame.lights = Some(myriad::render::light_columns(&plain));
     assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame), 2);
 }
+
+/// An engine's swap chain is often UNORM without sRGB (`Bgra8Unorm`; on the web the only choice):
+/// the shaders then encode sRGB themselves, so the image is the sRGB target's. Written linear, it
+/// came out up to 74/255 too dark and the heat map's colours were off their legend (audit). The
+/// scene's glass is drawn opaque here: blending into a UNORM target mixes encoded values (as any
+/// blending into one does), into an sRGB target linear ones, so the two differ there by design.
+#[test]
+fn a_unorm_target_gets_the_image_of_an_srgb_target() {
+    use myriad::gpu::{Blend, FrameDesc, encodes_srgb};
+    use myriad::render::{cluster_lists, light_columns, max_channel_difference};
+    let Some((scene, viewer)) = viewer_after_one_frame(96, 48) else {
+        return;
+    };
+    let ctx = &viewer.ctx;
+    assert!(scene.geometry.has_blended(), "the atrium has glass");
+    let mut opaque = scene.geometry.clone();
+    for material in &mut opaque.materials {
+        material.blend = Blend::Opaque;
+    }
+    let opaque = viewer.renderer.upload_scene(ctx, &opaque).unwrap();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let mut images = Vec::new();
+    for format in [
+        wgpu::TextureFormat::Rgba8UnormSrgb,
+        wgpu::TextureFormat::Rgba8Unorm,
+    ] {
+        assert_eq!(encodes_srgb(format), !format.is_srgb());
+        let mut renderer = Renderer::try_new(ctx, format).unwrap();
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("engine target"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let mut pair = Vec::new();
+        for heat_map in [false, true] {
+            let frame = FrameDesc {
+                heat_map,
+                ..FrameDesc::clustered(
+                    &scene.camera,
+                    &scene.grid,
+                    light_columns(&scene.lights),
+                    cluster_lists(viewer.lists()),
+                )
+            };
+            renderer.render(ctx, &opaque, &frame, &view).unwrap();
+            pair.push(myriad::gpu::read_rgba8(ctx, &texture).unwrap());
+        }
+        images.push(pair);
+    }
+    assert!(!encodes_srgb(wgpu::TextureFormat::Rgba16Float));
+    for (kind, (srgb, unorm)) in ["lit", "heat map"]
+        .iter()
+        .zip(images[0].iter().zip(&images[1]))
+    {
+        // The view must show more than its background for the comparison to mean anything.
+        let distinct: std::collections::HashSet<&[u8]> = srgb.chunks(4).collect();
+        assert!(distinct.len() > 5, "{kind}: {} colours", distinct.len());
+        // The hardware's encoding and the shader's may round a channel apart.
+        let difference = max_channel_difference(srgb, unorm);
+        assert!(difference <= 1, "{kind}: {difference}/255 apart");
+    }
+}

@@ -279,6 +279,26 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
     assert_eq!(odd.textures[texture as usize].pixels.len(), bytes);
     let e = renderer.upload_scene(&ctx, &odd).unwrap_err();
     assert!(e.to_string().contains(&format!("{bytes} bytes")), "{e}");
+    // Every texture is uploaded, so one no material names is checked too: these panicked in
+    // wgpu (a zero size) and in its upload helper (too few bytes) (audit).
+    for (width, height, bytes) in [(0, 0, 0), (4, 4, 10)] {
+        let mut unused = scene.geometry.clone();
+        unused.textures.push(myriad::gpu::TextureRgba8 {
+            width,
+            height,
+            pixels: vec![255; bytes],
+        });
+        let e = renderer.upload_scene(&ctx, &unused).unwrap_err();
+        let want = format!("{width}x{height} with {bytes} bytes");
+        assert!(e.to_string().contains(&want), "{e}");
+    }
+    // A draw naming a material out of range: `has_blended` (public, callable before any check)
+    // panicked on it; the upload names it.
+    let mut stray = scene.geometry.clone();
+    stray.draws[0].material = 999;
+    assert_eq!(stray.has_blended(), scene.geometry.has_blended());
+    let e = renderer.upload_scene(&ctx, &stray).unwrap_err();
+    assert!(e.to_string().contains("names material 999"), "{e}");
     // ...and the viewer does that itself and renders.
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
     viewer
@@ -354,14 +374,24 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
             "unusable camera",
         );
     }
-    // A near plane below the grids' floor passes the camera check but cannot be sliced: the
-    // prepass's one-cluster grid panicked there.
+    // A near plane below the grids' floor cannot be sliced: the prepass's one-cluster grid
+    // panicked there. And the render drew it with `Ok`: wrong pixels at near 1e-34 and none at
+    // 1e-36 on llvmpipe (audit), where the stored depths leave f32's normal range.
     let mut tiny_near = scene.camera;
     tiny_near.near = 1e-13;
     invalid(
         renderer.render_prepass(ctx, geometry, &tiny_near),
         "ClusterGrid::MIN_NEAR",
     );
+    for near in [1e-13, 1e-34, 1e-36] {
+        tiny_near.near = near;
+        invalid(
+            renderer
+                .render(ctx, geometry, &frame(&tiny_near, &scene.grid), &target.view)
+                .map(|_| ()),
+            "ClusterGrid::MIN_NEAR",
+        );
+    }
     // The uploaded lists are for the scene's grid; a grid of as many clusters in another shape
     // reused them (only the count was compared).
     let g = scene.grid;
@@ -489,6 +519,98 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
         .filter(|p| p[..3].iter().any(|&c| c > 40))
         .count();
     assert!(lit > 192 * 96 / 8, "only {lit} lit pixels");
+}
+
+/// A frame refused for its slice edges, the one buffer that was checked only after the lights and
+/// lists had been staged: the refused frame's lists stood as the kept ones, and a later frame drew
+/// stale lights with `Ok` (audit: 0 lit pixels where 9,280 were due). Storage bindings of 256 KiB
+/// make a 1×1×65536 grid's lists fit exactly and its 65,537 slice edges not.
+#[test]
+fn a_frame_refused_for_its_slice_edges_leaves_the_renderer_as_it_was() {
+    use myriad::assignment::{Assigner, LightLists};
+    use myriad::cluster_math::glam::UVec3;
+    use myriad::gpu::{
+        ClusterLists, FrameDesc, GpuError, HeadlessTarget, Renderer, read_rgba8, wgpu,
+    };
+    use myriad::render::{cluster_lists, light_columns};
+    use myriad::scene::ClusterGrid;
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    const LIMIT: u64 = 256 << 10;
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
+    let descriptor = wgpu::DeviceDescriptor {
+        required_limits: wgpu::Limits {
+            max_storage_buffer_binding_size: LIMIT,
+            ..Renderer::required_limits()
+        },
+        ..Default::default()
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
+    let ctx = GpuContext::from_device(device, queue);
+    let scene = RenderScene::default_scene(200, 96, 48).unwrap();
+    // `new`: `try_new` asks for the downlevel 128 MiB bindings; a frame is checked against what
+    // the device has.
+    let mut renderer = Renderer::new(&ctx, myriad::gpu::HEADLESS_FORMAT);
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    let target = HeadlessTarget::new(&ctx.device, 96, 48).unwrap();
+    let mut lists = LightLists::new();
+    Assigner::new().assign(
+        Method::Refined,
+        &myriad::light_input(&scene.lights),
+        &scene.camera,
+        &scene.grid,
+        &mut lists,
+    );
+    let frame = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        cluster_lists(&lists),
+    );
+    renderer
+        .render(&ctx, &geometry, &frame, &target.view)
+        .unwrap();
+    let before = read_rgba8(&ctx, &target.texture).unwrap();
+    let generation = renderer.upload_generation();
+
+    let slices = (LIMIT / 4) as u32;
+    let tall = ClusterGrid::new(
+        UVec3::new(1, 1, slices),
+        scene.grid.slicing(),
+        scene.grid.near(),
+        scene.grid.far(),
+    );
+    let zeros = vec![0u32; slices as usize];
+    let refused = FrameDesc::clustered(
+        &scene.camera,
+        &tall,
+        light_columns(&scene.lights),
+        ClusterLists {
+            offsets: &zeros,
+            counts: &zeros,
+            indices: &[],
+        },
+    );
+    match renderer.render(&ctx, &geometry, &refused, &target.view) {
+        Err(GpuError::BufferTooLarge { what, bytes, .. }) => {
+            assert_eq!((what, bytes), ("slice edges", 4 * (slices as u64 + 1)));
+        }
+        other => panic!("want the slice edges refused, got {:?}", other.map(|_| ())),
+    }
+    assert_eq!(renderer.upload_generation(), generation);
+    // The kept uploads are still the first frame's: drawn again, the same image.
+    let kept = FrameDesc {
+        lights: None,
+        lists: None,
+        ..frame
+    };
+    renderer
+        .render(&ctx, &geometry, &kept, &target.view)
+        .unwrap();
+    assert_eq!(read_rgba8(&ctx, &target.texture).unwrap(), before);
 }
 
 #[test]

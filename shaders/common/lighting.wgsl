@@ -5,6 +5,12 @@
 // False for scenes without spot lights: the spot cone code is compiled out of the pipeline.
 override HAS_SPOTS: bool = true;
 
+// True when the target stores what the shader writes as it is, with no sRGB encoding on the way
+// (an 8- or 10-bit UNORM format such as an engine's `Bgra8Unorm` swap chain): the shader encodes
+// sRGB itself, as an sRGB target would in hardware. False for sRGB targets and for float targets,
+// which get linear values.
+override ENCODE_SRGB: bool = false;
+
 // Distance falloff: inverse square (softened by 1 m² so it stays finite at the light) times a
 // window that is 1 at the light and exactly 0 at and beyond `radius` (Karis, "Real Shading in
 // Unreal Engine 4", 2013). A light the assignment left out of a cluster (it cannot reach it)
@@ -69,9 +75,25 @@ fn shade_light(light: Light, s: Surface) -> vec3<f32> {
     return light.color * attenuation * n_dot_l * (diffuse + spec_color);
 }
 
-// Exposure and a smooth shoulder; the sRGB target does the encoding.
+// Exposure and a smooth shoulder; linear, `to_target` encodes it for the target.
 fn tone_map(c: vec3<f32>, exposure: f32) -> vec3<f32> {
     return vec3<f32>(1.0) - exp(-c * exposure);
+}
+
+// A linear colour as the target wants it written (see `ENCODE_SRGB`).
+fn to_target(linear: vec3<f32>) -> vec3<f32> {
+    if (ENCODE_SRGB) {
+        return linear_to_srgb(linear);
+    }
+    return linear;
+}
+
+// A colour meant as sRGB bytes (the heat map's ramp) as the target wants it written.
+fn srgb_to_target(c: vec3<f32>) -> vec3<f32> {
+    if (ENCODE_SRGB) {
+        return c;
+    }
+    return srgb_to_linear(c);
 }
 
 // Blue -> cyan -> green -> yellow -> red ramp for t in [0, 1] (the heat map and its legend; the
@@ -100,4 +122,12 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     let low = c / 12.92;
     let high = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
     return select(high, low, c <= vec3<f32>(0.04045));
+}
+
+// The sRGB transfer function (what an sRGB target applies on write), on values clamped to [0, 1].
+fn linear_to_srgb(linear: vec3<f32>) -> vec3<f32> {
+    let c = clamp(linear, vec3<f32>(0.0), vec3<f32>(1.0));
+    let low = c * 12.92;
+    let high = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(high, low, c <= vec3<f32>(0.0031308));
 }

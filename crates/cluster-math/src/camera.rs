@@ -57,15 +57,25 @@ impl Camera {
     }
 
     /// What makes this camera unusable, if anything: [`Self::view_problem`], or a depth range
-    /// not `0 < near < far` (finite), or one whose `near·far` passes `f32::MAX`: depth is then
-    /// reconstructed as infinity ([`Self::view_depth_from_ndc_depth`], in f32 as on the GPU).
-    /// For engines that take cameras from users.
+    /// not `0 < near < far` (finite), a near plane below [`crate::ClusterGrid::MIN_NEAR`], or a
+    /// range whose `near·far` passes `f32::MAX`: depth is then reconstructed as infinity
+    /// ([`Self::view_depth_from_ndc_depth`], in f32 as on the GPU). For engines that take
+    /// cameras from users.
     pub fn problem(&self) -> Option<String> {
         self.view_problem().or_else(|| {
             if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
                 return Some(format!(
                     "depth range must satisfy 0 < near < far (finite), got [{}, {}]",
                     self.near, self.far
+                ));
+            }
+            if self.near < crate::ClusterGrid::MIN_NEAR {
+                return Some(format!(
+                    "near plane {:e} is below ClusterGrid::MIN_NEAR ({:e}): grids cannot slice \
+                     depth from there, and far below it the depth buffer's values leave f32's \
+                     normal range (on Mesa's llvmpipe, pixels went missing below 1e-33)",
+                    self.near,
+                    crate::ClusterGrid::MIN_NEAR
                 ));
             }
             (!(self.near * self.far).is_finite()).then(|| {

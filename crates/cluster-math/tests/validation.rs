@@ -155,11 +155,19 @@ fn camera_problems_are_named() {
             },
             "0 < near < far",
         ),
+        // The grids' floor: the renderer drew wrong or no pixels below ~1e-33 (audit).
+        (
+            Camera {
+                near: ClusterGrid::MIN_NEAR.next_down(),
+                ..good
+            },
+            "ClusterGrid::MIN_NEAR",
+        ),
     ] {
         let problem = camera.problem().expect("a problem");
         assert!(problem.contains(needle), "{camera:?}: {problem}");
         // The view alone ignores the depth range (assignment slices by the grid's).
-        let depth = needle == "0 < near < far" || needle == "overflows f32";
+        let depth = ["0 < near < far", "overflows f32", "ClusterGrid::MIN_NEAR"].contains(&needle);
         assert_eq!(camera.view_problem().is_none(), depth, "{camera:?}");
     }
 }

@@ -135,11 +135,18 @@ pub const SPOT_INNER_FRACTION: f32 = 0.8;
 /// camera. Invalid rows (non-finite values, radius <= 0, negative colour) become records that
 /// light nothing (radius 0 at the camera) — the assignment skips the same rows — and are counted
 /// in the return value.
+///
+/// # Panics
+/// When the columns differ in length, with [`LightColumns::check`]'s message (the renderer checks
+/// them first and returns [`crate::GpuError::InvalidInput`] instead).
 pub fn fill_gpu_lights(
     columns: &LightColumns<'_>,
     camera: DVec3,
     out: &mut Vec<GpuLight>,
 ) -> usize {
+    if let Err(problem) = columns.check() {
+        panic!("fill_gpu_lights: {problem}");
+    }
     out.clear();
     out.reserve(columns.len());
     let mut skipped = 0;

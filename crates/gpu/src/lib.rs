@@ -61,7 +61,7 @@ pub use error::GpuError;
 pub use frame_input::{
     ClusterLists, LightColumns, SPOT_INNER_FRACTION, SpotColumns, fill_gpu_lights,
 };
-pub use pipelines::ShadingMode;
+pub use pipelines::{ShadingMode, encodes_srgb};
 #[cfg(feature = "image")]
 pub use readback::{encode_png, save_png};
 pub use readback::{read_depth, read_rgba8};

@@ -1,7 +1,8 @@
 //! Bind group layouts and render pipelines, with the shader variants each frame needs.
 //!
 //! Variants are WGSL pipeline-overridable constants, not string edits: `MODE` (light lists or
-//! every light), `HEAT_MAP`, and `HAS_SPOTS` (false compiles the spot-cone code out). Each
+//! every light), `HEAT_MAP`, and `HAS_SPOTS` (false compiles the spot-cone code out); and, per
+//! renderer, `ENCODE_SRGB` ([`encodes_srgb`] of its output format). Each
 //! combination is built once, on first use, and cached — or ahead of the first frame that needs
 //! it, through `Renderer::prepare`, since building one compiles shaders: the main job's brute-force
 //! frame on llvmpipe encoded in 12.5 ms with its two pipelines built on the way and in 0.22 ms
@@ -13,6 +14,27 @@ use crate::profiling::profile_span;
 use crate::shaders::PassShader;
 use crate::targets::{ALBEDO_FORMAT, DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use std::collections::HashMap;
+
+/// Whether the shading passes encode sRGB themselves for a target of `format`: a UNORM format
+/// without sRGB (an engine's `Bgra8Unorm` or `Rgb10a2Unorm` swap chain) stores what the shader
+/// writes as it is, so written linear the image came out up to 74/255 too dark (audit). sRGB
+/// formats encode in hardware; float formats (`Rgba16Float`, …) get linear values for the
+/// engine's own post-processing. On a UNORM target the forward pass blends encoded values, as
+/// any blending into such a target does.
+pub fn encodes_srgb(format: wgpu::TextureFormat) -> bool {
+    use wgpu::TextureFormat as F;
+    !format.is_srgb()
+        && !matches!(
+            format,
+            F::R16Float
+                | F::Rg16Float
+                | F::Rgba16Float
+                | F::R32Float
+                | F::Rg32Float
+                | F::Rgba32Float
+                | F::Rg11b10Ufloat
+        )
+}
 
 /// Which lights a pixel visits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -180,6 +202,11 @@ impl Pipelines {
         self.output_format
     }
 
+    /// The shaders' `ENCODE_SRGB` for this renderer's output format.
+    fn encode_srgb_constant(&self) -> f64 {
+        f64::from(u8::from(encodes_srgb(self.output_format)))
+    }
+
     pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -279,6 +306,7 @@ impl Pipelines {
                 ("MODE", mode.constant()),
                 ("HEAT_MAP", f64::from(u8::from(heat_map))),
                 ("HAS_SPOTS", f64::from(u8::from(has_spots))),
+                ("ENCODE_SRGB", self.encode_srgb_constant()),
             ];
             let pipeline = build_pipeline(
                 device,
@@ -314,6 +342,7 @@ impl Pipelines {
             let constants = [
                 ("MODE", mode.constant()),
                 ("HAS_SPOTS", f64::from(u8::from(has_spots))),
+                ("ENCODE_SRGB", self.encode_srgb_constant()),
             ];
             let pipeline = build_pipeline(
                 device,

@@ -68,14 +68,18 @@ pub struct SceneGeometry {
 }
 
 impl SceneGeometry {
-    /// Whether any draw uses a blended material (the forward pass runs only then).
+    /// Whether any draw uses a blended material (the forward pass runs only then). A draw whose
+    /// material is out of range counts as not blended ([`Self::check`] refuses it).
     pub fn has_blended(&self) -> bool {
-        self.draws
-            .iter()
-            .any(|d| self.materials[d.material as usize].blend == Blend::Blended)
+        self.draws.iter().any(|d| {
+            self.materials
+                .get(d.material as usize)
+                .is_some_and(|m| m.blend == Blend::Blended)
+        })
     }
 
-    /// Checks that every index, material and texture reference is in range.
+    /// Checks that every index, material and texture reference is in range, and that every
+    /// texture's bytes match its size — the unreferenced ones too, since all are uploaded.
     pub fn check(&self) -> Result<(), String> {
         if let Some(&i) = self
             .indices
@@ -102,24 +106,26 @@ impl SceneGeometry {
             }
         }
         for (n, m) in self.materials.iter().enumerate() {
-            if let Some(t) = m.base_color_texture {
-                let Some(tex) = self.textures.get(t as usize) else {
-                    return Err(format!(
-                        "material {n} names texture {t} of {}",
-                        self.textures.len()
-                    ));
-                };
-                if tex.pixels.len() as u64 != tex.width as u64 * tex.height as u64 * 4
-                    || tex.width == 0
-                    || tex.height == 0
-                {
-                    return Err(format!(
-                        "texture {t} is {}x{} with {} bytes",
-                        tex.width,
-                        tex.height,
-                        tex.pixels.len()
-                    ));
-                }
+            if let Some(t) = m.base_color_texture
+                && t as usize >= self.textures.len()
+            {
+                return Err(format!(
+                    "material {n} names texture {t} of {}",
+                    self.textures.len()
+                ));
+            }
+        }
+        for (t, tex) in self.textures.iter().enumerate() {
+            if tex.pixels.len() as u64 != tex.width as u64 * tex.height as u64 * 4
+                || tex.width == 0
+                || tex.height == 0
+            {
+                return Err(format!(
+                    "texture {t} is {}x{} with {} bytes",
+                    tex.width,
+                    tex.height,
+                    tex.pixels.len()
+                ));
             }
         }
         Ok(())

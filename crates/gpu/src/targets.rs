@@ -13,7 +13,9 @@ pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm
 /// The G-buffer's depth (f32, reversed Z: 1 at the near plane, 0 at the far plane and where
 /// nothing was drawn): what an engine drawing against [`crate::Renderer::gbuffer`]'s depth builds
 /// its pipelines with, comparing `Greater`. Reversed Z keeps ~7 significant digits of depth at
-/// every distance, so no near plane is too small for the buffer (`Camera::clip_from_view`).
+/// every distance (`Camera::clip_from_view`), so the near plane may go down to the grids' floor,
+/// `ClusterGrid::MIN_NEAR` (1e-12), which `Camera::problem` enforces: far below it (near 1e-34
+/// on llvmpipe) the stored depths left f32's normal range and pixels went missing.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The colour format headless targets use (and read back as RGBA8).

@@ -186,7 +186,9 @@ impl Renderer {
     }
 
     /// A renderer that writes its output into textures of `output_format` (the headless target's
-    /// [`crate::HEADLESS_FORMAT`], or an engine's).
+    /// [`crate::HEADLESS_FORMAT`], or an engine's). sRGB formats get sRGB, encoded in hardware;
+    /// UNORM formats without sRGB get it too, encoded by the shaders ([`crate::encodes_srgb`]);
+    /// float formats get the linear tone-mapped colour.
     ///
     /// # Panics
     ///
@@ -521,6 +523,11 @@ impl Renderer {
             ] {
                 buffer.check_fits(device, std::mem::size_of_val(data) as u64)?;
             }
+        }
+        if self.edges_uploaded != Some(*frame.grid) {
+            // One f32 per slice boundary, as `fill_slice_edges` writes them below.
+            let edges = (frame.grid.dims().z as u64 + 1) * std::mem::size_of::<f32>() as u64;
+            self.slice_edges.check_fits(device, edges)?;
         }
         let camera_position = frame.camera.position.to_array();
         if frame.lights.is_none()
