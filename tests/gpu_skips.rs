@@ -145,6 +145,9 @@ fn unchanged_frames_are_reused_and_changes_are_seen() {
     assert_eq!(f2.report.upload_bytes, 0, "a reused frame uploads nothing");
     assert!(f2.stats.is_none());
     assert_eq!(first, second);
+    // It shaded with the first frame's mask, and says how many clusters that kept.
+    assert!(f1.active_clusters.is_some());
+    assert_eq!(f2.active_clusters, f1.active_clusters);
 
     // A colour change: lights re-uploaded, lists kept; the image equals a fresh render.
     for i in 0..scene.lights.len() {

@@ -731,7 +731,7 @@ fn print_table(s: &Stats) {
         format!("{:.1}%", r.pixels.skipped_fraction * 100.0)
     });
     println!(
-        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, dropped by the assignment's first test; the strategies upload them all, {} culls them first)",
+        "lights: {}{} ({} rejected as invalid, {} outside the view frustum, dropped by the assignment's first test; the strategies upload them all{})",
         s.lights,
         match s.lights_skipped_in_file {
             0 => String::new(),
@@ -739,7 +739,12 @@ fn print_table(s: &Stats) {
         },
         s.lights_rejected,
         s.lights_culled,
-        render_skipping::SHADING
+        // Only where that column runs and culls (it said so under `--skips none`, audit).
+        match &s.with_skips {
+            Some(w) if w.savings.contains(&"cull") =>
+                format!(", {} culls them first", render_skipping::SHADING),
+            _ => String::new(),
+        }
     );
     if let Some(w) = &s.with_skips {
         let mut notes = vec![format!("savings {}", w.savings.join(", "))];
@@ -754,6 +759,15 @@ fn print_table(s: &Stats) {
         }
         if let Some(d) = w.prepass_decision {
             notes.push(format!("tuned: {d}"));
+        }
+        if w.savings.contains(&"reuse") {
+            // The column's medians are frames that reused the first one's lists and uploads;
+            // the upload and pair rows are that first frame's (audit: unlabelled before).
+            notes.push(
+                "with reuse its timed frames kept the frame that assigned: no assignment, \
+                 prepass or upload of their own; its upload and pairs rows are that frame's"
+                    .to_string(),
+            );
         }
         notes.push(format!(
             "largest difference from the clustered image {}/255",

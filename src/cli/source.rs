@@ -127,32 +127,59 @@ fn worker_name(index: usize) -> String {
     format!("rayon {index}")
 }
 
+/// Bytes per light an assignment of a scene file's lights needs at the least: its columns and
+/// records. (`myriad assign` of `sphere` scenes, 9 lights in 10 culled, peaked 155 bytes a light
+/// more from 0.5M to 2M lights.)
+pub const ASSIGNED_BYTES_PER_LIGHT: u64 = 64;
+
+/// Bytes per light the commands that generate, assign and render their lights (`frames`,
+/// `stress`, `render`, `skips`, `report`) need at the least: the generated columns (52 bytes),
+/// the assigner's per-light scratch (~40), and the 48-byte GPU record three times over (the
+/// renderer's staging copy, the staging ring, the buffer — host memory on llvmpipe), before a
+/// single pair. Measured peaks are higher still (VmHWM 2026-11-28: `stress` +532 bytes a light
+/// from 250k to 1M lights, `frames` +1,141); 64 bytes a light let a 10M-light `stress` pass
+/// the check under a 1.5 GB cap and abort in its allocator (audit).
+pub const GENERATED_BYTES_PER_LIGHT: u64 = 256;
+
 /// Bytes a frame of a `dims` grid with `lights` lights needs at the least, before a single pair:
 /// per cluster the CSR `offsets` and `counts` plus the assigner's per-cluster scratch (16 bytes),
-/// per light its columns and records (64 bytes).
-pub fn minimum_frame_bytes(dims: UVec3, lights: usize) -> u64 {
+/// per light `bytes_per_light` ([`ASSIGNED_BYTES_PER_LIGHT`], [`GENERATED_BYTES_PER_LIGHT`]).
+pub fn minimum_frame_bytes(dims: UVec3, lights: usize, bytes_per_light: u64) -> u64 {
     let clusters = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
-    16 * clusters + 64 * lights as u64
+    (16 * clusters).saturating_add(bytes_per_light.saturating_mul(lights as u64))
 }
 
-/// Refuses a grid and light count whose minimum frame does not fit in the memory the OS says is
-/// available (Linux `MemAvailable`; no check where it is unknown). Without this, a valid scene
-/// file of a few bytes with a 65535×65535 grid makes the process grow until the OS kills it.
+/// Refuses a grid and light count whose minimum frame does not fit in the memory this process
+/// may still take ([`memory_limit_bytes`]). Without this, a valid scene file of a few bytes with
+/// a 65535×65535 grid makes the process grow until the OS kills it.
 pub fn check_memory(grid: &ClusterGrid, lights: usize) -> Result<()> {
-    check_memory_for(grid.dims(), lights)
+    check_memory_needed(
+        grid.dims(),
+        lights,
+        minimum_frame_bytes(grid.dims(), lights, ASSIGNED_BYTES_PER_LIGHT),
+    )
 }
 
-/// [`check_memory`] before the scene exists: the commands that generate their lights (`render`,
-/// `frames`, `stress`, `skips`, `report`) check the count they were given against the grid they
-/// will use *before* generating, since generating `--lights 4294967295` is itself the
-/// allocation that aborts the process (audit: "memory allocation of 17179869132 bytes failed").
+/// [`check_memory`] before the scene exists, for the commands that generate their lights
+/// (`render`, `frames`, `stress`, `skips`, `report`): they check the count they were given
+/// against the grid they will use *before* generating, since generating `--lights 4294967295`
+/// is itself the allocation that aborts the process (audit: "memory allocation of 17179869132
+/// bytes failed"), with [`GENERATED_BYTES_PER_LIGHT`].
 pub fn check_memory_for(dims: UVec3, lights: usize) -> Result<()> {
-    let needed = minimum_frame_bytes(dims, lights);
-    if let Some(available) = available_memory_bytes() {
+    check_memory_needed(
+        dims,
+        lights,
+        minimum_frame_bytes(dims, lights, GENERATED_BYTES_PER_LIGHT),
+    )
+}
+
+fn check_memory_needed(dims: UVec3, lights: usize, needed: u64) -> Result<()> {
+    if let Some(available) = memory_limit_bytes() {
         ensure!(
             needed <= available,
             "a {}x{}x{} grid with {lights} lights needs at least {:.1} GiB, but only {:.1} GiB of \
-             memory is available",
+             memory is available to this process (MemAvailable, or the headroom under its \
+             address-space limit)",
             dims.x,
             dims.y,
             dims.z,
@@ -163,12 +190,49 @@ pub fn check_memory_for(dims: UVec3, lights: usize) -> Result<()> {
     Ok(())
 }
 
+/// The memory this process may still take, in bytes: Linux's `MemAvailable`, or less under an
+/// address-space cap (`ulimit -v`: the soft limit less what is mapped now), which the check used
+/// to ignore — under one, a run the check passed aborted in its allocator with exit 134 instead
+/// of failing with 2 (audit). `None` where neither is known (no check then).
+pub fn memory_limit_bytes() -> Option<u64> {
+    let available = available_memory_bytes();
+    let headroom = address_space_headroom_bytes();
+    match (available, headroom) {
+        (Some(a), Some(h)) => Some(a.min(h)),
+        (a, h) => a.or(h),
+    }
+}
+
 /// `MemAvailable` from `/proc/meminfo`, in bytes.
 fn available_memory_bytes() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+/// The soft address-space limit (`/proc/self/limits`, "Max address space") less this process's
+/// mapped size (`VmSize` in `/proc/self/status`); `None` when unlimited or unknown.
+fn address_space_headroom_bytes() -> Option<u64> {
+    let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = limits
+        .lines()
+        .find(|l| l.starts_with("Max address space"))?;
+    let soft: u64 = line
+        .trim_start_matches("Max address space")
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?; // "unlimited" does not parse: no cap.
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let mapped_kib: u64 = status
+        .lines()
+        .find(|l| l.starts_with("VmSize:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()?;
+    Some(soft.saturating_sub(mapped_kib * 1024))
 }
 
 #[cfg(test)]
@@ -181,9 +245,9 @@ mod tests {
         let grid = |x, y, z| ClusterGrid::new(UVec3::new(x, y, z), DepthSlicing::Log, 0.1, 100.0);
         // 2^32 - 2^17 + 1 clusters: 64 GiB of offsets and counts before a single pair.
         let huge = grid(65_535, 65_535, 1);
-        let needed = minimum_frame_bytes(huge.dims(), 10);
+        let needed = minimum_frame_bytes(huge.dims(), 10, ASSIGNED_BYTES_PER_LIGHT);
         assert_eq!(needed, 16 * 65_535 * 65_535 + 640);
-        match available_memory_bytes() {
+        match memory_limit_bytes() {
             Some(available) if available < needed => {
                 let e = check_memory(&huge, 10).unwrap_err().to_string();
                 assert!(
@@ -195,13 +259,25 @@ mod tests {
         }
         check_memory(&grid(32, 18, 48), 100_000).unwrap();
         // A light count alone, before any grid or light exists (`frames`, `stress`, `render`):
-        // u32::MAX lights need 256 GiB of columns.
+        // u32::MAX lights need 1 TiB.
         let lights = u32::MAX as usize;
-        let needed = minimum_frame_bytes(UVec3::new(24, 12, 16), lights);
-        assert_eq!(needed, 16 * 24 * 12 * 16 + 64 * u64::from(u32::MAX));
-        if available_memory_bytes().is_some_and(|a| a < needed) {
-            let e = check_memory_for(UVec3::new(24, 12, 16), lights).unwrap_err();
-            assert!(e.to_string().contains("needs at least 256.0 GiB"), "{e}");
+        let dims = UVec3::new(24, 12, 16);
+        let needed = minimum_frame_bytes(dims, lights, GENERATED_BYTES_PER_LIGHT);
+        assert_eq!(needed, 16 * 24 * 12 * 16 + 256 * u64::from(u32::MAX));
+        if memory_limit_bytes().is_some_and(|a| a < needed) {
+            let e = check_memory_for(dims, lights).unwrap_err();
+            assert!(e.to_string().contains("needs at least 1024.0 GiB"), "{e}");
+        }
+    }
+
+    #[test]
+    fn the_memory_limit_is_at_most_what_linux_calls_available() {
+        // On Linux both figures exist; the limit never exceeds either.
+        if let Some(available) = available_memory_bytes() {
+            assert!(memory_limit_bytes().unwrap() <= available);
+        }
+        if let Some(headroom) = address_space_headroom_bytes() {
+            assert!(memory_limit_bytes().unwrap() <= headroom);
         }
     }
 

@@ -218,6 +218,8 @@ struct Cache {
     grid: ClusterGrid,
     lights: Lights,
     method: Method,
+    /// The frame's active clusters (with `active`), which a reused frame still shades with.
+    active_clusters: Option<usize>,
     /// The renderer's upload generation after this frame: any other upload since (a plain
     /// [`Viewer::frame`], say) means the GPU's lights and lists are no longer these.
     generation: u64,
@@ -347,6 +349,9 @@ impl Viewer {
             crate::profile_span!("skipping frame: reused");
             let appearance = appearance_dirty(&cache.lights, lights);
             frame.grid = cache.grid;
+            // The lists (and their mask) are the cached frame's; `skips` printed no active
+            // count for a reused frame although it shaded with the mask (audit).
+            frame.active_clusters = cache.active_clusters;
             frame.lights_assigned = if skips.cull {
                 state.visible.len()
             } else {
@@ -462,9 +467,11 @@ impl Viewer {
                 grid: frame.grid,
                 lights: Lights::new(),
                 method,
+                active_clusters: None,
                 generation: 0,
             });
             cache.skips = skips;
+            cache.active_clusters = frame.active_clusters;
             cache.method = method;
             cache.generation = self.renderer.upload_generation();
             cache.camera = scene.camera;

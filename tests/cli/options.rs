@@ -96,10 +96,10 @@ fn available_memory_bytes() -> Option<u64> {
 #[cfg(unix)]
 #[test]
 fn a_light_count_beyond_memory_is_refused_before_generating() {
-    // u32::MAX lights need 256 GiB of columns alone: refused up front, as `assign` and `scene`
-    // refuse them. Generating them first aborted with "memory allocation of 17179869132 bytes
-    // failed" under an address-space cap, and ground on without one.
-    let needed = 64 * u64::from(u32::MAX);
+    // u32::MAX lights need 1 TiB at 256 bytes a light: refused up front, as `assign` and
+    // `scene` refuse them. Generating them first aborted with "memory allocation of 17179869132
+    // bytes failed" under an address-space cap, and ground on without one.
+    let needed = 256 * u64::from(u32::MAX);
     if available_memory_bytes().is_none_or(|a| a >= needed) {
         return;
     }
@@ -131,6 +131,37 @@ fn a_light_count_beyond_memory_is_refused_before_generating() {
         assert!(!text.contains("panicked"), "{text}");
         assert_mentions(&text, &[&format!("{max} lights needs at least"), "GiB"]);
     }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_light_count_beyond_an_address_space_cap_is_refused() {
+    // 10M lights under a 1.5 GB cap: the check looked only at MemAvailable and counted 64 bytes
+    // a light, so it passed and the run aborted in its allocator (exit 134, audit); now the cap's
+    // headroom counts, at 256 bytes a light (2.4 GiB here), whatever the machine's memory.
+    let out = Command::new("sh")
+        .args([
+            "-c",
+            r#"ulimit -v 1500000 && exec "$0" "$@""#,
+            env!("CARGO_BIN_EXE_myriad"),
+            "stress",
+            "--size",
+            "32x18",
+            "--lights",
+            "10000000",
+        ])
+        .output()
+        .unwrap();
+    let text = all_output(&out);
+    assert_eq!(out.status.code(), Some(2), "{text}");
+    assert!(!text.contains("panicked"), "{text}");
+    assert_mentions(
+        &text,
+        &[
+            "10000000 lights needs at least 2.4 GiB",
+            "address-space limit",
+        ],
+    );
 }
 
 #[test]

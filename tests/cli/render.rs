@@ -341,7 +341,14 @@ fn a_failed_render_leaves_the_old_output_set_whole() {
         let args = ["render", "--preset", "uniform", "--lights", lights];
         myriad(&[&args[..], extra, &rest].concat())
     };
-    assert!(render("50", &[]).status.success());
+    let first = render("50", &[]);
+    assert!(first.status.success());
+    // No column culls, so the table says none does (it said "clustered+skips culls them first").
+    assert!(
+        !stdout(&first).contains("culls them first"),
+        "{}",
+        stdout(&first)
+    );
     let names = ["frame.png", "heatmap.png", "stats.json"];
     let read_all = || names.map(|n| std::fs::read(out_dir.join(n)).unwrap());
     let old = read_all();
@@ -519,6 +526,7 @@ fn render_takes_scene_files_presets_and_sizes() {
             "64x32",
             "grid 24x12x16",
             "tuned: depth prepass",
+            "clustered+skips culls them first",
         ],
     );
     // Tuned, the column reports the timed choice, and its frames ran it: with the prepass off,
@@ -543,7 +551,7 @@ fn render_takes_scene_files_presets_and_sizes() {
     // whenever no timed frame assigned, which depends on the tuner's timed choice against the
     // last probe's plan; with the fix reverted, 3 of 4 of these runs failed (an audit's repro).
     for runs in ["1", "3", "1", "3"] {
-        myriad_ok(&[
+        let out = myriad_ok(&[
             "render",
             "--preset",
             "paper",
@@ -560,6 +568,11 @@ fn render_takes_scene_files_presets_and_sizes() {
             "--out",
             out_dir.to_str().unwrap(),
         ]);
+        // The column's timed frames reused the assigning one's lists: the table says so.
+        assert_mentions(
+            &stdout(&out),
+            &["with reuse its timed frames kept the frame"],
+        );
         let skipping = &read_json(&out_dir.join("stats.json"))["with_skips"];
         assert!(
             skipping["result"]["pairs"].as_u64().unwrap() > 0,
