@@ -107,8 +107,9 @@ impl ClusterGrid {
                 Self::MIN_NEAR
             )));
         }
-        // Cluster ids are u32 in the output lists.
-        if (dims.x as u64) * (dims.y as u64) * (dims.z as u64) > u32::MAX as u64 {
+        // Cluster ids are u32 in the output lists. In u128: three u32 factors pass u64 (a
+        // 2^22 × 2^21 × 2^21 grid wrapped to 0 clusters and was accepted, audit).
+        if (dims.x as u128) * (dims.y as u128) * (dims.z as u128) > u32::MAX as u128 {
             return Err(InvalidGrid(format!(
                 "cluster grid {dims} has more clusters than fit in a u32 id"
             )));
@@ -301,17 +302,22 @@ fn ndc_edge_from_left(i: u32, n: u32) -> f32 {
 fn tile_of_pixel(p: u32, pixels: u32, tiles: u32) -> u32 {
     // A pixel outside the target would give another cluster's id, silently.
     assert!(p < pixels, "pixel {p} outside 0..{pixels}");
-    (((2 * p as u64 + 1) * tiles as u64) / (2 * pixels as u64)) as u32
+    match (2 * p as u64 + 1).checked_mul(tiles as u64) {
+        Some(n) => (n / (2 * pixels as u64)) as u32,
+        // Past u64 only when pixels and tiles are both beyond ~3e9 (it wrapped, audit).
+        None => (((2 * p as u128 + 1) * tiles as u128) / (2 * pixels as u128)) as u32,
+    }
 }
 
-/// Pixels `p` with `tile_of_pixel(p) == t`: `(2p+1)·T >= 2tP` and `(2p+1)·T < 2(t+1)P`.
+/// Pixels `p` with `tile_of_pixel(p) == t`: `(2p+1)·T >= 2tP` and `(2p+1)·T < 2(t+1)P`. In u128:
+/// `2tP` passes u64 for pixels and tiles both beyond ~3e9.
 fn pixel_range_of_tile(t: u32, pixels: u32, tiles: u32) -> Range<u32> {
-    let first = |t: u64| -> u64 {
+    let first = |t: u128| -> u128 {
         // Smallest p with (2p + 1)·T >= 2tP, i.e. p >= (2tP − T) / 2T.
-        let num = (2 * t * pixels as u64).saturating_sub(tiles as u64);
-        num.div_ceil(2 * tiles as u64)
+        let num = (2 * t * pixels as u128).saturating_sub(tiles as u128);
+        num.div_ceil(2 * tiles as u128)
     };
-    let start = first(t as u64).min(pixels as u64) as u32;
-    let end = first(t as u64 + 1).min(pixels as u64) as u32;
+    let start = first(t as u128).min(pixels as u128) as u32;
+    let end = first(t as u128 + 1).min(pixels as u128) as u32;
     start..end
 }

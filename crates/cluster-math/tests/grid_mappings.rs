@@ -236,6 +236,39 @@ fn large_resolutions_map_every_pixel_row_and_column() {
     }
 }
 
+/// Pixel and tile counts both beyond ~3e9: `(2p + 1)·tiles` and `2·t·pixels` pass u64 (they
+/// wrapped: pixel 4294967294 of 4294967295 gave tile 2147483645 of u32::MAX, audit). Checked
+/// against the defining inequality in u128, at the ends and where the products first overflow.
+#[test]
+fn pixels_and_tiles_beyond_u64_products_map_exactly() {
+    for (pixels, tiles) in [
+        (u32::MAX, u32::MAX),
+        (4_000_000_000, 3_500_000_000),
+        (u32::MAX, 3_037_000_500),
+        (3_037_000_500, u32::MAX),
+    ] {
+        let grid = ClusterGrid::new(UVec3::new(tiles, 1, 1), DepthSlicing::Linear, 0.1, 1.0);
+        for p in [0, 1, pixels / 2, pixels - 2, pixels - 1] {
+            let t = grid.tile_x_of_pixel(p, pixels) as u128;
+            let lhs = (2 * p as u128 + 1) * tiles as u128;
+            assert!(
+                lhs >= 2 * t * pixels as u128 && lhs < 2 * (t + 1) * pixels as u128,
+                "pixel {p} of {pixels}, {tiles} tiles: tile {t}"
+            );
+            let columns = grid.tile_pixel_columns(t as u32, pixels);
+            assert!(
+                columns.contains(&p),
+                "tile {t}: {columns:?} lacks pixel {p}"
+            );
+        }
+    }
+    assert_eq!(
+        ClusterGrid::new(UVec3::new(u32::MAX, 1, 1), DepthSlicing::Linear, 0.1, 1.0)
+            .tile_x_of_pixel(u32::MAX - 1, u32::MAX),
+        u32::MAX - 1
+    );
+}
+
 #[test]
 fn tile_edges_match_design_formula() {
     let grid = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.1, 100.0);

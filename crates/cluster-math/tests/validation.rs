@@ -39,6 +39,22 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
         (UVec3::new(65536, 65536, 2), log, 0.1, 100.0, "u32 id"),
         (UVec3::new(2, 65536, 65536), log, 0.1, 100.0, "u32 id"),
         (UVec3::new(65536, 2, 65536), log, 0.1, 100.0, "u32 id"),
+        // The product passes u64 too: it wrapped to 0 clusters and was accepted (audit).
+        (
+            UVec3::new(1 << 22, 1 << 21, 1 << 21),
+            log,
+            0.1,
+            100.0,
+            "u32 id",
+        ),
+        (
+            UVec3::new(1 << 22, 1 << 22, 1 << 20),
+            log,
+            0.1,
+            100.0,
+            "u32 id",
+        ),
+        (UVec3::splat(u32::MAX), log, 0.1, 100.0, "u32 id"),
         (UVec3::new(24, 12, 16), log, 1e-22, 1e-16, "at least 1e-12"),
         (
             UVec3::new(24, 12, 16),
