@@ -126,6 +126,29 @@ pub(crate) fn check_camera(p: &CameraParts, sink: &mut Sink<'_>) -> CameraCheck 
     {
         sink.report("up", "must be non-zero");
     }
+    // Parallel to the view direction, `Camera` picks a world axis as up (its documented fallback);
+    // a scene file does not guess its camera's roll, as it refuses a zero `up` (audit: accepted
+    // silently). The test is `Camera::basis_f64`'s, so exactly the cameras it would repair.
+    if let (Some(pos), Some(target), Some(up)) = (p.position, p.target, p.up)
+        && pos.is_finite()
+        && target.is_finite()
+        && up.is_finite()
+        && pos != target
+        && up != Vec3::ZERO
+    {
+        let forward = (target.as_dvec3() - pos.as_dvec3()).normalize_or_zero();
+        let up = up.as_dvec3();
+        if forward != glam::DVec3::ZERO && forward.cross(up).length() <= 1e-6 * up.length() {
+            sink.report(
+                "up",
+                format!(
+                    "{} is parallel to the view direction (camera.target − camera.position), so \
+                     the camera's roll is undefined",
+                    show_vec3(up.as_vec3())
+                ),
+            );
+        }
+    }
     if let (Some(pos), Some(target)) = (p.position, p.target)
         && pos.is_finite()
         && pos == target

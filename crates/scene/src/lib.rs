@@ -54,7 +54,8 @@
 //!    would otherwise silently fall back to a default. `null` for an optional field means absent.
 //! 3. **Values.** Each number is read as f64 and rounded to f32 once; one that overflows f32
 //!    (`1e39`) is an error, not an infinity. Degrees are converted to radians in f64 and then
-//!    rounded once. Checks: everything finite; camera `position != target`, `up != 0`,
+//!    rounded once. Checks: everything finite; camera `position != target`, `up != 0` and not
+//!    parallel to `target − position` (the roll would be the camera's fallback, a guess),
 //!    `fov_y_deg` in (0, 180), `width, height >= 1`, `1e-12 <= near < far` (compared after rounding
 //!    to f32; `ClusterGrid::MIN_NEAR` is the floor); grid dimensions `>= 1` with `x·y·z <= u32::MAX` (cluster ids are u32); light
 //!    `radius > 0`, colour and `intensity >= 0`, spot direction non-zero, spot `angle_deg` in

@@ -493,6 +493,13 @@ const INVALID_EDITS: &[(&str, &str, &str, &str)] = &[
         "camera.up",
         "non-zero",
     ),
+    // Parallel to the view (−Z here): the camera's fallback would pick a roll (audit).
+    (
+        r#""up":[0,1,0]"#,
+        r#""up":[0,0,-3]"#,
+        "camera.up",
+        "parallel to the view direction",
+    ),
     (
         r#""up":[0,1,0]"#,
         r#""upp":[0,1,0]"#,
