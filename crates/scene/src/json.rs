@@ -343,6 +343,22 @@ pub(crate) fn to_u32(j: &Json, at: &str, sink: &mut Sink<'_>) -> Option<u32> {
                 None
             }
         },
+        // `1536.0` or `1.536e3`: whole, but written with a fraction or an exponent, which the
+        // format refuses for integer fields; "expected a whole number, got 1536.0" contradicted
+        // itself (audit).
+        Json::Number(Number::Float(f))
+            if f.fract() == 0.0 && *f >= 0.0 && *f <= u32::MAX as f64 =>
+        {
+            sink.report(
+                at,
+                format!(
+                    "expected a whole number written without a fraction or exponent (e.g. {}), \
+                     got {f:?}",
+                    *f as u32,
+                ),
+            );
+            None
+        }
         Json::Number(n) => {
             sink.report(
                 at,
@@ -430,7 +446,8 @@ mod tests {
                 "camera.target[1]: expected a number, got a string",
                 "camera.target[2]: 1e+39 is out of the f32 range (magnitude at most 3.4028235e38)",
                 "camera.width: expected a whole number in 0..=4294967295, got -3",
-                "camera.width: expected a whole number in 0..=4294967295, got 24.0",
+                "camera.width: expected a whole number written without a fraction or exponent \
+                 (e.g. 24), got 24.0",
                 "camera.width: must be at most 4294967295, got 4294967296",
                 "camera.depth: expected a string, got a number",
             ]

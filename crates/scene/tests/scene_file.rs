@@ -461,7 +461,13 @@ const INVALID_EDITS: &[(&str, &str, &str, &str)] = &[
         r#""height":768"#,
         r#""height":768.5"#,
         "camera.height",
-        "whole number",
+        "whole number in 0..=4294967295, got 768.5",
+    ),
+    (
+        r#""height":768"#,
+        r#""height":7.68e2"#,
+        "camera.height",
+        "without a fraction or exponent (e.g. 768), got 768.0",
     ),
     (
         r#""target":[0,2,0]"#,
