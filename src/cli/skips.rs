@@ -15,7 +15,7 @@ use myriad::render::{
 };
 use myriad::scene::LoadOptions;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Where Sponza is when the shared assets are checked out next to the repository.
@@ -245,10 +245,38 @@ fn scene_report(
     })
 }
 
+/// A `--gltf` path compared by the file it names: `a.glb` and `./a.glb` (or a link to it) are one
+/// model, which would be measured and reported twice.
+struct SameFile<'a> {
+    /// The path as given, which the error names.
+    spelled: &'a Path,
+    /// The path with links and `.`/`..` resolved; as given where it does not resolve (a missing
+    /// file is refused, by name, when it is loaded).
+    resolved: PathBuf,
+}
+
+impl PartialEq for SameFile<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.resolved == other.resolved
+    }
+}
+
+fn same_files(paths: &[PathBuf]) -> Vec<SameFile<'_>> {
+    paths
+        .iter()
+        .map(|p| SameFile {
+            spelled: p,
+            resolved: p.canonicalize().unwrap_or_else(|_| p.clone()),
+        })
+        .collect()
+}
+
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
-    refuse_repeats("--gltf", &args.gltf, |p| p.display().to_string())?;
+    refuse_repeats("--gltf", &same_files(&args.gltf), |f| {
+        f.spelled.display().to_string()
+    })?;
     check_memory_for(DEFAULT_GRID, args.lights)?;
     let ctx = GpuContext::headless()?;
     let mut scenes = Vec::new();

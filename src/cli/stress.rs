@@ -211,27 +211,26 @@ pub fn run(args: Args) -> Result<ExitCode> {
     ));
 
     // 3. GPU set-up and a warm-up frame (same lights, empty lists).
-    let (mut viewer, seconds) =
-        progress.stage("GPU setup (device, geometry, warm-up frame)", || {
-            let ctx = GpuContext::headless()?;
-            let mut viewer = Viewer::new(ctx, &scene)?;
-            let empty = vec![0u32; grid.cluster_count()];
-            let no_lists = ClusterLists {
-                offsets: &empty,
-                counts: &empty,
-                indices: &[],
-            };
-            let warm_up = FrameDesc {
-                settings: viewer.settings,
-                ..FrameDesc::clustered(&scene.camera, &grid, light_columns(&scene.lights), no_lists)
-            };
-            viewer
-                .renderer
-                .render(&viewer.ctx, &viewer.scene, &warm_up, &viewer.target.view)?;
-            myriad::profiling::frame_mark();
-            viewer.ctx.wait_idle()?;
-            Ok(viewer)
-        })?;
+    let (mut viewer, seconds) = progress.stage("GPU setup (device, geometry, warm-up)", || {
+        let ctx = GpuContext::headless()?;
+        let mut viewer = Viewer::new(ctx, &scene)?;
+        let empty = vec![0u32; grid.cluster_count()];
+        let no_lists = ClusterLists {
+            offsets: &empty,
+            counts: &empty,
+            indices: &[],
+        };
+        let warm_up = FrameDesc {
+            settings: viewer.settings,
+            ..FrameDesc::clustered(&scene.camera, &grid, light_columns(&scene.lights), no_lists)
+        };
+        viewer
+            .renderer
+            .render(&viewer.ctx, &viewer.scene, &warm_up, &viewer.target.view)?;
+        myriad::profiling::frame_mark();
+        viewer.ctx.wait_idle()?;
+        Ok(viewer)
+    })?;
     stages.gpu_setup_ms = seconds * 1e3;
     let adapter = viewer.ctx.describe();
     let timestamps = viewer.ctx.has_timestamps();

@@ -190,6 +190,17 @@ fn a_list_option_naming_an_item_twice_is_refused() {
             ],
             &["--gltf lists assets/atrium.glb twice"],
         ),
+        (
+            // Two spellings of one file are one model, measured once.
+            &[
+                "skips",
+                "--gltf",
+                "assets/atrium.glb",
+                "--gltf",
+                "./assets/../assets/atrium.glb",
+            ],
+            &["--gltf lists ./assets/../assets/atrium.glb twice"],
+        ),
     ]);
     assert!(!dir.join("report").exists(), "nothing is written");
 }
