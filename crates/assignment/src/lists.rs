@@ -69,19 +69,34 @@ impl LightLists {
     /// Checks the CSR invariants (panics naming the first broken one); for tests and for callers
     /// who build or edit lists themselves. `assign` does not call it.
     pub fn assert_well_formed(&self, light_count: usize) {
-        assert_eq!(self.offsets.len(), self.counts.len());
+        assert_eq!(
+            self.offsets.len(),
+            self.counts.len(),
+            "offsets and counts differ in length"
+        );
         let mut running = 0u64;
         for c in 0..self.counts.len() {
             assert_eq!(self.offsets[c] as u64, running, "offset of cluster {c}");
             running += self.counts[c] as u64;
+            assert!(
+                running <= self.indices.len() as u64,
+                "cluster {c} ends past the {} indices",
+                self.indices.len()
+            );
             let lights = self.lights_of(c);
             assert!(
                 lights.windows(2).all(|w| w[0] < w[1]),
                 "cluster {c} not ascending"
             );
-            assert!(lights.iter().all(|&l| (l as usize) < light_count));
+            if let Some(&l) = lights.iter().find(|&&l| l as usize >= light_count) {
+                panic!("cluster {c} lists light {l} of {light_count}");
+            }
         }
-        assert_eq!(running as usize, self.indices.len());
+        assert_eq!(
+            running as usize,
+            self.indices.len(),
+            "counts add up to fewer pairs than indices holds"
+        );
     }
 }
 
@@ -104,5 +119,87 @@ mod tests {
         assert_eq!(lists.lights_of(0), [4, 7]);
         assert_eq!(lists.lights_of(1), [] as [u32; 0]);
         assert_eq!(lists.lights_of(2), [1, 2, 9]);
+    }
+
+    /// The panic message of `lists.assert_well_formed(lights)`, or `None` where it passes.
+    fn broken_invariant(lists: &LightLists, lights: usize) -> Option<String> {
+        let payload = std::panic::catch_unwind(|| lists.assert_well_formed(lights)).err()?;
+        Some(match payload.downcast::<String>() {
+            Ok(message) => *message,
+            Err(payload) => payload.downcast_ref::<&str>().unwrap().to_string(),
+        })
+    }
+
+    #[test]
+    fn assert_well_formed_names_each_broken_invariant() {
+        // Every test of the assigners leans on this check; one that passed broken lists would
+        // make them all check nothing (mutation audit: no test fed it bad lists).
+        let good = LightLists {
+            offsets: vec![0, 2, 2],
+            counts: vec![2, 0, 3],
+            indices: vec![4, 7, 1, 2, 9],
+        };
+        assert_eq!(broken_invariant(&good, 10), None);
+        let cases = [
+            (
+                vec![0, 2],
+                vec![2, 0, 3],
+                vec![4, 7, 1, 2, 9],
+                10,
+                "differ in length",
+            ),
+            (
+                vec![0, 2, 3],
+                vec![2, 0, 3],
+                vec![4, 7, 1, 2, 9],
+                10,
+                "offset of cluster 2",
+            ),
+            (
+                vec![0, 2, 2],
+                vec![2, 0, 3],
+                vec![7, 4, 1, 2, 9],
+                10,
+                "cluster 0 not ascending",
+            ),
+            (
+                vec![0, 2, 2],
+                vec![2, 0, 3],
+                vec![4, 4, 1, 2, 9],
+                10,
+                "cluster 0 not ascending",
+            ),
+            (
+                vec![0, 2, 2],
+                vec![2, 0, 3],
+                vec![4, 7, 1, 2, 9],
+                9,
+                "cluster 2 lists light 9 of 9",
+            ),
+            (
+                vec![0, 2, 2],
+                vec![2, 0, 3],
+                vec![4, 7, 1, 2],
+                10,
+                "cluster 2 ends past the 4",
+            ),
+            (
+                vec![0, 2, 2],
+                vec![2, 0, 3],
+                vec![4, 7, 1, 2, 9, 11],
+                12,
+                "fewer pairs",
+            ),
+        ];
+        for (offsets, counts, indices, lights, needle) in cases {
+            let lists = LightLists {
+                offsets,
+                counts,
+                indices,
+            };
+            let message = broken_invariant(&lists, lights)
+                .unwrap_or_else(|| panic!("{lists:?} passed as well formed"));
+            assert!(message.contains(needle), "{message:?} for {lists:?}");
+        }
     }
 }

@@ -186,6 +186,12 @@ fn camera_problems_are_named() {
         let depth = ["0 < near < far", "overflows f32", "ClusterGrid::MIN_NEAR"].contains(&needle);
         assert_eq!(camera.view_problem().is_none(), depth, "{camera:?}");
     }
+    // The floor itself is allowed, as grids allow it (mutation audit: `<=` passed the suite).
+    let at_floor = Camera {
+        near: ClusterGrid::MIN_NEAR,
+        ..good
+    };
+    assert_eq!(at_floor.problem(), None);
 }
 
 #[test]
