@@ -203,9 +203,10 @@ impl Assigner {
     /// [`AssignStats::coarsened`] (and get that grid from [`AssignStats::grid_built`]).
     ///
     /// From [`SERIAL_LIGHTS`] lights the frame is split into tasks, which run on the current
-    /// rayon pool — unless the previous call of this assigner ended more than 20 µs ago and was
-    /// small (under about 250 µs of work): then the pool's workers are asleep and would arrive
-    /// too late to help, so the tasks run one after another on the calling thread
+    /// rayon pool — unless the previous call of this assigner ended more than 20 µs ago and this
+    /// frame is expected to be small (under about 250 µs of work: the previous frame's, scaled by
+    /// the ratio of the light counts): then the pool's workers are asleep and would arrive too
+    /// late to help, so the tasks run one after another on the calling thread
     /// ([`AssignStats::parallel`]; the measurements are in `pacing.rs`). Calls back to back, as
     /// in a benchmark loop or several views in a row, and big frames run in parallel;
     /// [`Parallelism::Always`] runs every split frame in parallel, and
@@ -269,7 +270,7 @@ impl Assigner {
             && self
                 .parallelism
                 .limits()
-                .is_none_or(|limits| self.pacing.parallel(start, limits));
+                .is_none_or(|limits| self.pacing.parallel(start, lights.len(), limits));
         let stats = if parallel
             && rayon::current_thread_index().is_none()
             && plan_tasks(lights.len(), method) > 1
@@ -288,7 +289,8 @@ impl Assigner {
         } else {
             1
         };
-        self.pacing.record(start, Instant::now(), threads);
+        self.pacing
+            .record(start, Instant::now(), threads, lights.len());
         stats
     }
 

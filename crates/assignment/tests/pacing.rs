@@ -114,3 +114,47 @@ fn an_assigner_set_to_always_runs_every_split_frame_on_the_pool_after_idle_too()
         assert!(stats.parallel, "frame {frame} after 5 ms idle ran serially");
     }
 }
+
+#[test]
+fn a_big_frame_after_a_small_one_runs_on_the_pool_after_idle_too() {
+    // An engine's frames vary: 1500 lights after 1 (or after none) are ≥ 1500× the work, so
+    // they must not run serially because the frame before was small (audit: a 100k-light frame
+    // after a 100-light one ran on one thread). Any call takes over 67 ns, so 1500 lights are
+    // estimated past the 100 µs set here on any machine; 0 lights give no estimate at all.
+    let (scene, lights) = small_lights(13, 1500);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let limits = PacingLimits {
+        warm_gap: Duration::from_micros(20),
+        cold_work: Duration::from_micros(100),
+    };
+    let mut assigner = Assigner::new().with_parallelism(Parallelism::PacedWith(limits));
+    let mut lists = LightLists::new();
+    let mut frame = |lights: &Columns| {
+        std::thread::sleep(Duration::from_millis(5));
+        pool.install(|| {
+            assigner.assign(
+                Method::Binary,
+                &lights.input(false),
+                &scene.camera,
+                &scene.grid,
+                &mut lists,
+            )
+        })
+    };
+    let mut one = Columns::default();
+    one.push(glam::Vec3::new(0.0, 0.0, -5.0), 0.05);
+    for before in [one, Columns::default()] {
+        let small = frame(&before);
+        assert!(small.tasks <= 1, "{} lights are not split", before.x.len());
+        let big = frame(&lights);
+        assert!(big.tasks > 1, "1500 lights are split into tasks");
+        assert!(
+            big.parallel,
+            "1500 lights after {} and 5 ms idle ran serially",
+            before.x.len()
+        );
+    }
+}
