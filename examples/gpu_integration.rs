@@ -239,7 +239,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             lists: None,
             settings: ShadingSettings::default(),
         },
-    );
+    )?;
     let built_before = renderer.pipelines_built();
     let (report, pairs, pixels) =
         frame(&engine, &mut renderer, &scene, &lights, ShadingMode::Lists)?;

@@ -258,7 +258,7 @@ fn prepared_pipelines_are_the_ones_frames_use() {
     );
     frame.lights = None;
     let (ctx, gpu_scene) = (viewer.ctx.clone(), &viewer.scene);
-    assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame), 0);
+    assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame).unwrap(), 0);
     // Lights without spot columns are another variant, deferred and forward.
     let mut plain = myriad::scene::Lights::new();
     for light in scene.lights.iter() {
@@ -269,7 +269,7 @@ fn prepared_pipelines_are_the_ones_frames_use() {
     }
     assert!(!plain.has_spots());
     frame.lights = Some(myriad::render::light_columns(&plain));
-    assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame), 2);
+    assert_eq!(viewer.renderer.prepare(&ctx, gpu_scene, &frame).unwrap(), 2);
 }
 
 /// An engine's swap chain is often UNORM without sRGB (`Bgra8Unorm`; on the web the only choice):
@@ -342,4 +342,85 @@ fn a_unorm_target_gets_the_image_of_an_srgb_target() {
         let difference = max_channel_difference(srgb, unorm);
         assert!(difference <= 1, "{kind}: {difference}/255 apart");
     }
+}
+
+/// An engine with two devices (a window's and a headless one) can hand a renderer the other
+/// device's context or scene by mistake: wgpu panicked inside the frame ("Cannot get
+/// non-existent resource", audit); every call that takes a context refuses it instead, and the
+/// renderer still draws on its own device afterwards.
+#[test]
+fn a_context_or_scene_of_another_device_is_refused() {
+    let Some((scene, mut mine)) = viewer_after_one_frame(64, 32) else {
+        return;
+    };
+    let other = Viewer::new(GpuContext::headless().unwrap(), &scene).unwrap();
+    assert!(mine.ctx.device != other.ctx.device, "two devices");
+    let lists = mine.lists().clone();
+    let frame = myriad::gpu::FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        myriad::render::light_columns(&scene.lights),
+        myriad::render::cluster_lists(&lists),
+    );
+    let refused = |result: Result<(), GpuError>, what: &str, needle: &str| match result {
+        Err(GpuError::InvalidInput(message)) => {
+            assert!(message.contains(needle), "{what}: {message}")
+        }
+        other => panic!("{what}: want InvalidInput, got {other:?}"),
+    };
+    let target = &mine.target.view;
+    let (ctx, scene_b) = (&other.ctx, &other.scene);
+    let r = &mut mine.renderer;
+    let ctx_a = mine.ctx.clone();
+    let another = "another device than the one this renderer";
+    refused(
+        r.render(ctx, &mine.scene, &frame, target).map(drop),
+        "render",
+        another,
+    );
+    refused(
+        r.render_after_prepass(ctx, &mine.scene, &frame, target)
+            .map(drop),
+        "render_after_prepass",
+        another,
+    );
+    refused(
+        r.render_prepass(ctx, &mine.scene, &scene.camera),
+        "prepass",
+        another,
+    );
+    refused(
+        r.prepare(ctx, &mine.scene, &frame).map(drop),
+        "prepare",
+        another,
+    );
+    refused(r.read_depth(ctx).map(drop), "read_depth", another);
+    refused(r.last_pass_times(ctx).map(drop), "last_pass_times", another);
+    refused(
+        r.upload_scene(ctx, &scene.geometry).map(drop),
+        "upload_scene",
+        another,
+    );
+    // The right context with the other device's scene.
+    let other_scene = "scene was uploaded on another device";
+    refused(
+        r.render(&ctx_a, scene_b, &frame, target).map(drop),
+        "render",
+        other_scene,
+    );
+    refused(
+        r.prepare(&ctx_a, scene_b, &frame).map(drop),
+        "prepare",
+        other_scene,
+    );
+    refused(
+        r.render_prepass(&ctx_a, scene_b, &scene.camera),
+        "prepass",
+        other_scene,
+    );
+    // Nothing of that changed the renderer: its own frame still draws.
+    mine.renderer
+        .render(&ctx_a, &mine.scene, &frame, &mine.target.view)
+        .unwrap();
+    assert!(mine.renderer.read_depth(&ctx_a).unwrap().is_some());
 }

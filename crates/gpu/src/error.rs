@@ -70,8 +70,10 @@ pub enum GpuError {
          the device with at least those limits"
     )]
     DeviceLimits(String),
-    /// Frame inputs that do not fit together (list sizes vs grid, target size vs grid).
-    #[error("invalid frame input: {0}")]
+    /// Inputs the renderer cannot use or that do not fit together: a frame's (list sizes vs
+    /// grid, target size vs camera), a scene's geometry, an output format it cannot draw into, a
+    /// context of another device than the renderer's.
+    #[error("invalid input: {0}")]
     InvalidInput(String),
     /// Mapping a read-back buffer failed.
     #[error("reading back from the GPU failed: {0}")]

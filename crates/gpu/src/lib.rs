@@ -7,17 +7,20 @@
 //! buffers, pass timestamps, headless targets and PNG read-back.
 //!
 //! It works on the caller's `wgpu::Device`/`Queue` ([`GpuContext::from_device`]), so an engine
-//! can drop it in, or creates its own headless adapter ([`GpuContext::headless`]) for the CLI and
-//! tests. It depends on `myriad-cluster-math` (the pixel → cluster mapping must be the CPU's, bit
+//! can drop it in, or creates its own headless adapter (`GpuContext::headless`, feature
+//! `headless`) for the CLI and tests. It depends on `myriad-cluster-math` (the pixel → cluster mapping must be the CPU's, bit
 //! for bit: `shaders/common/cluster.wgsl` is tested against `ClusterGrid::cluster_of_pixel`) and on
 //! nothing that knows scenes or assignment methods: light columns and CSR lists arrive as plain
 //! slices ([`LightColumns`], [`ClusterLists`]).
 //!
 //! ## Features
-//! - `headless` (default): [`GpuContext::headless`], which creates a device of its own (through
+//! - `headless` (default): `GpuContext::headless`, which creates a device of its own (through
 //!   `pollster`).
-//! - `image` (default): PNG read-back ([`save_png`], [`encode_png`]) and
-//!   [`SceneGeometry::fit_textures`], through `image`.
+//! - `image` (default): PNG read-back (`save_png`, `encode_png`) and
+//!   `SceneGeometry::fit_textures`, through `image`.
+//!
+//! (Plain names, not links, for what a feature adds: these docs build without the features too,
+//! as an engine that turns them off builds them.)
 //! - `tracy`: Tracy spans for upload and encoding (each pass's CPU-side encode on its own) and
 //!   for each pipeline build.
 //!

@@ -134,7 +134,7 @@ impl SceneGeometry {
     /// Checks the sizes against what `limits` allow: every texture's sides against
     /// `max_texture_dimension_2d`, the vertex and index buffers against `max_buffer_size`. Past
     /// them wgpu raises a validation error, which panics in its default handler, so the upload
-    /// refuses them first ([`Self::fit_textures`] scales textures down instead).
+    /// refuses them first (`fit_textures`, feature `image`, scales textures down instead).
     pub fn check_limits(&self, limits: &wgpu::Limits) -> Result<(), String> {
         let max_side = limits.max_texture_dimension_2d;
         if let Some((n, t)) = self
@@ -204,9 +204,11 @@ impl SceneGeometry {
     }
 }
 
-/// The scene's GPU resources.
+/// The scene's GPU resources, on the device of the renderer that uploaded it.
 #[derive(Debug)]
 pub struct GpuScene {
+    /// The device its buffers live on: a renderer refuses a scene of another device.
+    pub(crate) device: wgpu::Device,
     pub(crate) vertex_buffer: wgpu::Buffer,
     pub(crate) index_buffer: wgpu::Buffer,
     pub(crate) opaque: Vec<Draw>,
@@ -303,6 +305,7 @@ impl GpuScene {
             .iter()
             .partition(|d| geometry.materials[d.material as usize].blend == Blend::Blended);
         Self {
+            device: device.clone(),
             vertex_buffer,
             index_buffer,
             opaque,

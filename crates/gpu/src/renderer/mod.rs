@@ -110,6 +110,9 @@ pub struct FrameReport {
 /// The renderer: pipelines, G-buffer, light and list buffers, the staging ring, the timer.
 #[derive(Debug)]
 pub struct Renderer {
+    /// The device everything below lives on: a call with another device's context or scene is
+    /// refused ([`Renderer::check_device`]) where wgpu would panic on a resource it does not know.
+    device: wgpu::Device,
     pipelines: Pipelines,
     gbuffer: Option<GBuffer>,
     frame_buffer: wgpu::Buffer,
@@ -212,6 +215,7 @@ impl Renderer {
             }],
         });
         Self {
+            device: device.clone(),
             gbuffer: None,
             frame_group,
             frame_buffer,
@@ -244,6 +248,7 @@ impl Renderer {
         ctx: &GpuContext,
         geometry: &SceneGeometry,
     ) -> Result<GpuScene, GpuError> {
+        self.check_device(ctx, None)?;
         geometry.check().map_err(GpuError::InvalidInput)?;
         geometry
             .check_limits(&ctx.device.limits())
@@ -263,8 +268,14 @@ impl Renderer {
     /// `frame.lights`, or in the last upload when it keeps them), and the forward pass's when
     /// the frame has one (`scene` has blended geometry, or every feature is forced). Nothing is
     /// uploaded or checked, and `frame.lists` is not read. Returns how many pipelines it built:
-    /// 0 when they all were already.
-    pub fn prepare(&mut self, ctx: &GpuContext, scene: &GpuScene, frame: &FrameDesc<'_>) -> usize {
+    /// 0 when they all were already; an error only for a context or scene of another device.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        frame: &FrameDesc<'_>,
+    ) -> Result<usize, GpuError> {
+        self.check_device(ctx, Some(scene))?;
         let before = self.pipelines.built();
         let has_spots = self.shades_spots(frame);
         self.pipelines
@@ -272,7 +283,28 @@ impl Renderer {
         if has_forward_pass(scene, frame) {
             self.pipelines.forward(&ctx.device, frame.mode, has_spots);
         }
-        self.pipelines.built() - before
+        Ok(self.pipelines.built() - before)
+    }
+
+    /// Refuses a context (and scene) of another device than the one this renderer was made on:
+    /// the renderer's pipelines and buffers exist only there, and wgpu panics on them elsewhere
+    /// ("Cannot get non-existent resource", audit).
+    fn check_device(&self, ctx: &GpuContext, scene: Option<&GpuScene>) -> Result<(), GpuError> {
+        if ctx.device != self.device {
+            return Err(GpuError::InvalidInput(
+                "the context is of another device than the one this renderer was made on (a \
+                 renderer, its scenes and its targets belong to one device)"
+                    .into(),
+            ));
+        }
+        if scene.is_some_and(|scene| scene.device != self.device) {
+            return Err(GpuError::InvalidInput(
+                "the scene was uploaded on another device than this renderer's (upload it with \
+                 this renderer's upload_scene)"
+                    .into(),
+            ));
+        }
+        Ok(())
     }
 
     /// Whether `frame` shades with the spot-cone code: its lights have spot columns (or, when it
@@ -295,6 +327,7 @@ impl Renderer {
     /// nothing was drawn; `Camera::view_depth_from_ndc_depth` turns it into view depth); waits for
     /// the GPU. `None` before the first frame.
     pub fn read_depth(&self, ctx: &GpuContext) -> Result<Option<Vec<f32>>, GpuError> {
+        self.check_device(ctx, None)?;
         self.gbuffer
             .as_ref()
             .map(|g| crate::readback::read_depth(ctx, &g.depth_texture))
@@ -333,6 +366,7 @@ impl Renderer {
     /// GPU times of the last frame's passes (waits for the GPU); `None` where the device has no
     /// timestamp queries.
     pub fn last_pass_times(&self, ctx: &GpuContext) -> Result<Option<PassTimes>, GpuError> {
+        self.check_device(ctx, None)?;
         self.timer.read(ctx)
     }
 
@@ -360,6 +394,7 @@ impl Renderer {
         scene: &GpuScene,
         camera: &Camera,
     ) -> Result<(), GpuError> {
+        self.check_device(ctx, Some(scene))?;
         check_camera(camera)?;
         let (width, height) = (camera.width, camera.height);
         self.ensure_gbuffer(&ctx.device, width, height)?;
@@ -433,6 +468,7 @@ impl Renderer {
         target: &wgpu::TextureView,
         draw_gbuffer: bool,
     ) -> Result<FrameReport, GpuError> {
+        self.check_device(ctx, Some(scene))?;
         let device = &ctx.device;
         check_camera(frame.camera)?;
         let (width, height) = (frame.camera.width, frame.camera.height);
