@@ -17,7 +17,11 @@ pub struct SpotColumns<'a> {
     pub angle: &'a [f32],
 }
 
-/// A frame's lights as SoA columns, world space; all columns have the same length.
+/// A frame's lights as SoA columns, world space (the scene's units: the shading's falloff takes
+/// them as metres); all columns have the same length. A light's radiance at distance `d` is
+/// `colour × intensity × window(d / radius)² / (d² + 1)`, the window `max(1 − (d/radius)⁴, 0)`
+/// (`shaders/common/lighting.wgsl`): exactly 0 at and past `radius`, which is what the
+/// assignment bounds.
 #[derive(Clone, Copy, Debug)]
 pub struct LightColumns<'a> {
     /// Position x.
@@ -26,7 +30,7 @@ pub struct LightColumns<'a> {
     pub y: &'a [f32],
     /// Position z.
     pub z: &'a [f32],
-    /// Range.
+    /// Range, in the positions' units: the light reaches nothing at or past this distance.
     pub radius: &'a [f32],
     /// Linear colour, red.
     pub r: &'a [f32],
@@ -34,7 +38,7 @@ pub struct LightColumns<'a> {
     pub g: &'a [f32],
     /// Linear colour, blue.
     pub b: &'a [f32],
-    /// Intensity multiplier.
+    /// Intensity multiplier of the colour (unitless; the falloff above carries the distance).
     pub intensity: &'a [f32],
     /// Spot columns, when any light is a spot.
     pub spot: Option<SpotColumns<'a>>,

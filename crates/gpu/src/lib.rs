@@ -64,6 +64,8 @@ pub use error::GpuError;
 pub use frame_input::{
     ClusterLists, LightColumns, SPOT_INNER_FRACTION, SpotColumns, fill_gpu_lights,
 };
+/// The glam version of the public types ([`Draw::center`], the camera's vectors).
+pub use myriad_cluster_math::glam;
 pub use pipelines::{ShadingMode, encodes_srgb};
 #[cfg(feature = "image")]
 pub use readback::{encode_png, save_png};
@@ -72,5 +74,5 @@ pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_unif
 pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
 pub use targets::{DEPTH_FORMAT, GBuffer, HEADLESS_FORMAT, HeadlessTarget};
 pub use timing::PassTimes;
-/// The wgpu version this crate is built against, for callers that want to match it.
+/// The wgpu version this crate is built against (30), for callers that want to match it.
 pub use wgpu;

@@ -108,6 +108,10 @@ pub struct FrameReport {
 }
 
 /// The renderer: pipelines, G-buffer, light and list buffers, the staging ring, the timer.
+///
+/// It belongs to the device of the context it was made with: every call takes that context and
+/// the scenes it uploaded, and refuses another device's with [`GpuError::InvalidInput`]. (A
+/// target texture cannot be asked for its device; one of another device panics in wgpu.)
 #[derive(Debug)]
 pub struct Renderer {
     /// The device everything below lives on: a call with another device's context or scene is
