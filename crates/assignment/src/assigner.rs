@@ -134,6 +134,28 @@ pub const SERIAL_LIGHTS: usize = 512;
 /// to the lights' work.
 const LIGHTS_PER_TASK: usize = 256;
 
+/// The message for an active-cluster mask of another grid than the frame's.
+fn mask_for_another_grid(active: &ActiveClusters, grid: &ClusterGrid) -> String {
+    let [a, g] = [active.dims(), grid.dims()];
+    format!(
+        "active-cluster mask is for a {}x{}x{} grid, not this {}x{}x{} one",
+        a.x, a.y, a.z, g.x, g.y, g.z
+    )
+}
+
+/// Why [`Assigner::try_assign`] refused a frame: the message [`Assigner::assign`] would panic
+/// with.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InvalidFrame(pub String);
+
+impl std::fmt::Display for InvalidFrame {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InvalidFrame {}
+
 /// Runs light assignment and keeps all of its scratch storage between frames, so steady-state
 /// frames allocate nothing. One `Assigner` per concurrent frame; it uses the current rayon pool
 /// (install your own with `ThreadPool::install` to pick the thread count).
@@ -219,6 +241,7 @@ impl Assigner {
     /// when the camera comes from user input. (The camera's near and far are not used: depth is
     /// sliced by `grid`'s range, so an infinite far plane is fine.) Also when `lights`' columns
     /// differ in length, or hold more than `u32::MAX` lights (light indices are u32).
+    /// [`Assigner::try_assign`] returns these as errors.
     pub fn assign(
         &mut self,
         method: Method,
@@ -228,6 +251,46 @@ impl Assigner {
         out: &mut LightLists,
     ) -> AssignStats {
         self.assign_active(method, lights, camera, grid, None, out)
+    }
+
+    /// [`Assigner::assign`] that returns an error where `assign` panics (a camera
+    /// [`Camera::view_problem`] rejects, columns of different lengths, more than `u32::MAX`
+    /// lights), for engines whose cameras and light counts come from data. `out` is untouched
+    /// on an error.
+    pub fn try_assign(
+        &mut self,
+        method: Method,
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+        out: &mut LightLists,
+    ) -> Result<AssignStats, InvalidFrame> {
+        self.try_assign_active(method, lights, camera, grid, None, out)
+    }
+
+    /// [`Assigner::assign_active`] that returns an error where it panics (as
+    /// [`Assigner::try_assign`], and a mask for another grid).
+    pub fn try_assign_active(
+        &mut self,
+        method: Method,
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+        active: Option<&ActiveClusters>,
+        out: &mut LightLists,
+    ) -> Result<AssignStats, InvalidFrame> {
+        if let Some(problem) = camera.view_problem() {
+            return Err(InvalidFrame(format!(
+                "light assignment needs a valid camera: {problem}"
+            )));
+        }
+        if let Some(problem) = lights.problem() {
+            return Err(InvalidFrame(problem.into()));
+        }
+        if let Some(a) = active.filter(|a| a.dims() != grid.dims()) {
+            return Err(InvalidFrame(mask_for_another_grid(a, grid)));
+        }
+        Ok(self.assign_active(method, lights, camera, grid, active, out))
     }
 
     /// [`Assigner::assign`] for only the `active` clusters (see [`ActiveClusters`]): every other
@@ -252,10 +315,10 @@ impl Assigner {
             panic!("light assignment needs a valid camera: {problem}");
         }
         if let Some(a) = active {
-            assert_eq!(
-                a.dims(),
-                grid.dims(),
-                "active-cluster mask is for another grid"
+            assert!(
+                a.dims() == grid.dims(),
+                "{}",
+                mask_for_another_grid(a, grid)
             );
         }
         let frame = Frame {

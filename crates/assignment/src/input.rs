@@ -57,26 +57,30 @@ impl<'a> LightInput<'a> {
         self.x.is_empty()
     }
 
+    /// What makes these columns unusable, if anything: columns of different lengths, or more
+    /// lights than u32 indices reach. (Bad *values* — NaN, negative radii — are not a problem
+    /// here: such lights are skipped and counted in [`crate::AssignStats::rejected`].)
+    pub fn problem(&self) -> Option<&'static str> {
+        let n = self.x.len();
+        if !(self.y.len() == n && self.z.len() == n && self.radius.len() == n) {
+            return Some("light columns differ in length");
+        }
+        if let Some(s) = &self.spot
+            && !(s.dir_x.len() == n
+                && s.dir_y.len() == n
+                && s.dir_z.len() == n
+                && s.angle.len() == n)
+        {
+            return Some("spot columns differ in length from the light columns");
+        }
+        (n > u32::MAX as usize).then_some("more lights than fit in a u32 index")
+    }
+
     /// Panics unless all columns have the same length (a programming error, not bad data).
     pub(crate) fn assert_consistent(&self) {
-        let n = self.x.len();
-        assert!(
-            self.y.len() == n && self.z.len() == n && self.radius.len() == n,
-            "light columns differ in length"
-        );
-        if let Some(s) = &self.spot {
-            assert!(
-                s.dir_x.len() == n
-                    && s.dir_y.len() == n
-                    && s.dir_z.len() == n
-                    && s.angle.len() == n,
-                "spot columns differ in length from the light columns"
-            );
+        if let Some(problem) = self.problem() {
+            panic!("{problem}");
         }
-        assert!(
-            n <= u32::MAX as usize,
-            "more lights than fit in a u32 index"
-        );
     }
 }
 

@@ -77,7 +77,9 @@ mod profiling;
 mod search;
 
 pub use active::ActiveClusters;
-pub use assigner::{AppendStrategy, AssignStats, Assigner, Method, SERIAL_LIGHTS, coarser_grid};
+pub use assigner::{
+    AppendStrategy, AssignStats, Assigner, InvalidFrame, Method, SERIAL_LIGHTS, coarser_grid,
+};
 pub use input::{LightInput, SpotInput};
 pub use lists::LightLists;
 pub use pacing::{PacingLimits, Parallelism};

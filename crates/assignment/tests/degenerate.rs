@@ -600,6 +600,65 @@ fn a_light_whose_padded_radius_alone_overflows_f32_is_culled_in_f64() {
 }
 
 #[test]
+fn try_assign_returns_each_panic_of_assign_as_an_error_and_leaves_the_lists() {
+    // For engines whose cameras and light counts come from data: what `assign` panics on,
+    // `try_assign` returns, with the same message, and `out` keeps the last good frame.
+    let good = camera(64, 32);
+    let grid = ClusterGrid::new(UVec3::new(8, 4, 4), DepthSlicing::Log, 0.1, 100.0);
+    let lights = random_lights(&good, 50, 3);
+    let mut assigner = Assigner::new();
+    let mut lists = LightLists::new();
+    let stats = assigner
+        .try_assign(
+            Method::Refined,
+            &lights.input(false),
+            &good,
+            &grid,
+            &mut lists,
+        )
+        .unwrap();
+    let (want, want_stats) = assign(Method::Refined, &lights, &good, &grid);
+    assert_eq!((&lists, stats.pairs), (&want, want_stats.pairs));
+    let mut short = lights.input(false);
+    short.radius = &short.radius[1..];
+    let mut short_spot = lights.input(true);
+    short_spot.spot.as_mut().unwrap().angle = &[];
+    let other_grid = ClusterGrid::new(UVec3::new(4, 4, 4), DepthSlicing::Log, 0.1, 100.0);
+    let mask = myriad_assignment::ActiveClusters::new(&other_grid);
+    let no_height = Camera { height: 0, ..good };
+    let full = lights.input(false);
+    let cases = [
+        (&full, &no_height, None, "needs a valid camera"),
+        (&short, &good, None, "light columns differ in length"),
+        (&short_spot, &good, None, "spot columns differ"),
+        (
+            &full,
+            &good,
+            Some(&mask),
+            "mask is for a 4x4x4 grid, not this 8x4x4 one",
+        ),
+    ];
+    for (input, cam, active, needle) in cases {
+        let e = assigner
+            .try_assign_active(Method::Binary, input, cam, &grid, active, &mut lists)
+            .unwrap_err();
+        assert!(e.to_string().contains(needle), "{e}");
+        assert_eq!(lists, want, "{needle}: the lists changed");
+        let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut out = LightLists::new();
+            Assigner::new().assign_active(Method::Binary, input, cam, &grid, active, &mut out)
+        }))
+        .expect_err("assign panics where try_assign refuses");
+        let message = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap();
+        assert!(message.contains(needle), "{message}");
+    }
+}
+
+#[test]
 fn every_method_refuses_an_unusable_camera_with_one_clear_message() {
     // Once `linear` indexed out of bounds on a NaN field of view while the other methods culled
     // every light (and a zero height listed every light everywhere in `linear`).
