@@ -9,8 +9,11 @@
 
 use glam::{DMat3, DVec3, Mat3, Mat4, Vec2, Vec3};
 
-/// A perspective camera with wgpu's 0..1 clip depth. Fields are plain data; see
-/// `myriad-scene` for validation of values read from files.
+/// A perspective camera with wgpu's 0..1 clip depth, reversed (1 at `near`, 0 at `far`). View
+/// space is right-handed: the camera looks down its −Z, +Y is up on screen, +X right; view
+/// depth is the distance along the view direction (−z), as the grid's slices measure it; world
+/// coordinates are the scene's units, shared by the camera and the lights. Fields are plain data ([`Camera::problem`] names what makes one unusable); `fov_y` is in
+/// radians, while [`Camera::new`] takes degrees, as the scene file does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Eye position in world space.
