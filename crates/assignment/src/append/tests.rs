@@ -268,3 +268,47 @@ fn long_rows_and_tall_boxes_go_in_pieces_of_whole_clusters() {
     row.push(4, first + max, 5, Some(&view));
     assert_eq!((row.spans.len(), row.pairs), (0, 0));
 }
+
+/// The atomic counters' lists come out in ascending light order whatever order the fill
+/// visits the lights in (mutation audit: `sort_lists`, and its split over the pool, went
+/// untested: the tests' fills already ran in light order, so a sort that did nothing or sorted
+/// the wrong ranges passed). One task pushes the lights in descending order over 1280
+/// clusters, so the parallel sort splits twice and sorts ranges that start past pair 0.
+#[test]
+fn atomic_counters_sort_every_list_whatever_the_fill_order() {
+    let clusters = 1280usize;
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+    let mut task = CachePadded::new(TaskOutput::default());
+    task.buckets.resize_with(1, CachePadded::default);
+    let mut lists = vec![Vec::new(); clusters];
+    for light in (0..200u32).rev() {
+        let len = rng.random_range(1..120u32);
+        let first = rng.random_range(0..clusters as u32 - len);
+        task.buckets[0].push(light, first, len, None);
+        for c in first..first + len {
+            lists[c as usize].push(light);
+        }
+    }
+    let mut want = LightLists::default();
+    for mut list in lists {
+        list.sort_unstable();
+        want.offsets.push(want.indices.len() as u32);
+        want.counts.push(list.len() as u32);
+        want.indices.extend(list);
+    }
+    let tasks = vec![task];
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .unwrap();
+    for parallel in [false, true] {
+        let mut atomic = AtomicCounters::default();
+        let mut out = LightLists::default();
+        let pairs = pool
+            .install(|| atomic.assign(&tasks, 1, 1, clusters, None, parallel, u64::MAX, &mut out));
+        assert_eq!(pairs, Ok(want.indices.len()), "parallel {parallel}");
+        assert_eq!(out.offsets, want.offsets, "parallel {parallel}");
+        assert_eq!(out.counts, want.counts, "parallel {parallel}");
+        assert_eq!(out.indices, want.indices, "parallel {parallel}");
+    }
+}
