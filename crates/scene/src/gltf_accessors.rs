@@ -632,3 +632,83 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod boundary_tests {
+    //! The reader's bounds at their edges (mutation audit: a zero count with a view, a sparse
+    //! index equal to the count and a stride under the element size went untested).
+
+    use super::*;
+
+    fn root(bytes: usize, views: &str, accessors: &str) -> json::Root {
+        let text = format!(
+            r#"{{"asset": {{"version": "2.0"}},
+                "buffers": [{{"byteLength": {bytes}}}],
+                "bufferViews": [{views}],
+                "accessors": [{accessors}]}}"#
+        );
+        json::deserialize::from_str(&text).unwrap()
+    }
+
+    fn read_vec3(data: Vec<u8>, views: &str, accessors: &str) -> Result<Vec<Vec3>, String> {
+        let r = root(data.len(), views, accessors);
+        let buffers = [gltf::buffer::Data(data)];
+        BufferData {
+            root: &r,
+            buffers: &buffers,
+        }
+        .vec3(0)
+    }
+
+    /// The module docs: the `gltf` crate "computes `count - 1` on a zero count"; this reader
+    /// must not. A zero-count accessor with a view is empty, not a panic or an error.
+    #[test]
+    fn zero_count_accessor_with_a_view_is_empty() {
+        let v = read_vec3(
+            vec![0; 12],
+            r#"{"buffer": 0, "byteLength": 12}"#,
+            r#"{"bufferView": 0, "componentType": 5126, "count": 0, "type": "VEC3"}"#,
+        );
+        assert_eq!(v, Ok(vec![]));
+    }
+
+    /// A sparse index equal to the count is one past the last element: an error, not a write
+    /// past the end.
+    #[test]
+    fn sparse_index_equal_to_count_is_out_of_range() {
+        // View 0: sparse index 2 (u8) + padding; view 1: one VEC3 value.
+        let mut data = vec![2u8, 0, 0, 0];
+        data.extend([7.0f32, 8.0, 9.0].iter().flat_map(|v| v.to_le_bytes()));
+        let r = std::panic::catch_unwind(|| {
+            read_vec3(
+                data,
+                r#"{"buffer": 0, "byteLength": 1}, {"buffer": 0, "byteOffset": 4, "byteLength": 12}"#,
+                r#"{"componentType": 5126, "count": 2, "type": "VEC3",
+                    "sparse": {"count": 1, "indices": {"bufferView": 0, "componentType": 5121},
+                               "values": {"bufferView": 1}}}"#,
+            )
+        })
+        .expect("no panic");
+        let e = r.unwrap_err();
+        assert!(
+            e.contains("sparse index 2 is out of range (count 2)"),
+            "{e}"
+        );
+    }
+
+    /// A byteStride smaller than the element would read overlapping elements: refused.
+    #[test]
+    fn stride_smaller_than_the_element_is_an_error() {
+        let data: Vec<u8> = (0..9).flat_map(|i| (i as f32).to_le_bytes()).collect();
+        let e = read_vec3(
+            data,
+            r#"{"buffer": 0, "byteLength": 36, "byteStride": 4}"#,
+            r#"{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}"#,
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("byteStride 4 of bufferViews[0] is smaller than the element (12 bytes)"),
+            "{e}"
+        );
+    }
+}

@@ -891,3 +891,38 @@ fn chain(e: &dyn std::error::Error) -> String {
     }
     shown
 }
+
+fn scene_with_up(up: &str) -> String {
+    format!(
+        r#"{{"camera": {{"position":[0,2,10], "target":[0,2,0], "up":{up}, "fov_y_deg":60,
+            "width":64, "height":32, "near":0.1, "far":100}},
+          "grid": {{"x":4, "y":2, "z":8, "depth":"log"}}, "lights": []}}"#
+    )
+}
+
+/// `camera.up` is refused exactly when `Camera::basis_f64` would replace it by a world axis
+/// (its test is relative to |up|): checked on nearly parallel hints of very different lengths
+/// (mutation audit: only an exactly parallel `up` was tested).
+#[test]
+fn a_nearly_parallel_up_is_judged_relative_to_its_length() {
+    // (up, parallel?) for a view along −Z: the perpendicular part over |up| decides.
+    for (up, parallel) in [
+        ("[0, 1e-4, -1000]", true), // 1e-7 relative: the camera would pick its own roll
+        ("[0, 5e-4, -1e-3]", false), // 0.45 relative: a usable (if short) up hint
+        ("[0, 1, -3]", false),
+        ("[0, 0, -3]", true),
+    ] {
+        let text = scene_with_up(up);
+        let report = validate_json_str(&text, "up.json").unwrap();
+        let flagged = report
+            .problems
+            .iter()
+            .any(|p| p.path == "camera.up" && p.message.contains("parallel"));
+        assert_eq!(flagged, parallel, "up {up}: {report}");
+        assert_eq!(
+            Scene::from_json_str(&text, "up.json", LightPolicy::Strict).is_ok(),
+            !parallel,
+            "up {up}"
+        );
+    }
+}

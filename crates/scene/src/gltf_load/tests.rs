@@ -579,3 +579,211 @@ fn missing_files_name_the_path() {
     let source = std::error::Error::source(&e).expect("the OS error is the source");
     assert!(source.to_string().contains("No such file"), "{source}");
 }
+
+// What the module docs promise and no test checked (mutation audit).
+
+fn with_camera(camera: &str) -> String {
+    triangle_gltf(
+        [0, 1, 2],
+        &format!(
+            r#", "cameras": [{camera}],
+  "scenes": [{{"nodes": [0, 1]}}], "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 0, 5]}}]"#
+        ),
+    )
+}
+
+/// Every camera the module docs call invalid is an error naming the camera and the value;
+/// the boundary values next to them load.
+#[test]
+fn invalid_camera_projections_are_errors() {
+    let p = |body: &str| format!(r#"{{"type": "perspective", "perspective": {{{body}}}}}"#);
+    let o = |body: &str| format!(r#"{{"type": "orthographic", "orthographic": {{{body}}}}}"#);
+    for (camera, fragment) in [
+        (p(r#""yfov": 0, "znear": 0.1"#), "yfov 0 is not in (0, π)"),
+        (p(r#""yfov": 3.1415927, "znear": 0.1"#), "is not in (0, π)"),
+        (
+            p(r#""yfov": 1, "znear": 0"#),
+            "znear 0 is not finite and > 0",
+        ),
+        (p(r#""yfov": 1, "znear": 1e39"#), "is not finite and > 0"),
+        (
+            p(r#""yfov": 1, "znear": 1, "zfar": 1"#),
+            "zfar 1 is not finite and > znear 1",
+        ),
+        (
+            p(r#""yfov": 1, "znear": 1, "zfar": 1e39"#),
+            "is not finite and > znear",
+        ),
+        (
+            o(r#""xmag": 0, "ymag": 1, "znear": 0, "zfar": 1"#),
+            "orthographic xmag 0",
+        ),
+        (
+            o(r#""xmag": 1, "ymag": 0, "znear": 0, "zfar": 1"#),
+            "orthographic xmag 1, ymag 0",
+        ),
+        (
+            o(r#""xmag": 1, "ymag": 1, "znear": -1, "zfar": 1"#),
+            "znear -1",
+        ),
+        (
+            o(r#""xmag": 1, "ymag": 1, "znear": 1, "zfar": 1"#),
+            "zfar 1 are not valid",
+        ),
+        (
+            o(r#""xmag": 1, "ymag": 1, "znear": 0, "zfar": 1e39"#),
+            "are not valid",
+        ),
+    ] {
+        let e = load_str(&with_camera(&camera))
+            .expect_err(&camera)
+            .to_string();
+        assert!(
+            e.contains("cameras[0]") && e.contains(fragment),
+            "{camera}: {e}"
+        );
+    }
+    for camera in [
+        p(r#""yfov": 3.1415925, "znear": 1e-30, "zfar": 2e-30"#),
+        o(r#""xmag": -1, "ymag": 1, "znear": 0, "zfar": 1e-30"#),
+    ] {
+        let m = load_str(&with_camera(&camera)).expect(&camera);
+        assert_eq!(m.cameras.len(), 1, "{camera}");
+    }
+}
+
+/// Module docs: "Normals that are not unit length are normalised (with a warning naming the
+/// primitive)".
+#[test]
+fn non_unit_normals_are_normalised_with_a_warning() {
+    let bytes: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .chain(&[0.0f32, 0.0, 2.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0001])
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let text = format!(
+        r#"{{"asset": {{"version": "2.0"}},
+  "buffers": [{{"byteLength": 72, "uri": "data:application/octet-stream;base64,{}"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 36}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+                {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}}],
+  "meshes": [{{"name": "tri", "primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1}}}}]}}]}}"#,
+        base64(&bytes)
+    );
+    let model = load_str(&text).unwrap();
+    let normals = &model.meshes[0].primitives[0].normals;
+    // 2.0 is fixed; 1.0001 (length² off by 2e-4) is within the tolerance and kept bit for bit.
+    assert_eq!(normals[..], [Vec3::Z, Vec3::Z, Vec3::new(0.0, 0.0, 1.0001)]);
+    assert!(
+        model.warnings.iter().any(|w| w.contains("meshes[0]")
+            && w.contains("1 normal(s) were not unit length and were normalised")),
+        "{:?}",
+        model.warnings
+    );
+}
+
+/// A strip of four indices is two triangles of a strip, not of a fan.
+#[test]
+fn a_strip_of_four_loads_as_a_strip() {
+    // triangle_gltf has 3 vertices; 4 strip indices [0, 1, 2, 0]: strip (0,1,2),(2,1,0);
+    // fan (1,2,0),(2,0,0).
+    let text = triangle_gltf([0, 1, 2], "")
+        .replace(
+            r#""count": 3, "type": "SCALAR""#,
+            r#""count": 4, "type": "SCALAR""#,
+        )
+        .replace(
+            r#""byteOffset": 36, "byteLength": 6"#,
+            r#""byteOffset": 36, "byteLength": 8"#,
+        )
+        .replace(r#""indices": 1}"#, r#""indices": 1, "mode": 5}"#);
+    // (The buffer's 2 padding bytes after the 3 indices read as index 0.)
+    let model = load_str(&text).unwrap();
+    let p = &model.meshes[0].primitives[0];
+    assert_eq!(p.triangle_count(), 2);
+    // A strip's second triangle, (1, 0, 2), turns back: its flat normal is −Z. As a fan it
+    // would be (2, 0, 0), with no area.
+    assert_eq!(
+        p.normals[p.indices[3] as usize],
+        Vec3::NEG_Z,
+        "{:?}",
+        p.normals
+    );
+}
+
+/// Module docs: skins and animations are "left out, with a warning".
+#[test]
+fn animations_and_skins_are_warned_about() {
+    let text = triangle_gltf(
+        [0, 1, 2],
+        r#", "animations": [{"channels": [], "samplers": []}]"#,
+    );
+    let model = load_str(&text).unwrap();
+    assert!(
+        model
+            .warnings
+            .iter()
+            .any(|w| w == "ignored 1 animation(s): the static pose is loaded"),
+        "{:?}",
+        model.warnings
+    );
+}
+
+/// `LoadOptions::light_cutoff` must be finite and > 0.
+#[test]
+fn a_bad_light_cutoff_is_an_error() {
+    for cutoff in [0.0, -1.0, f32::INFINITY, f32::NAN] {
+        let options = LoadOptions {
+            light_cutoff: cutoff,
+            ..LoadOptions::default()
+        };
+        let e = Model::from_gltf_slice(
+            triangle_gltf([0, 1, 2], "").as_bytes(),
+            "t.gltf",
+            None,
+            &options,
+        )
+        .expect_err(&format!("{cutoff}"))
+        .to_string();
+        assert!(
+            e.contains("light cut-off must be finite and > 0"),
+            "{cutoff}: {e}"
+        );
+    }
+}
+
+/// An image URI inside the model's folder that names a FIFO (or a folder) is refused before the
+/// `gltf` crate reads it to its end (a FIFO with no writer would block the load forever).
+#[cfg(unix)]
+#[test]
+fn an_image_uri_naming_a_fifo_in_the_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let made = std::process::Command::new("mkfifo")
+        .arg(dir.path().join("pipe.png"))
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let text = triangle_gltf(
+        [0, 1, 2],
+        r#", "images": [{"uri": "pipe.png"}], "textures": [{"source": 0}],
+  "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]"#,
+    );
+    let path = dir.path().join("m.gltf");
+    std::fs::write(&path, text).unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(
+            Model::load(&path, &LoadOptions::default())
+                .map(|_| ())
+                .map_err(|e| e.to_string()),
+        );
+    });
+    let e = rx
+        .recv_timeout(std::time::Duration::from_secs(10))
+        .expect("the load hung on a FIFO")
+        .unwrap_err();
+    assert!(
+        e.contains("pipe.png") && e.contains("not a regular file"),
+        "{e}"
+    );
+}
