@@ -134,13 +134,27 @@ pub const SERIAL_LIGHTS: usize = 512;
 /// to the lights' work.
 const LIGHTS_PER_TASK: usize = 256;
 
-/// The message for an active-cluster mask of another grid than the frame's.
-fn mask_for_another_grid(active: &ActiveClusters, grid: &ClusterGrid) -> String {
-    let [a, g] = [active.dims(), grid.dims()];
-    format!(
-        "active-cluster mask is for a {}x{}x{} grid, not this {}x{}x{} one",
-        a.x, a.y, a.z, g.x, g.y, g.z
-    )
+/// What makes a frame's input unusable: what [`Assigner::assign_active`] panics with and
+/// [`Assigner::try_assign_active`] returns.
+fn frame_problem(
+    lights: &LightInput<'_>,
+    camera: &Camera,
+    grid: &ClusterGrid,
+    active: Option<&ActiveClusters>,
+) -> Option<String> {
+    if let Some(problem) = camera.view_problem() {
+        return Some(format!("light assignment needs a valid camera: {problem}"));
+    }
+    if let Some(problem) = lights.problem() {
+        return Some(problem.into());
+    }
+    let [a, g] = [active?.dims(), grid.dims()];
+    (a != g).then(|| {
+        format!(
+            "active-cluster mask is for a {}x{}x{} grid, not this {}x{}x{} one",
+            a.x, a.y, a.z, g.x, g.y, g.z
+        )
+    })
 }
 
 /// Why [`Assigner::try_assign`] refused a frame: the message [`Assigner::assign`] would panic
@@ -279,16 +293,8 @@ impl Assigner {
         active: Option<&ActiveClusters>,
         out: &mut LightLists,
     ) -> Result<AssignStats, InvalidFrame> {
-        if let Some(problem) = camera.view_problem() {
-            return Err(InvalidFrame(format!(
-                "light assignment needs a valid camera: {problem}"
-            )));
-        }
-        if let Some(problem) = lights.problem() {
-            return Err(InvalidFrame(problem.into()));
-        }
-        if let Some(a) = active.filter(|a| a.dims() != grid.dims()) {
-            return Err(InvalidFrame(mask_for_another_grid(a, grid)));
+        if let Some(problem) = frame_problem(lights, camera, grid, active) {
+            return Err(InvalidFrame(problem));
         }
         Ok(self.assign_active(method, lights, camera, grid, active, out))
     }
@@ -311,15 +317,8 @@ impl Assigner {
         active: Option<&ActiveClusters>,
         out: &mut LightLists,
     ) -> AssignStats {
-        if let Some(problem) = camera.view_problem() {
-            panic!("light assignment needs a valid camera: {problem}");
-        }
-        if let Some(a) = active {
-            assert!(
-                a.dims() == grid.dims(),
-                "{}",
-                mask_for_another_grid(a, grid)
-            );
+        if let Some(problem) = frame_problem(lights, camera, grid, active) {
+            panic!("{problem}");
         }
         let frame = Frame {
             method,

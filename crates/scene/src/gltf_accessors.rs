@@ -433,7 +433,7 @@ mod tests {
     use super::*;
 
     /// A document with one buffer of `bytes` and the given views and accessors (JSON text).
-    fn root(bytes: usize, views: &str, accessors: &str) -> json::Root {
+    pub(super) fn root(bytes: usize, views: &str, accessors: &str) -> json::Root {
         let text = format!(
             r#"{{"asset": {{"version": "2.0"}},
                 "buffers": [{{"byteLength": {bytes}}}],
@@ -638,17 +638,8 @@ mod boundary_tests {
     //! The reader's bounds at their edges (mutation audit: a zero count with a view, a sparse
     //! index equal to the count and a stride under the element size went untested).
 
+    use super::tests::root;
     use super::*;
-
-    fn root(bytes: usize, views: &str, accessors: &str) -> json::Root {
-        let text = format!(
-            r#"{{"asset": {{"version": "2.0"}},
-                "buffers": [{{"byteLength": {bytes}}}],
-                "bufferViews": [{views}],
-                "accessors": [{accessors}]}}"#
-        );
-        json::deserialize::from_str(&text).unwrap()
-    }
 
     fn read_vec3(data: Vec<u8>, views: &str, accessors: &str) -> Result<Vec<Vec3>, String> {
         let r = root(data.len(), views, accessors);
