@@ -9,6 +9,7 @@
 //! * [`Camera`]: position/target/up, vertical field of view, resolution, near/far, and the matrices
 //!   `view_from_world` and `clip_from_view` (wgpu depth range 0..1, reversed Z: 1 at near, 0 at far). Lights are brought to view space
 //!   *camera-relative* ([`Camera::view_from_world_point`]) so huge world coordinates lose no precision.
+//!   [`Camera::from_matrices`] reads one back from an engine's own view and projection matrices.
 //! * [`ClusterGrid`]: X×Y×Z clusters. Tiles are uniform in NDC; depth is cut by [`DepthSlicing`]
 //!   (linear, logarithmic, or logarithmic with a special first slice). The grid's depth range defaults
 //!   to the camera's near/far and may be overridden for fitted (dynamic) ranges.
@@ -38,6 +39,7 @@
 
 mod bounds;
 mod camera;
+mod camera_from_matrices;
 mod grid;
 pub mod oracle;
 mod padding;
@@ -45,6 +47,7 @@ mod planes;
 
 pub use bounds::{SpotCone, spot_bounding_sphere};
 pub use camera::Camera;
+pub use camera_from_matrices::{CameraMatrixError, ClipSpace};
 pub use grid::{ClusterGrid, DepthSlicing, InvalidGrid};
 pub use padding::{RADIUS_PAD, pad_radius};
 pub use planes::PlaneSets;

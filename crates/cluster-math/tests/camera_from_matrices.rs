@@ -1,0 +1,457 @@
+//! `Camera::from_matrices`: an engine's matrices read back into the camera they describe, so its
+//! pixels and the clusters agree; and each pair no camera can describe refused with its reason.
+
+use glam::camera::{lh, rh};
+use glam::{Mat4, Vec3, vec3};
+use myriad_cluster_math::{Camera, CameraMatrixError, ClipSpace};
+use proptest::prelude::*;
+
+/// NDC (x, y, depth) of a world point under `clip_from_world`.
+fn ndc(clip_from_world: Mat4, world: Vec3) -> Vec3 {
+    let clip = clip_from_world * world.extend(1.0);
+    clip.truncate() / clip.w
+}
+
+/// Points in front of a camera at the origin looking down −Z, spread over the frustum and depth.
+fn points_in_front(eye: Vec3, forward: Vec3, right: Vec3, up: Vec3) -> Vec<Vec3> {
+    let mut points = Vec::new();
+    for depth in [0.5f32, 3.0, 40.0] {
+        for (x, y) in [(0.0, 0.0), (0.3, -0.2), (-0.25, 0.15), (0.1, 0.3)] {
+            points.push(eye + forward * depth + right * (x * depth) + up * (y * depth));
+        }
+    }
+    points
+}
+
+fn assert_same_ndc(engine: Mat4, camera: &Camera, points: &[Vec3]) {
+    for &p in points {
+        let (want, got) = (ndc(engine, p), ndc(camera.clip_from_world(), p));
+        assert!(
+            (want - got).abs().max_element() < 1e-4,
+            "point {p}: engine NDC {want}, camera NDC {got}"
+        );
+    }
+}
+
+#[test]
+fn glam_right_handed_pairs_give_the_camera_they_describe() {
+    let eye = vec3(3.0, 4.0, -7.0);
+    let view = rh::view::look_at_mat4(eye, vec3(0.0, 1.0, 2.0), Vec3::Y);
+    let forward = (vec3(0.0, 1.0, 2.0) - eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    let points = points_in_front(eye, forward, right, up);
+    let fov = 50f32.to_radians();
+    let aspect = 1920.0 / 1080.0;
+
+    let cases = [
+        (
+            rh::proj::directx::perspective(fov, aspect, 0.1, 500.0),
+            ClipSpace::ZeroToOneYUp,
+            500.0,
+        ),
+        (
+            rh::proj::opengl::perspective(fov, aspect, 0.1, 500.0),
+            ClipSpace::MinusOneToOneYUp,
+            500.0,
+        ),
+        (
+            rh::proj::directx::perspective_infinite(fov, aspect, 0.1),
+            ClipSpace::ZeroToOneYUp,
+            f32::INFINITY,
+        ),
+        (
+            rh::proj::directx::perspective_infinite_reverse(fov, aspect, 0.1),
+            ClipSpace::ZeroToOneYUp,
+            f32::INFINITY,
+        ),
+    ];
+    for (projection, depth, far) in cases {
+        let camera = Camera::from_matrices(view, projection, depth, 1920, 1080)
+            .unwrap_or_else(|e| panic!("{projection}: {e}"));
+        assert!(
+            (camera.position - eye).abs().max_element() < 1e-5,
+            "{camera:?}"
+        );
+        assert!((camera.fov_y - fov).abs() < 1e-6, "{camera:?}");
+        assert!((camera.near - 0.1).abs() < 1e-6, "{camera:?}");
+        if far.is_finite() {
+            assert!((camera.far / far - 1.0).abs() < 1e-4, "{camera:?}");
+            assert!(camera.problem().is_none(), "{camera:?}");
+        } else {
+            assert_eq!(camera.far, far, "{projection}");
+            assert!(camera.view_problem().is_none() && camera.problem().is_some());
+        }
+        // x and y of every point land where the engine puts them (depth conventions differ).
+        for &p in &points {
+            let (want, got) = (ndc(projection * view, p), ndc(camera.clip_from_world(), p));
+            assert!(
+                (want.truncate() - got.truncate()).abs().max_element() < 1e-4,
+                "{projection}: point {p}: engine NDC {want}, camera NDC {got}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_y_down_projection_is_the_same_camera_when_named_so() {
+    let view = rh::view::look_at_mat4(vec3(1.0, 5.0, 2.0), vec3(0.0, 0.0, -3.0), Vec3::Y);
+    let (fov, aspect) = (1.1, 1536.0 / 768.0);
+    let y_up = rh::proj::directx::perspective(fov, aspect, 0.2, 90.0);
+    let y_down = rh::proj::vulkan::perspective(fov, aspect, 0.2, 90.0);
+    let want = Camera::from_matrices(view, y_up, ClipSpace::ZeroToOneYUp, 1536, 768).unwrap();
+    let got = Camera::from_matrices(view, y_down, ClipSpace::ZeroToOneYDown, 1536, 768).unwrap();
+    assert_close(&got, &want);
+    // Read as y up, the Vulkan matrix shows the world upside down and mirrored: refused.
+    assert_eq!(
+        Camera::from_matrices(view, y_down, ClipSpace::ZeroToOneYUp, 1536, 768),
+        Err(CameraMatrixError::Mirrored)
+    );
+}
+
+#[test]
+fn this_crates_own_matrices_round_trip_at_the_edges() {
+    let cameras = [
+        Camera::new(
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            60.0,
+            1920,
+            1080,
+            0.1,
+            100.0,
+        ),
+        // Narrow and wide fields of view, extreme depth ranges, tall and 1-pixel targets.
+        Camera::new(
+            vec3(1.0, 2.0, 3.0),
+            vec3(4.0, 2.0, -9.0),
+            Vec3::Y,
+            0.01,
+            640,
+            480,
+            1e-3,
+            1e6,
+        ),
+        Camera::new(
+            vec3(-5.0, 0.0, 2.0),
+            vec3(0.0, 0.0, 2.0),
+            Vec3::Z,
+            179.0,
+            300,
+            900,
+            1e-6,
+            1.0,
+        ),
+        Camera::new(
+            Vec3::ZERO,
+            vec3(0.0, -1.0, 0.0),
+            Vec3::Y,
+            45.0,
+            1,
+            1,
+            0.5,
+            2.0,
+        ),
+        // Looking straight down (the fallback up), and a rolled camera.
+        Camera::new(
+            vec3(0.0, 10.0, 0.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            70.0,
+            1536,
+            768,
+            0.05,
+            80.0,
+        ),
+        Camera::new(
+            Vec3::ZERO,
+            Vec3::X,
+            vec3(0.0, 1.0, 1.0),
+            70.0,
+            800,
+            600,
+            0.05,
+            80.0,
+        ),
+    ];
+    for original in cameras {
+        let camera = Camera::from_matrices(
+            original.view_from_world(),
+            original.clip_from_view(),
+            ClipSpace::ZeroToOneYUp,
+            original.width,
+            original.height,
+        )
+        .unwrap_or_else(|e| panic!("{original:?}: {e}"));
+        assert_close(&camera, &original);
+        let (r, u, f) = original.basis_f64();
+        let points = points_in_front(original.position, f.as_vec3(), r.as_vec3(), u.as_vec3());
+        assert_same_ndc(original.clip_from_world(), &camera, &points);
+    }
+}
+
+fn assert_close(camera: &Camera, original: &Camera) {
+    let scale = original.position.abs().max_element().max(1.0);
+    assert!(
+        (camera.position - original.position).abs().max_element() <= 1e-6 * scale,
+        "position {} vs {}",
+        camera.position,
+        original.position
+    );
+    let rotation = (camera.view_rotation_f64() - original.view_rotation_f64()).abs();
+    let rotation_error = [rotation.x_axis, rotation.y_axis, rotation.z_axis]
+        .iter()
+        .map(|c| c.max_element())
+        .fold(0.0, f64::max);
+    assert!(
+        rotation_error < 2e-6,
+        "rotation off by {rotation_error}: {camera:?} vs {original:?}"
+    );
+    assert!(
+        (camera.fov_y / original.fov_y - 1.0).abs() < 1e-5,
+        "{camera:?} vs {original:?}"
+    );
+    assert!(
+        (camera.near / original.near - 1.0).abs() < 1e-5,
+        "{camera:?} vs {original:?}"
+    );
+    assert!(
+        (camera.far / original.far - 1.0).abs() < 1e-3,
+        "{camera:?} vs {original:?}"
+    );
+    assert_eq!(
+        (camera.width, camera.height),
+        (original.width, original.height)
+    );
+}
+
+#[test]
+fn huge_world_coordinates_keep_the_view_direction() {
+    // One unit ahead of a camera at 10⁶ would round the target by 0.06 m: a turned view.
+    for position in [vec3(1e6, -2e6, 3e5), vec3(3e7, 0.0, 0.0)] {
+        let original = Camera::new(
+            position,
+            position + vec3(0.3, 0.1, -1.0),
+            Vec3::Y,
+            60.0,
+            1920,
+            1080,
+            0.1,
+            1000.0,
+        );
+        let camera = Camera::from_matrices(
+            original.view_from_world(),
+            original.clip_from_view(),
+            ClipSpace::ZeroToOneYUp,
+            1920,
+            1080,
+        )
+        .unwrap();
+        assert_close(&camera, &original);
+    }
+}
+
+#[test]
+fn a_left_handed_pair_is_refused_as_mirrored_and_the_mirrored_world_works() {
+    let (eye, at) = (vec3(2.0, 3.0, -6.0), vec3(0.0, 1.0, 0.0));
+    let view = lh::view::look_at_mat4(eye, at, Vec3::Y);
+    let projection = lh::proj::directx::perspective(1.0, 4.0 / 3.0, 0.1, 100.0);
+    assert_eq!(
+        Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 800, 600),
+        Err(CameraMatrixError::Mirrored)
+    );
+    // The fix the error names: mirror world x for the view matrix and for the points (lights).
+    let mirror = Mat4::from_scale(vec3(-1.0, 1.0, 1.0));
+    let camera =
+        Camera::from_matrices(view * mirror, projection, ClipSpace::ZeroToOneYUp, 800, 600)
+            .unwrap();
+    let forward = (at - eye).normalize();
+    let right = Vec3::Y.cross(forward).normalize();
+    let up = forward.cross(right);
+    for p in points_in_front(eye, forward, right, up) {
+        let want = ndc(projection * view, p);
+        let got = ndc(camera.clip_from_world(), vec3(-p.x, p.y, p.z));
+        assert!(
+            (want.truncate() - got.truncate()).abs().max_element() < 1e-4,
+            "point {p}: engine NDC {want}, camera NDC {got}"
+        );
+    }
+}
+
+#[test]
+fn flipping_both_screen_axes_is_a_roll_and_one_alone_a_mirror() {
+    let original = Camera::new(
+        vec3(1.0, 1.0, 1.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        60.0,
+        640,
+        480,
+        0.1,
+        50.0,
+    );
+    let view = original.view_from_world();
+    let flip = |x: f32, y: f32| Mat4::from_scale(vec3(x, y, 1.0)) * original.clip_from_view();
+    let rolled = Camera::from_matrices(view, flip(-1.0, -1.0), ClipSpace::ZeroToOneYUp, 640, 480)
+        .expect("a half turn about the view axis is a camera");
+    let (r, u, f) = original.basis_f64();
+    let points = points_in_front(original.position, f.as_vec3(), r.as_vec3(), u.as_vec3());
+    assert_same_ndc(flip(-1.0, -1.0) * view, &rolled, &points);
+    assert!(
+        (rolled.up.normalize() + u.as_vec3()).length() < 1e-5,
+        "{rolled:?}"
+    );
+    for (x, y) in [(1.0, -1.0), (-1.0, 1.0)] {
+        assert_eq!(
+            Camera::from_matrices(view, flip(x, y), ClipSpace::ZeroToOneYUp, 640, 480),
+            Err(CameraMatrixError::Mirrored),
+            "flip ({x}, {y})"
+        );
+    }
+}
+
+#[test]
+fn matrices_no_camera_describes_are_refused_with_the_reason() {
+    let original = Camera::new(
+        vec3(1.0, 2.0, 3.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        60.0,
+        640,
+        480,
+        0.1,
+        50.0,
+    );
+    let (view, projection) = (original.view_from_world(), original.clip_from_view());
+    let read = |view: Mat4, projection: Mat4| {
+        Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 640, 480)
+    };
+
+    // A TAA jitter of half a pixel: the NDC shift is reported.
+    let mut jittered = projection;
+    jittered.z_axis.x = 1.0 / 640.0;
+    match read(view, jittered) {
+        Err(CameraMatrixError::OffCenter { shift }) => {
+            assert!(
+                (shift[0] + 1.0 / 640.0).abs() < 1e-9 && shift[1] == 0.0,
+                "{shift:?}"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+    let orthographic = rh::proj::directx::orthographic(-1.0, 1.0, -0.75, 0.75, 0.1, 50.0);
+    assert!(matches!(
+        read(view, orthographic),
+        Err(CameraMatrixError::NotPerspective(_))
+    ));
+    for (column, row) in [(0, 3), (1, 3), (3, 3), (0, 2), (1, 2), (0, 1)] {
+        let mut mixed = projection;
+        mixed.col_mut(column)[row] = 0.25;
+        assert!(
+            matches!(read(view, mixed), Err(CameraMatrixError::NotPerspective(_))),
+            "entry of column {column}, row {row}: {:?}",
+            read(view, mixed)
+        );
+    }
+    let mut shifted = projection;
+    shifted.w_axis.y = 0.25;
+    assert!(matches!(read(view, shifted), Err(CameraMatrixError::OffCenter { .. })));
+    let mut sheared = projection;
+    sheared.y_axis.x = 0.3;
+    assert!(matches!(
+        read(view, sheared),
+        Err(CameraMatrixError::NotPerspective(_))
+    ));
+
+    let scaled = Mat4::from_scale(Vec3::splat(2.0)) * view;
+    assert!(matches!(
+        read(scaled, projection),
+        Err(CameraMatrixError::NotRigid { .. })
+    ));
+    let mut projective = view;
+    projective.x_axis.w = 0.01;
+    assert!(matches!(
+        read(projective, projection),
+        Err(CameraMatrixError::NotRigid { .. })
+    ));
+
+    assert!(matches!(
+        Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 480, 480),
+        Err(CameraMatrixError::AspectMismatch { .. })
+    ));
+    assert_eq!(
+        Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 0, 480),
+        Err(CameraMatrixError::EmptyTarget)
+    );
+    let mut nan = view;
+    nan.w_axis.y = f32::NAN;
+    assert_eq!(read(nan, projection), Err(CameraMatrixError::NonFinite));
+
+    // No depth at all (B = 0: every depth maps to one NDC value), and a range behind the eye.
+    let mut flat = projection;
+    flat.w_axis.z = 0.0;
+    assert!(matches!(
+        read(view, flat),
+        Err(CameraMatrixError::DepthRange { .. })
+    ));
+    let mut behind = projection;
+    behind.z_axis.z = -2.0;
+    assert!(matches!(
+        read(view, behind),
+        Err(CameraMatrixError::DepthRange { .. })
+    ));
+    // Near and far swapped is the usual way to build a reversed-Z projection: read as one.
+    let swapped = rh::proj::directx::perspective(original.fov_y, 640.0 / 480.0, 50.0, 0.1);
+    let camera = read(view, swapped).unwrap();
+    assert!(
+        (camera.near - 0.1).abs() < 1e-6 && (camera.far - 50.0).abs() < 1e-4,
+        "{camera:?}"
+    );
+    // A scaled projection is the same projection.
+    let camera = read(view, projection * 3.0).unwrap();
+    assert_close(&camera, &original);
+    // Every refusal says what is wrong in words.
+    let message = read(view, jittered).unwrap_err().to_string();
+    assert!(message.contains("unjittered"), "{message}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+    #[test]
+    fn any_usable_camera_round_trips(
+        position in prop::array::uniform3(-1e4f32..1e4),
+        direction in prop::array::uniform3(-1f32..1.0),
+        up in prop::array::uniform3(-1f32..1.0),
+        fov_deg in 0.05f32..178.0,
+        width in 1u32..4096,
+        height in 1u32..4096,
+        near_exp in -5f32..2.0,
+        range_exp in 0.1f32..7.0,
+    ) {
+        let direction = Vec3::from(direction);
+        prop_assume!(direction.length() > 1e-2);
+        let position = Vec3::from(position);
+        let near = 10f32.powf(near_exp);
+        let original = Camera::new(
+            position,
+            position + direction,
+            Vec3::from(up),
+            fov_deg,
+            width,
+            height,
+            near,
+            near * 10f32.powf(range_exp),
+        );
+        prop_assume!(original.problem().is_none());
+        let camera = Camera::from_matrices(
+            original.view_from_world(),
+            original.clip_from_view(),
+            ClipSpace::ZeroToOneYUp,
+            width,
+            height,
+        );
+        let camera = camera.map_err(|e| TestCaseError::fail(format!("{original:?}: {e}")))?;
+        assert_close(&camera, &original);
+    }
+}
