@@ -356,7 +356,10 @@ fn matrices_no_camera_describes_are_refused_with_the_reason() {
     }
     let mut shifted = projection;
     shifted.w_axis.y = 0.25;
-    assert!(matches!(read(view, shifted), Err(CameraMatrixError::OffCenter { .. })));
+    assert!(matches!(
+        read(view, shifted),
+        Err(CameraMatrixError::OffCenter { .. })
+    ));
     let mut sheared = projection;
     sheared.y_axis.x = 0.3;
     assert!(matches!(

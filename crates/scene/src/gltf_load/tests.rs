@@ -467,6 +467,22 @@ fn spec_violations_are_refused_or_reported() {
             text.replace(r#""version": "2.0""#, r#""version": "two""#),
             "asset.version \"two\" is not MAJOR.MINOR",
         ),
+        // A right major version does not excuse a minor one that is not a number.
+        (
+            text.replace(r#""version": "2.0""#, r#""version": "2.x""#),
+            "asset.version \"2.x\" is not MAJOR.MINOR",
+        ),
+        (
+            text.replace(r#""version": "2.0""#, r#""version": "2.""#),
+            "asset.version \"2.\" is not MAJOR.MINOR",
+        ),
+        (
+            text.replace(
+                r#""version": "2.0""#,
+                r#""version": "2.0", "minVersion": "2.0b""#,
+            ),
+            "asset.minVersion \"2.0b\" is not MAJOR.MINOR",
+        ),
         (
             text.replace(r#""byteLength": 44"#, r#""byteLength": 10"#),
             "bufferViews[0]: bytes 0..0+36 lie outside buffer 0 (10 bytes)",
@@ -786,4 +802,146 @@ fn an_image_uri_naming_a_fifo_in_the_folder_is_refused() {
         e.contains("pipe.png") && e.contains("not a regular file"),
         "{e}"
     );
+}
+
+#[test]
+fn a_rotation_that_is_not_unit_length_is_normalised_not_a_scale() {
+    // glTF requires unit quaternions; exporters round. A quaternion of length 2 read as is would
+    // scale the mesh by 4 (a rotation matrix built from q scales by |q|²).
+    let world = |rotation: &str| {
+        let extra = format!(r#", "nodes": [{{"mesh": 0, "rotation": {rotation}}}]"#);
+        load_str(&triangle_gltf([0, 1, 2], &extra))
+            .unwrap()
+            .instances[0]
+            .world_from_local
+    };
+    assert_eq!(world("[0, 0, 0, 2]"), glam::Mat4::IDENTITY);
+    let quarter = world("[0, 0, 0.7071068, 0.7071068]");
+    let doubled = world("[0, 0, 1.4142136, 1.4142136]");
+    assert!(quarter.abs_diff_eq(doubled, 1e-6), "{quarter} vs {doubled}");
+    assert!(
+        (quarter.transform_point3(Vec3::X) - Vec3::Y).length() < 1e-6,
+        "{quarter}"
+    );
+}
+
+#[test]
+fn a_factor_past_f32_fails_the_file_whichever_factor_it_is() {
+    // 1e39 is a finite JSON number that f32 reads as infinity.
+    let material = |pbr: &str, normal: &str| {
+        let extra = format!(
+            r#", "images": [{{"uri": "missing.png"}}], "textures": [{{"source": 0}}],
+  "materials": [{{"pbrMetallicRoughness": {{{pbr}}}{normal}}}],
+  "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}]"#
+        );
+        Model::from_gltf_slice(
+            triangle_gltf([0, 1, 2], &extra).as_bytes(),
+            "t.gltf",
+            None,
+            &LoadOptions::without_images(),
+        )
+    };
+    for (pbr, normal) in [
+        (r#""metallicFactor": 1e39"#, ""),
+        (r#""roughnessFactor": -1e39"#, ""),
+        ("", r#", "normalTexture": {"index": 0, "scale": 1e39}"#),
+        (r#""baseColorFactor": [1, 1e39, 1, 1]"#, ""),
+    ] {
+        let e = material(pbr, normal).unwrap_err().to_string();
+        assert!(
+            e.contains("materials[0]") && e.contains("a factor is not finite"),
+            "{pbr}{normal}: {e}"
+        );
+    }
+    assert!(material(r#""metallicFactor": 0.5"#, "").is_ok());
+}
+
+#[test]
+fn only_a_uv_set_other_than_texcoord_0_is_warned_about() {
+    let with_set = |set: u32| {
+        let extra = format!(
+            r#", "images": [{{"uri": "missing.png"}}], "textures": [{{"source": 0}}],
+  "materials": [{{"name": "m", "emissiveTexture": {{"index": 0, "texCoord": {set}}}}}],
+  "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}]"#
+        );
+        let text = triangle_gltf([0, 1, 2], &extra);
+        Model::from_gltf_slice(
+            text.as_bytes(),
+            "t.gltf",
+            None,
+            &LoadOptions::without_images(),
+        )
+        .unwrap()
+    };
+    let model = with_set(0);
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+    let model = with_set(1);
+    assert_eq!(
+        model.warnings,
+        ["materials[0] \"m\": samples a UV set other than TEXCOORD_0, which is not loaded"]
+    );
+    assert_eq!(model.materials[0].emissive_texture.unwrap().tex_coord, 1);
+}
+
+#[test]
+fn lights_at_the_edges_of_what_is_allowed_are_kept() {
+    // f32 π and π/2 written out in full, so the loader reads exactly those values.
+    let lights = [
+        // A cone of exactly π (the widest the assignment takes): kept, warned about (past π/2).
+        r#"{"type": "spot", "range": 2, "spot": {"outerConeAngle": 3.1415927410125732}}"#,
+        // Exactly the spec's π/2 with an inner angle of 0: kept without a word.
+        r#"{"type": "spot", "range": 2, "spot": {"innerConeAngle": 0, "outerConeAngle": 1.5707963705062866}}"#,
+        // Inner equal to outer is outside [0, outer): clamped and reported.
+        r#"{"type": "spot", "range": 2, "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.5}}"#,
+        // Black, or of intensity 0, with a range: lights nothing, but is a valid light.
+        r#"{"type": "point", "range": 2, "intensity": 0}"#,
+        r#"{"type": "point", "range": 2, "color": [0, 0, 0]}"#,
+    ];
+    let nodes: Vec<String> = (0..lights.len())
+        .map(|i| format!(r#"{{"extensions": {{"KHR_lights_punctual": {{"light": {i}}}}}}}"#))
+        .collect();
+    let extra = format!(
+        r#", "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{}]}}}},
+  "scenes": [{{"nodes": [{}]}}], "nodes": [{}]"#,
+        lights.join(", "),
+        (0..lights.len())
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        nodes.join(", ")
+    );
+    let model = load_str(&triangle_gltf([0, 1, 2], &extra)).unwrap();
+    assert!(model.skipped_lights.is_empty(), "{:?}", model.warnings);
+    assert_eq!(model.lights.len(), lights.len());
+    assert_eq!(
+        model.lights.get(0).spot.unwrap().angle,
+        std::f32::consts::PI
+    );
+    assert_eq!(
+        model.lights.get(1).spot.unwrap().angle,
+        std::f32::consts::FRAC_PI_2
+    );
+    assert_eq!(model.warnings.len(), 2, "{:?}", model.warnings);
+    assert!(
+        model.warnings[0]
+            .starts_with("KHR_lights_punctual lights[0]: outerConeAngle 3.1415927 is above"),
+        "{:?}",
+        model.warnings
+    );
+    assert!(
+        model.warnings[1]
+            .contains("lights[2]: innerConeAngle 0.5 is not in [0, outerConeAngle 0.5)"),
+        "{:?}",
+        model.warnings
+    );
+    match model.placed_lights[2].kind {
+        PunctualKind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            assert!(inner_cone_angle < outer_cone_angle && inner_cone_angle > 0.49)
+        }
+        other => panic!("{other:?}"),
+    }
 }
