@@ -1,14 +1,14 @@
-//! Using myriad's light assignment from an engine: the engine keeps its own light type, hands
-//! the assigner plain SoA columns, a camera and a cluster grid every frame, and gets back CSR
-//! light lists ready to upload.
+//! Using myriad's light assignment from an engine: the engine keeps its own light type and its
+//! own camera matrices, hands the assigner plain SoA columns, a camera read from those matrices
+//! and a cluster grid every frame, and gets back CSR light lists ready to upload.
 //!
 //! Only `myriad-cluster-math` and `myriad-assignment` are used (no scene files, no facade), as an
 //! engine that depends on just those two crates would. Run with
 //! `cargo run --release --example engine_integration`.
 
 use myriad_assignment::{Assigner, LightInput, LightLists, Method};
-use myriad_cluster_math::glam::{UVec3, Vec3};
-use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use myriad_cluster_math::glam::{UVec3, Vec3, camera};
+use myriad_cluster_math::{Camera, ClipSpace, ClusterGrid, DepthSlicing};
 
 /// The engine's own light record (array of structs).
 struct EngineLight {
@@ -46,23 +46,21 @@ impl LightColumns {
 }
 
 fn main() {
-    // A 1920×1080 camera at the origin looking down −Z, and a 16×9×24 grid with log slices.
-    let camera = Camera::new(
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        Vec3::Y,
-        60.0,
-        1920,
-        1080,
+    // The engine's own camera, as the two matrices it renders with: at the origin looking down
+    // −Z, 60° vertical field of view, a reversed-Z projection with an infinite far plane.
+    let view = camera::rh::view::look_at_mat4(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+    let projection = camera::rh::proj::directx::perspective_infinite_reverse(
+        60f32.to_radians(),
+        1920.0 / 1080.0,
         0.1,
-        100.0,
     );
-    let grid = ClusterGrid::new(
-        UVec3::new(16, 9, 24),
-        DepthSlicing::Log,
-        camera.near,
-        camera.far,
-    );
+    // Read back into a `Camera` (an error would say why: a jittered projection, a left-handed
+    // pair, a size other than the projection's aspect ratio...).
+    let camera = Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 1920, 1080)
+        .expect("a centred right-handed perspective");
+    // The far plane is infinite; the grid slices depth over a finite range of its own (lights
+    // past it are culled): a 16×9×24 grid with log slices out to 100 m.
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, 100.0);
 
     // 10 000 lights on a deterministic spiral in front of the camera.
     let mut lights: Vec<EngineLight> = (0..10_000)

@@ -245,7 +245,11 @@ fn outputs_never_replace_their_inputs_or_fifos() {
         use std::os::unix::fs::FileTypeExt;
         let fifo = dir.join("fifo");
         let made = Command::new("mkfifo").arg(&fifo).status();
-        if made.is_ok_and(|s| s.success()) {
+        assert!(
+            made.is_ok_and(|s| s.success()),
+            "mkfifo (coreutils) made no FIFO"
+        );
+        {
             let (sent, received) = std::sync::mpsc::channel();
             let reader_path = fifo.clone();
             std::thread::spawn(move || {
@@ -280,9 +284,10 @@ fn a_fifo_input_is_refused_at_once_even_when_the_output_exists() {
     let (scene, model) = (dir.join("f.json"), dir.join("f.glb"));
     for fifo in [&scene, &model] {
         let made = Command::new("mkfifo").arg(fifo).status();
-        if !made.is_ok_and(|s| s.success()) {
-            return;
-        }
+        assert!(
+            made.is_ok_and(|s| s.success()),
+            "mkfifo (coreutils) made no FIFO"
+        );
     }
     // Existing outputs: the check that an output is not an input once opened the input to
     // compare, and a FIFO's open waits for a writer that never comes.

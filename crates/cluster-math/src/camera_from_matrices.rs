@@ -272,7 +272,8 @@ fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, Camera
     // come out negative. A denominator that small of the wrong sign is read as infinite.
     let (near, far_denominator) = (b / (ndc_near - a), ndc_far - a);
     let far = b / far_denominator;
-    let far = if far_denominator == 0.0 || (far < 0.0 && far_denominator.abs() <= 1e-6) {
+    // (An exact 0 gives ±∞: +∞ stands, −∞ is that case too.)
+    let far = if far < 0.0 && far_denominator.abs() <= 1e-6 {
         f64::INFINITY
     } else {
         far

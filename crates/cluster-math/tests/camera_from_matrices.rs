@@ -387,6 +387,23 @@ fn matrices_no_camera_describes_are_refused_with_the_reason() {
         Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 0, 480),
         Err(CameraMatrixError::EmptyTarget)
     );
+    // Infinite far planes a rounding away from exact: still infinite, not a negative far.
+    let mut rounded = rh::proj::directx::perspective_infinite(1.0, 640.0 / 480.0, 0.1);
+    rounded.z_axis.z *= 1.0 - f32::EPSILON;
+    let mut rounded_reverse =
+        rh::proj::directx::perspective_infinite_reverse(1.0, 640.0 / 480.0, 0.1);
+    rounded_reverse.z_axis.z = -1e-9;
+    for projection in [rounded, rounded_reverse] {
+        let camera = read(view, projection).unwrap_or_else(|e| panic!("{projection}: {e}"));
+        assert_eq!(camera.far, f32::INFINITY, "{projection}");
+        assert!((camera.near - 0.1).abs() < 1e-6, "{camera:?}");
+    }
+    // An eye so far out that no f32 point lies in front of it.
+    let far_out = Mat4::from_translation(vec3(-1e38, 0.0, 0.0));
+    assert_eq!(
+        read(far_out, projection),
+        Err(CameraMatrixError::PositionTooLarge)
+    );
     let mut nan = view;
     nan.w_axis.y = f32::NAN;
     assert_eq!(read(nan, projection), Err(CameraMatrixError::NonFinite));

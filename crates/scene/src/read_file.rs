@@ -63,10 +63,12 @@ mod tests {
         // A FIFO with no writer: refused at once (opening it would block forever).
         let fifo = dir.path().join("fifo");
         let made = std::process::Command::new("mkfifo").arg(&fifo).status();
-        if made.is_ok_and(|s| s.success()) {
-            let e = read_regular_file(&fifo).unwrap_err();
-            assert!(e.to_string().contains("not a regular file"), "{e}");
-        }
+        assert!(
+            made.is_ok_and(|s| s.success()),
+            "mkfifo (coreutils) made no FIFO"
+        );
+        let e = read_regular_file(&fifo).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
         let file = dir.path().join("a.txt");
         std::fs::write(&file, b"bytes").unwrap();
         assert_eq!(read_regular_file(&file).unwrap(), b"bytes");
