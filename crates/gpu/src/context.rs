@@ -117,7 +117,7 @@ impl GpuContext {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
-            .map_err(|e| GpuError::Device(e.to_string()))
+            .map_err(GpuError::Wait)
     }
 }
 

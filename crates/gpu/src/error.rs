@@ -1,4 +1,12 @@
 //! What can go wrong on the GPU side, each with a message that says what to do.
+//!
+//! What the renderer checks itself comes back here: inputs that do not fit, buffers past the
+//! device's binding limit, loop budgets, limits, read-back and waits. wgpu's own validation and
+//! out-of-memory errors do not: wgpu hands them to the device's uncaptured-error handler (an
+//! engine's device keeps its own; wgpu's default panics with the message), as for every other
+//! call an engine makes on that device. The renderer checks ahead what would reach it — sizes
+//! against limits, targets against the pipelines (`renderer/target_check.rs`, inside a
+//! validation error scope) — so a frame it accepts does not.
 
 /// Errors of the renderer.
 #[derive(Debug, thiserror::Error)]
@@ -78,9 +86,9 @@ pub enum GpuError {
     /// Mapping a read-back buffer failed.
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
-    /// The device reported a validation or out-of-memory error.
-    #[error("wgpu reported an error: {0}")]
-    Device(String),
+    /// Waiting for the GPU to finish its work failed (wgpu's `PollError`).
+    #[error("waiting for the GPU failed: {0}")]
+    Wait(#[from] wgpu::PollError),
 }
 
 /// What to change when a pass would pass the adapter's loop limit.
