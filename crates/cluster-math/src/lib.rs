@@ -26,8 +26,11 @@
 //!   conservative against them.
 //!
 //! ## What it refuses to do
-//! It does not validate user input (that is `myriad-scene`'s job, which turns bad files into errors);
-//! misuse here — a zero-sized grid, `near >= far` — is a programming error and panics via `assert!`.
+//! It does not read user files (that is `myriad-scene`'s job, which turns bad files into errors).
+//! `ClusterGrid::new` panics on a bad grid (a zero size, `near >= far`), a programming error; for
+//! values from user settings, [`ClusterGrid::try_new`] returns [`InvalidGrid`],
+//! [`Camera::problem`] names what makes a camera unusable, and [`Camera::from_matrices`] returns
+//! [`CameraMatrixError`].
 //!
 //! ## Conventions
 //! Right-handed view space, camera looking down −Z, +Y up (glam `look_at_rh`). "View depth" is the
