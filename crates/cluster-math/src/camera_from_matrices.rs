@@ -16,8 +16,8 @@
 //! * **Orthographic, sheared or non-rigid** matrices (a scaled view matrix would scale light radii
 //!   too), and an aspect ratio other than the target's `width / height`.
 //!
-//! The clip depth's direction is read off the matrix (reversed or not; an infinite far plane gives
-//! `far = f32::INFINITY`, which the assignment accepts with a finite grid but
+//! The clip depth's direction is read off the matrix (reversed or not; an infinite far plane, or
+//! one the depth never reaches, gives `far = f32::INFINITY`, which the assignment accepts with a finite grid but
 //! [`Camera::problem`] refuses for rendering); its range, 0..1 or −1..1, and whether NDC y points
 //! up or down on screen cannot be, so the caller names them ([`ClipSpace`]). Everything is computed in f64; the result's own matrices equal the inputs to f32
 //! rounding (tested).
@@ -249,13 +249,12 @@ fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, Camera
             "x' or y' or z' mixes x and y (shear or rotation)",
         ));
     }
-    let shift = [m.z_axis.x * m.z_axis.w, m.z_axis.y * m.z_axis.w];
-    if !(zero(m.z_axis.x) && zero(m.z_axis.y) && zero(m.w_axis.x) && zero(m.w_axis.y)) {
-        let shift = if zero(m.w_axis.x) && zero(m.w_axis.y) {
-            shift
-        } else {
-            [f64::NAN, f64::NAN]
-        };
+    if !(zero(m.w_axis.x) && zero(m.w_axis.y)) {
+        return Err(NotPerspective("x' or y' has a constant term"));
+    }
+    if !(zero(m.z_axis.x) && zero(m.z_axis.y)) {
+        // NDC x = sx·x / (w_sign·z) + shift_x·…: the centre's offset is z_axis.xy · w_sign.
+        let shift = [m.z_axis.x * m.z_axis.w, m.z_axis.y * m.z_axis.w];
         return Err(CameraMatrixError::OffCenter { shift });
     }
     // z_ndc = (A·z + B) / (w_sign·z); with depth d = w_sign·z, z_ndc = a + B/d, a = A·w_sign.
@@ -267,18 +266,14 @@ fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, Camera
     };
     // Reversed when NDC depth falls with distance (B > 0): near maps to 1, far to `low`.
     let (ndc_near, ndc_far) = if b > 0.0 { (1.0, low) } else { (low, 1.0) };
-    // An infinite far plane puts `ndc_far − a` at exactly 0 only when the matrix was built
-    // exactly; rounded, it is a hair off either way, and on the wrong side the far plane would
-    // come out negative. A denominator that small of the wrong sign is read as infinite.
-    let (near, far_denominator) = (b / (ndc_near - a), ndc_far - a);
-    let far = b / far_denominator;
-    // (An exact 0 gives ±∞: +∞ stands, −∞ is that case too.)
-    let far = if far < 0.0 && far_denominator.abs() <= 1e-6 {
-        f64::INFINITY
-    } else {
-        far
-    };
-    if !(near > 0.0 && near.is_finite() && (far > near || far == f64::INFINITY)) {
+    // NDC depth runs monotonically from ±∞ at the eye to `a` at infinity, so it reaches the far
+    // plane's value at a positive depth only if `a` lies beyond it. Where it never does (an
+    // infinite far plane: `a` exactly at the value, or a rounding short of it, or a projection
+    // that leaves part of the depth range unused), nothing far away is clipped: far is infinite.
+    // The near plane must be reached, or no depth at all is visible.
+    let (near, far) = (b / (ndc_near - a), b / (ndc_far - a));
+    let far = if far > 0.0 { far } else { f64::INFINITY };
+    if !(near > 0.0 && near.is_finite() && far > near) {
         return Err(CameraMatrixError::DepthRange { near, far });
     }
     Ok(Projection {

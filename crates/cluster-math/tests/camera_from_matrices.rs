@@ -354,12 +354,25 @@ fn matrices_no_camera_describes_are_refused_with_the_reason() {
             read(view, mixed)
         );
     }
-    let mut shifted = projection;
-    shifted.w_axis.y = 0.25;
-    assert!(matches!(
-        read(view, shifted),
-        Err(CameraMatrixError::OffCenter { .. })
-    ));
+    for (column, row) in [(3, 0), (3, 1)] {
+        let mut constant = projection;
+        constant.col_mut(column)[row] = 0.25;
+        assert!(matches!(
+            read(view, constant),
+            Err(CameraMatrixError::NotPerspective(_))
+        ));
+    }
+    for scale in [(0.0, 1.0), (1.0, 0.0)] {
+        let zeroed = Mat4::from_scale(vec3(scale.0, scale.1, 1.0)) * projection;
+        assert!(matches!(
+            read(view, zeroed),
+            Err(CameraMatrixError::NotPerspective(_))
+        ));
+    }
+    // A jitter under a thousandth of a pixel is rounding, not an off-centre projection.
+    let mut rounding = projection;
+    rounding.z_axis.x = 1e-5;
+    assert!(read(view, rounding).is_ok());
     let mut sheared = projection;
     sheared.y_axis.x = 0.3;
     assert!(matches!(
@@ -393,10 +406,14 @@ fn matrices_no_camera_describes_are_refused_with_the_reason() {
     let mut rounded_reverse =
         rh::proj::directx::perspective_infinite_reverse(1.0, 640.0 / 480.0, 0.1);
     rounded_reverse.z_axis.z = -1e-9;
-    for projection in [rounded, rounded_reverse] {
+    // Depth that never falls to 0 (its limit at infinity is 0.5): nothing far is clipped.
+    let mut half_used = rh::proj::directx::perspective_infinite_reverse(1.0, 640.0 / 480.0, 0.1);
+    half_used.z_axis.z = -0.5;
+    // (Depth 1, the near plane, is at 0.1 / (1 − 0.5) there.)
+    for (projection, near) in [(rounded, 0.1), (rounded_reverse, 0.1), (half_used, 0.2)] {
         let camera = read(view, projection).unwrap_or_else(|e| panic!("{projection}: {e}"));
         assert_eq!(camera.far, f32::INFINITY, "{projection}");
-        assert!((camera.near - 0.1).abs() < 1e-6, "{camera:?}");
+        assert!((camera.near - near).abs() < 1e-6, "{camera:?}");
     }
     // An eye so far out that no f32 point lies in front of it.
     let far_out = Mat4::from_translation(vec3(-1e38, 0.0, 0.0));
