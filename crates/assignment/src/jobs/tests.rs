@@ -627,3 +627,37 @@ fn point_lights_in_spot_columns_are_listed_and_counted_as_without_them() {
         want.len()
     );
 }
+
+/// Each cluster's bounding sphere is centred on the centroid of its cell's eight corners and
+/// reaches the farthest of them, padded like a light's radius: it holds the cell and is no
+/// larger than that. (A sphere around another centre still holds the cell, so the oracle
+/// suites cannot see it; a spot's rows then keep clusters its cone misses.)
+#[test]
+fn cluster_spheres_are_centred_on_their_cells() {
+    let (camera, grid, _) = frame();
+    let mut spheres = Vec::new();
+    cluster_bounding_spheres(&camera, &grid, &mut spheres);
+    assert_eq!(spheres.len(), grid.cluster_count() as usize);
+    let d = grid.dims();
+    for (i, j, k) in [(0, 0, 0), (5, 3, 2), (23, 11, 15), (12, 6, 8), (0, 11, 9)] {
+        let cell = Cell::of_cluster(&camera, &grid, i, j, k);
+        let corners = cell.corners();
+        let centroid = corners.iter().sum::<DVec3>() / 8.0;
+        let farthest = corners
+            .iter()
+            .map(|c| c.distance(centroid))
+            .fold(0.0, f64::max);
+        let s = spheres[grid.cluster_id(i, j, k) as usize];
+        let context = format!("cluster ({i}, {j}, {k}) of {d}: {s}, centroid {centroid}");
+        assert!(
+            (s.truncate().as_dvec3() - centroid).length() <= 1e-6 * centroid.length(),
+            "{context}"
+        );
+        let padded = geometry::pad_radius(s.x, s.y, -s.z, farthest as f32);
+        assert!(
+            s.w >= farthest as f32 && s.w <= padded * (1.0 + 1e-6),
+            "{context}: radius {}, farthest corner {farthest}",
+            s.w
+        );
+    }
+}

@@ -374,6 +374,83 @@ mod tests {
     }
 
     #[test]
+    fn a_tiny_light_is_judged_at_its_own_scale_however_deep_the_cell() {
+        // The cut keeps lengths local to the light only if it ends about a radius past the ball:
+        // one that reached a fixed length further (2 or 4, or 4ε / depth) kept errors of ulps of
+        // that length, larger than these lights. Cells and lights about 1e-16 across, the cell's
+        // far wall from 1e9 to 1e30: the answer is the one of the cell cut just beyond the ball.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(16);
+        let (mut touching, mut close) = (0, 0);
+        for n in 0..4000 {
+            let cell = crate::oracle::random_cell(&mut rng, 1e-16);
+            let r = 1e-16 * 10f64.powf(rng.random_range(-1.0..0.5));
+            let p = cell_point(
+                &cell,
+                rng.random_range(-0.3..1.3),
+                rng.random_range(-0.3..1.3),
+                rng.random_range(-0.1..0.05),
+            ) + DVec3::new(0.0, 0.0, rng.random_range(-2.0..2.0) * r);
+            let local = Cell {
+                depths: [cell.depths[0], (-p.z + 2.0 * r).max(cell.depths[0]) * 1.5],
+                ..cell
+            };
+            let deep = Cell {
+                depths: [cell.depths[0], [1e9, 1e20, 1e30][n % 3]],
+                ..cell
+            };
+            let distance = distance_to_cell(p, &local);
+            let want = distance <= r;
+            touching += want as usize;
+            close += ((distance - r).abs() < 0.05 * r) as usize;
+            assert_eq!(
+                sphere_intersects_cell(p, r, &deep),
+                want,
+                "{p} r {r} {deep:?}: {distance} from the cut cell"
+            );
+        }
+        assert!(
+            (500..3500).contains(&touching) && close > 20,
+            "{touching} of 4000 touch, {close} within 5% of touching"
+        );
+    }
+
+    #[test]
+    fn a_cell_shrunk_to_a_point_is_at_the_distance_of_that_point() {
+        // Every edge of the cell has length zero: the distance is the one to its only point.
+        let cell = Cell {
+            x_slopes: [0.25, 0.25],
+            y_slopes: [-0.5, -0.5],
+            depths: [4.0, 4.0],
+        };
+        let point = cell.corner(0, 0, 0);
+        assert_eq!(point, DVec3::new(1.0, -2.0, -4.0));
+        assert_eq!(distance_to_cell(point, &cell), 0.0);
+        for offset in [
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(0.0, -1.5, 0.0),
+            DVec3::new(0.0, 0.0, 2.0),
+            DVec3::new(-1.0, 2.0, -2.0),
+        ] {
+            let d = distance_to_cell(point + offset, &cell);
+            assert!(
+                (d - offset.length()).abs() <= 1e-12,
+                "{offset}: {d}, want {}",
+                offset.length()
+            );
+            assert!(sphere_intersects_cell(
+                point + offset,
+                offset.length() * 1.001,
+                &cell
+            ));
+            assert!(!sphere_intersects_cell(
+                point + offset,
+                offset.length() * 0.999,
+                &cell
+            ));
+        }
+    }
+
+    #[test]
     fn cell_of_cluster_matches_grid_edges() {
         use crate::DepthSlicing;
         use glam::{UVec3, Vec3};

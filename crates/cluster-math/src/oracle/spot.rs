@@ -1370,6 +1370,74 @@ mod tests {
     }
 
     #[test]
+    fn a_spot_near_the_eye_keeps_its_tolerance_however_deep_the_cell() {
+        // The test of `a_cell_reaching_very_deep_does_not_widen_a_tiny_spots_tolerance` near the
+        // eye: everything 1e-14 times as large, the spot 1e-20 long. The cut must end a range
+        // past the spot's far depth (about 2e-14), not a fixed length beyond it: a cut at depth 2
+        // or more made the band 1e-12 of that, ten million ranges.
+        let (s, r) = (1e-14, 1e-20);
+        let wall = DVec3::new(1.0, 0.0, 0.1).normalize();
+        let on_wall = DVec3::new(0.2, 0.0, -2.0) * s;
+        for far in [10.0 * s, 1e7] {
+            let cell = Cell {
+                x_slopes: [-0.1, 0.1],
+                y_slopes: [-0.1, 0.1],
+                depths: [s, far],
+            };
+            let spot = |gap: f64| SpotVolume {
+                apex: on_wall + wall * gap,
+                direction: -wall,
+                range: r,
+                angle: 0.5,
+            };
+            assert!(spot_intersects_cell(&spot(0.95 * r), &cell), "far {far}");
+            assert!(!spot_intersects_cell(&spot(1.05 * r), &cell), "far {far}");
+            assert!(!spot_intersects_cell(&spot(3.0 * r), &cell), "far {far}");
+        }
+    }
+
+    #[test]
+    fn a_negative_range_is_empty_even_inside_the_cell() {
+        // The apex inside the cell would make any spot touch it; a negative range, however
+        // small (well inside the ball test's rounding band), is the empty set.
+        let cell = unit_cell();
+        let inside = SpotVolume {
+            apex: DVec3::new(0.1, -0.2, -1.5),
+            direction: DVec3::NEG_Z,
+            range: 1.0,
+            angle: 0.3,
+        };
+        assert!(spot_intersects_cell(&inside, &cell));
+        for range in [-1e-300, -1e-20, -1e-15] {
+            let empty = SpotVolume { range, ..inside };
+            assert!(!spot_intersects_cell(&empty, &cell), "range {range}");
+        }
+    }
+
+    /// The public engine is GJK, the feature search only where it stalls: on random cases GJK
+    /// decides nearly every case past the quick checks, and the feature search alone never
+    /// hands over to it. (`engines_agree_on_random_cases` compares the two whichever runs.)
+    #[test]
+    fn gjk_decides_and_the_feature_search_only_takes_over() {
+        let mut rng = Pcg64::seed_from_u64(17);
+        let mut routes = [0; 3];
+        for case in 0..2000 {
+            let cell = random_cell(&mut rng, [1.0, 1e6, 1e-3][case % 3]);
+            let angle = random_angle(&mut rng);
+            let spot = random_spot_near(&mut rng, &cell, angle);
+            let (_, route) = classify(&spot, &cell, Engine::GjkThenFeatures);
+            routes[route as usize] += 1;
+            let (_, alone) = classify(&spot, &cell, Engine::FeaturesOnly);
+            assert_ne!(alone, Route::Gjk, "case {case}: {spot:?} {cell:?}");
+        }
+        let [quick, gjk, features] = routes;
+        assert!(
+            gjk > 500 && gjk > 20 * features,
+            "routes: quick {quick}, gjk {gjk}, features {features}"
+        );
+    }
+
+    #[test]
     fn descent_points_away_from_the_closest_part_of_the_volume() {
         // A 45° spot from the origin down −z with range 1: its rim is the circle of radius
         // sin 45° at depth cos 45°.
@@ -1400,6 +1468,139 @@ mod tests {
         ));
         // Inside the volume: no descent.
         assert_eq!(spot.descent(DVec3::new(0.1, 0.0, -0.5)), None);
+    }
+
+    #[test]
+    fn descent_behind_the_apex_points_from_it_and_the_closed_boundary_has_none() {
+        // The 45° spot of `descent_points_away_from_the_closest_part_of_the_volume`.
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let spot = ConvexSpot {
+            apex: DVec3::ZERO,
+            axis: DVec3::NEG_Z,
+            range: 1.0,
+            cos_angle: h,
+            sin_angle: h,
+        };
+        // Behind the apex (closest to it): the unit vector from the apex, on the axis and off it.
+        assert_eq!(spot.descent(DVec3::new(0.0, 0.0, 2.0)), Some(DVec3::Z));
+        let behind = DVec3::new(0.3, 0.4, 1.2);
+        let got = spot.descent(behind).expect("outside the volume");
+        assert!((got - behind / 1.3).length() < 1e-12, "{got}");
+        // On the cap and on the side: the closed volume holds them.
+        assert_eq!(spot.descent(DVec3::new(0.0, 0.0, -1.0)), None);
+        assert_eq!(spot.descent(DVec3::new(0.0, 0.6, -0.8)), None);
+        assert_eq!(spot.descent(DVec3::new(0.5, 0.0, -0.5)), None);
+        // Just outside each: a descent again.
+        assert!(spot.descent(DVec3::new(0.0, 0.0, -1.0 - 1e-12)).is_some());
+        assert!(spot.descent(DVec3::new(0.5 + 1e-12, 0.0, -0.5)).is_some());
+    }
+
+    /// GJK's reduction step on its own: the point of a simplex's hull nearest the origin, at a
+    /// vertex (the first or another), inside an edge (and not past its end), inside a triangle,
+    /// with a hint along it; a tetrahedron around the origin encloses it. (The feature search
+    /// answers for GJK whenever it stalls, so the oracle's answers cannot show a reduction that
+    /// stops short; this can.)
+    #[test]
+    fn closest_to_origin_finds_the_hulls_nearest_point() {
+        let simplex = |points: &[DVec3]| {
+            let mut s = Simplex::empty();
+            points.iter().for_each(|&p| s.push(p));
+            s
+        };
+        let v = DVec3::new;
+        let near = |got: DVec3, want: DVec3| (got - want).length() < 1e-12;
+        for (points, want) in [
+            // Vertices: the second of a triangle, the end of an edge past which the line passes
+            // nearer, the first of a segment.
+            (
+                vec![v(2.0, 1.0, 0.0), v(1.0, 0.0, 0.0), v(2.0, -1.0, 0.0)],
+                v(1.0, 0.0, 0.0),
+            ),
+            (vec![v(3.0, 1.0, 0.0), v(1.0, 1.0, 0.0)], v(1.0, 1.0, 0.0)),
+            (vec![v(0.0, 2.0, 0.0), v(3.0, 3.0, 0.0)], v(0.0, 2.0, 0.0)),
+            // Inside an edge, off its middle, alone and as the nearest part of a triangle.
+            (vec![v(-1.0, 1.0, 0.0), v(3.0, 1.0, 0.0)], v(0.0, 1.0, 0.0)),
+            (
+                vec![v(-1.0, 1.0, 0.0), v(3.0, 1.0, 0.0), v(1.0, 4.0, 0.0)],
+                v(0.0, 1.0, 0.0),
+            ),
+            // Inside a triangle, and the same triangle with a fourth point farther off.
+            (
+                vec![v(1.0, -1.0, 1.0), v(-1.0, -1.0, 1.0), v(0.0, 2.0, 1.0)],
+                v(0.0, 0.0, 1.0),
+            ),
+            (
+                vec![
+                    v(1.0, -1.0, 1.0),
+                    v(-1.0, -1.0, 1.0),
+                    v(0.0, 2.0, 1.0),
+                    v(0.0, 0.0, 5.0),
+                ],
+                v(0.0, 0.0, 1.0),
+            ),
+        ] {
+            let reduced = closest_to_origin(&simplex(&points));
+            assert!(near(reduced.point, want), "{points:?}: {}", reduced.point);
+            let hint = reduced.hint.normalize();
+            assert!(
+                near(hint, want.normalize()),
+                "{points:?}: hint {}",
+                reduced.hint
+            );
+            assert!(
+                (reduced.enclosed_norm - want.length()).abs() < 1e-12,
+                "{points:?}"
+            );
+            assert!(reduced.simplex.len <= 3);
+            assert!(reduced.simplex.points().iter().all(|p| points.contains(p)));
+        }
+        // A tetrahedron around the origin encloses it, whatever the order of its points.
+        let around = [
+            v(1.0, 1.0, 1.0),
+            v(-1.0, -1.0, 1.0),
+            v(-1.0, 1.0, -1.0),
+            v(1.0, -1.0, -1.0),
+        ];
+        for order in [
+            [0, 1, 2, 3],
+            [1, 0, 2, 3],
+            [0, 2, 1, 3],
+            [3, 2, 1, 0],
+            [2, 3, 0, 1],
+        ] {
+            let points = order.map(|n| around[n] * 0.5 + v(0.1, 0.2, -0.1));
+            let reduced = closest_to_origin(&simplex(&points));
+            assert!(reduced.enclosed_norm < 1e-12, "{points:?}");
+        }
+        // Random tetrahedra, some far off-centre: enclosed exactly when the origin's barycentric
+        // coordinates (solved for here) are all positive.
+        let mut rng = Pcg64::seed_from_u64(18);
+        let mut enclosing = 0;
+        for _ in 0..2000 {
+            let offset = random_unit(&mut rng) * rng.random_range(0.0..2.0);
+            let points: [DVec3; 4] = std::array::from_fn(|_| {
+                random_unit(&mut rng) * rng.random_range(0.5..4.0) + offset
+            });
+            let [a, b, c, d] = points;
+            let m = glam::DMat3::from_cols(b - a, c - a, d - a);
+            let l = m.inverse() * -a;
+            let weights = [1.0 - l.x - l.y - l.z, l.x, l.y, l.z];
+            if weights.iter().any(|w| w.abs() < 1e-6) {
+                continue;
+            }
+            let inside = weights.iter().all(|&w| w > 0.0);
+            enclosing += inside as usize;
+            let norm = closest_to_origin(&simplex(&points)).enclosed_norm;
+            assert_eq!(
+                norm < 1e-9,
+                inside,
+                "{points:?}: {norm}, weights {weights:?}"
+            );
+        }
+        assert!(
+            (100..1900).contains(&enclosing),
+            "{enclosing} of 2000 enclose the origin"
+        );
     }
 
     /// Test 3: huge coordinates (cells a million times farther and larger).
