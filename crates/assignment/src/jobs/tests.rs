@@ -637,7 +637,7 @@ fn cluster_spheres_are_centred_on_their_cells() {
     let (camera, grid, _) = frame();
     let mut spheres = Vec::new();
     cluster_bounding_spheres(&camera, &grid, &mut spheres);
-    assert_eq!(spheres.len(), grid.cluster_count() as usize);
+    assert_eq!(spheres.len(), grid.cluster_count());
     let d = grid.dims();
     for (i, j, k) in [(0, 0, 0), (5, 3, 2), (23, 11, 15), (12, 6, 8), (0, 11, 9)] {
         let cell = Cell::of_cluster(&camera, &grid, i, j, k);
