@@ -273,4 +273,22 @@ mod tests {
             assert!(e.contains(fragment), "{e}");
         }
     }
+
+    #[test]
+    fn a_slot_between_two_lists_that_no_list_owns_is_an_error() {
+        // Cluster 5 lists light 0 at indices[0] and cluster 6 light 1 at indices[2]; indices[1]
+        // belongs to neither, though the last list ends where `indices` does.
+        let mut dump = one_pair();
+        dump.indices = vec![0, 1, 1];
+        dump.counts[6] = 1;
+        dump.offsets[6] = 2;
+        dump.offsets[7..].fill(3);
+        let e = dump.validate().unwrap_err().to_string();
+        assert_eq!(e, "indices[1..2] belong to no cluster's list");
+        // Without the stray slot the lists are a partition.
+        dump.indices.remove(1);
+        dump.offsets[6] = 1;
+        dump.offsets[7..].fill(2);
+        dump.check_against(&grid(), 2).unwrap();
+    }
 }

@@ -249,4 +249,46 @@ mod tests {
         let c = compare(&lists(&[&[5]]), &lists(&[&[]]));
         assert_eq!((c.false_positives, c.false_positive_ratio), (1, 0.0));
     }
+
+    /// Idle time is waited through, asleep or spinning: at least the time asked for.
+    #[test]
+    fn idling_waits_at_least_its_time() {
+        let time = std::time::Duration::from_millis(30);
+        for idle in [Idle::Sleep(time), Idle::Busy(time)] {
+            let start = Instant::now();
+            idle.wait();
+            let waited = start.elapsed();
+            assert!(waited >= time, "{idle:?} returned after {waited:?}");
+        }
+    }
+
+    /// `measure` reports microseconds: the three slowest of five timed runs fit in the wall time
+    /// of the whole call, and a frame of a thousand lights takes more than 0.1 µs.
+    #[test]
+    fn measured_times_are_microseconds() {
+        let scene = crate::render::RenderScene::default_scene(1000, 64, 36).unwrap();
+        let input = crate::light_input(&scene.lights);
+        let mut exact = LightLists::new();
+        Assigner::new().assign(
+            Method::Exact,
+            &input,
+            &scene.camera,
+            &scene.grid,
+            &mut exact,
+        );
+        let start = Instant::now();
+        let r = measure(
+            Method::Binary,
+            &input,
+            &scene.camera,
+            &scene.grid,
+            &exact,
+            Timing::back_to_back(5),
+        )
+        .unwrap();
+        let wall_us = start.elapsed().as_secs_f64() * 1e6;
+        assert_eq!((r.runs, r.misses), (5, 0), "{r:?}");
+        assert!(r.min_us > 0.1 && r.min_us <= r.median_us, "{r:?}");
+        assert!(r.median_us * 3.0 <= wall_us, "{r:?} in {wall_us} µs");
+    }
 }

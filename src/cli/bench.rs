@@ -206,3 +206,44 @@ fn exit_code(report: &Report) -> ExitCode {
         ExitCode::SUCCESS
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(misses: &[u64]) -> Report {
+        Report {
+            scene: "test".into(),
+            lights: 1,
+            lights_skipped: 0,
+            grid: [1, 1, 1],
+            threads: 1,
+            core_link: None,
+            methods: misses
+                .iter()
+                .map(|&misses| MethodResult {
+                    method: "binary".into(),
+                    median_us: 1.0,
+                    min_us: 1.0,
+                    runs: 1,
+                    pairs: 1,
+                    false_positive_ratio: 0.0,
+                    misses,
+                    bytes: 12,
+                    effective_gb_s: 0.0,
+                    visible_lights: 1,
+                    pooled_runs: 0,
+                })
+                .collect(),
+        }
+    }
+
+    /// Any method that misses a pair fails the run (no method here can be made to miss from the
+    /// command line: they are all right).
+    #[test]
+    fn a_method_with_a_miss_fails_the_run() {
+        assert_eq!(exit_code(&report(&[0, 0])), ExitCode::SUCCESS);
+        assert_eq!(exit_code(&report(&[0, 1])), ExitCode::FAILURE);
+        assert_eq!(exit_code(&report(&[2])), ExitCode::FAILURE);
+    }
+}

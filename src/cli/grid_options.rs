@@ -104,4 +104,16 @@ mod tests {
             .to_string();
         assert!(e.contains("68719476736 clusters"), "{e}");
     }
+
+    #[test]
+    fn a_near_slice_must_be_deeper_than_zero() {
+        let e = parse_slicing("log_near:0").unwrap_err().to_string();
+        assert!(e.contains("log_near:0") && e.contains("> 0"), "{e}");
+        assert_eq!(
+            parse_slicing("log_near:1e-30").unwrap(),
+            DepthSlicing::LogWithNearSlice {
+                first_slice_depth: 1e-30
+            }
+        );
+    }
 }

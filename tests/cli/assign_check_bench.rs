@@ -520,6 +520,86 @@ fn bench_json_reports_every_method_without_misses() {
     assert_mentions(&out, &["--idle-us"]);
 }
 
+/// The `exact` method, the slow oracle-backed one, is timed at most three times whatever `--runs`
+/// asks; every other method takes all the runs asked for.
+#[test]
+fn bench_times_the_exact_method_at_most_three_times() {
+    let out = myriad_ok(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--lights",
+        "300",
+        "--methods",
+        "exact,binary",
+        "--runs",
+        "5",
+        "--json",
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let runs: Vec<(String, u64)> = report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            (
+                m["method"].as_str().unwrap().to_string(),
+                u64_field(m, "runs"),
+            )
+        })
+        .collect();
+    assert_eq!(
+        runs,
+        [("exact".to_string(), 3), ("binary".to_string(), 5)],
+        "{report}"
+    );
+}
+
+/// The text table: the scene line, a header, a row per method, and `binary` and `refined` each
+/// compared with `linear` when `linear` ran (never `linear` or `cone`; no comparison without
+/// `linear`).
+#[test]
+fn bench_table_compares_binary_and_refined_with_linear() {
+    let table = |methods: &str| {
+        stdout(&myriad_ok(&[
+            "bench",
+            "--preset",
+            "paper",
+            "--lights",
+            "300",
+            "--methods",
+            methods,
+            "--runs",
+            "3",
+        ]))
+    };
+    let text = table("linear,binary,refined,cone");
+    assert_mentions(
+        &text,
+        &[
+            "300 lights, grid 24x12x16",
+            "median µs",
+            "fp ratio",
+            "on pool",
+        ],
+    );
+    for method in ["linear", "binary", "refined", "cone"] {
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with(method) && l.trim_end().ends_with("/3")),
+            "no row for {method}:\n{text}"
+        );
+    }
+    let compared: Vec<&str> = text
+        .lines()
+        .filter(|l| l.ends_with("x faster than linear"))
+        .map(|l| l.split_whitespace().next().unwrap())
+        .collect();
+    assert_eq!(compared, ["binary", "refined"], "{text}");
+    let text = table("binary,refined");
+    assert!(!text.contains("faster than"), "{text}");
+}
+
 #[test]
 fn skipped_invalid_lights_are_counted_in_bench_output() {
     let dir = work_dir("skipped_counted");
