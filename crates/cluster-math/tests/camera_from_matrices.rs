@@ -23,11 +23,19 @@ fn points_in_front(eye: Vec3, forward: Vec3, right: Vec3, up: Vec3) -> Vec<Vec3>
     points
 }
 
-fn assert_same_ndc(engine: Mat4, camera: &Camera, points: &[Vec3]) {
+/// Each point lands at the same NDC x and y under the engine's matrices as its image under
+/// `to_camera_world` does under the camera (depth conventions may differ between the two).
+fn assert_same_screen(
+    engine: Mat4,
+    camera: &Camera,
+    points: &[Vec3],
+    to_camera_world: impl Fn(Vec3) -> Vec3,
+) {
     for &p in points {
-        let (want, got) = (ndc(engine, p), ndc(camera.clip_from_world(), p));
+        let want = ndc(engine, p);
+        let got = ndc(camera.clip_from_world(), to_camera_world(p));
         assert!(
-            (want - got).abs().max_element() < 1e-4,
+            (want.truncate() - got.truncate()).abs().max_element() < 1e-4,
             "point {p}: engine NDC {want}, camera NDC {got}"
         );
     }
@@ -82,14 +90,7 @@ fn glam_right_handed_pairs_give_the_camera_they_describe() {
             assert_eq!(camera.far, far, "{projection}");
             assert!(camera.view_problem().is_none() && camera.problem().is_some());
         }
-        // x and y of every point land where the engine puts them (depth conventions differ).
-        for &p in &points {
-            let (want, got) = (ndc(projection * view, p), ndc(camera.clip_from_world(), p));
-            assert!(
-                (want.truncate() - got.truncate()).abs().max_element() < 1e-4,
-                "{projection}: point {p}: engine NDC {want}, camera NDC {got}"
-            );
-        }
+        assert_same_screen(projection * view, &camera, &points, |p| p);
     }
 }
 
@@ -187,7 +188,7 @@ fn this_crates_own_matrices_round_trip_at_the_edges() {
         assert_close(&camera, &original);
         let (r, u, f) = original.basis_f64();
         let points = points_in_front(original.position, f.as_vec3(), r.as_vec3(), u.as_vec3());
-        assert_same_ndc(original.clip_from_world(), &camera, &points);
+        assert_same_screen(original.clip_from_world(), &camera, &points, |p| p);
     }
 }
 
@@ -269,14 +270,10 @@ fn a_left_handed_pair_is_refused_as_mirrored_and_the_mirrored_world_works() {
     let forward = (at - eye).normalize();
     let right = Vec3::Y.cross(forward).normalize();
     let up = forward.cross(right);
-    for p in points_in_front(eye, forward, right, up) {
-        let want = ndc(projection * view, p);
-        let got = ndc(camera.clip_from_world(), vec3(-p.x, p.y, p.z));
-        assert!(
-            (want.truncate() - got.truncate()).abs().max_element() < 1e-4,
-            "point {p}: engine NDC {want}, camera NDC {got}"
-        );
-    }
+    let points = points_in_front(eye, forward, right, up);
+    assert_same_screen(projection * view, &camera, &points, |p| {
+        vec3(-p.x, p.y, p.z)
+    });
 }
 
 #[test]
@@ -297,7 +294,7 @@ fn flipping_both_screen_axes_is_a_roll_and_one_alone_a_mirror() {
         .expect("a half turn about the view axis is a camera");
     let (r, u, f) = original.basis_f64();
     let points = points_in_front(original.position, f.as_vec3(), r.as_vec3(), u.as_vec3());
-    assert_same_ndc(flip(-1.0, -1.0) * view, &rolled, &points);
+    assert_same_screen(flip(-1.0, -1.0) * view, &rolled, &points, |p| p);
     assert!(
         (rolled.up.normalize() + u.as_vec3()).length() < 1e-5,
         "{rolled:?}"
