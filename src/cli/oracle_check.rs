@@ -817,6 +817,126 @@ mod tests {
         assert!(dropped > 100_000, "{dropped}");
     }
 
+    /// A spot of `range` (index 1, a narrow cone) aimed along `−n` at `p` on `cell`'s boundary,
+    /// `n` pointing out of the cell, its apex moved out past its range to the last f64 offset `t`
+    /// the oracle accepts. Asserts that `t` passes `band` (the case is one where the oracle's
+    /// tolerance, 64 ulps of a scale, reaches that far) and that the prefilter keeps the light:
+    /// the cell lists it.
+    fn assert_kept_on_the_band(cell: &Cell, p: DVec3, n: DVec3, range: f64, band: f64) {
+        let at = |t: f64| {
+            LightVolume::Spot(SpotVolume {
+                apex: p + n * (range + t),
+                direction: -n,
+                range,
+                angle: 0.25,
+            })
+        };
+        let accepts = |t: f64| at(t).intersects_cell(cell);
+        let extent = cell
+            .corners()
+            .iter()
+            .map(|c| c.length())
+            .fold(0.0, f64::max);
+        let far_out = 1e-3 * (range + extent);
+        assert!(accepts(0.0) && !accepts(far_out), "{cell:?} {p} {n}");
+        let t = last_accepted(0.0, far_out, accepts);
+        assert!(t > band, "{t} {cell:?}");
+        let light = view_light(at(t), 1);
+        let mut out = Vec::new();
+        OracleLights::from_view_lights(vec![light]).touching(cell, &mut out);
+        assert_eq!(out, [1], "{t} {light:?} {cell:?}");
+    }
+
+    /// A field of view of π less one f32 ulp on a 4096×1 target (x slopes to 5.5e10), as in
+    /// [`boundary_cells`], and its left tile of a 2×1 grid in one slice over `[near, far]`:
+    /// x slopes [−5.5e10, 0], y slopes ±1.3e7.
+    fn widest_left_cell(near: f32, far: f32) -> Cell {
+        use myriad::cluster_math::DepthSlicing;
+        use myriad::cluster_math::glam::UVec3;
+        let camera = Camera {
+            fov_y: f32::from_bits(std::f32::consts::PI.to_bits() - 1),
+            ..Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 4096, 1, 0.1, 100.0)
+        };
+        let grid = ClusterGrid::new(UVec3::new(2, 1, 1), DepthSlicing::Log, near, far);
+        let cell = Cell::of_cluster(&camera, &grid, 0, 0, 0);
+        assert!(
+            cell.x_slopes[0] < -5e10 && cell.x_slopes[1] == 0.0,
+            "{cell:?}"
+        );
+        cell
+    }
+
+    /// A spot of range 1e9 behind the eye, aimed at the centre of a usual cell's near face: the
+    /// oracle's band is 64 ulps of the range (1.4e-5), more than the slack's 1e-6 floor, and only
+    /// the range in the slack's scale covers it (the centre's coordinates alone are the range
+    /// less the cell's depth).
+    #[test]
+    fn the_prefilter_keeps_a_long_spot_behind_the_eye_on_the_band_of_its_range() {
+        let cell = Cell {
+            x_slopes: [-1.0, 1.0],
+            y_slopes: [-0.5, 0.5],
+            depths: [1.0, 2.0],
+        };
+        assert_kept_on_the_band(&cell, DVec3::NEG_Z, DVec3::Z, 1e9, 1e-5);
+    }
+
+    /// A spot just outside the wall of slope 0 of the widest cell, 5e8 deep: the oracle's band
+    /// is 64 ulps of the cell's corners at that depth (3.9e5), which the slack covers with its
+    /// `spread` times the depth, not with the light's coordinates or `spread` alone (5.6e4).
+    #[test]
+    fn the_prefilter_keeps_a_spot_beside_a_deep_wide_cell_on_the_band_of_its_corners() {
+        let cell = widest_left_cell(1e8, 1e9);
+        let p = DVec3::new(0.0, 0.0, -5e8);
+        assert_kept_on_the_band(&cell, p, DVec3::X, 1.0, 1e5);
+    }
+
+    /// A spot beyond the far plane of the widest cell, 1e9 deep: the oracle's band is 64 ulps of
+    /// the far corners (7.8e5), which the depth window's slack covers with `spread` times the
+    /// far depth, not with their sum (5.6e4).
+    #[test]
+    fn the_prefilter_keeps_a_spot_beyond_a_deep_wide_cell_in_its_depth_window() {
+        let cell = widest_left_cell(1e8, 1e9);
+        let p = DVec3::new(0.0, 0.0, -1e9);
+        assert_kept_on_the_band(&cell, p, DVec3::NEG_Z, 1.0, 1e5);
+    }
+
+    /// A spot beyond the far plane of a cell of a field of view of 1e-12 (slopes ±9e-13), 2e9
+    /// deep: the oracle's band is 64 ulps of the depth (2.8e-5), which the depth window's slack
+    /// covers because `spread` is at least 1 (the slopes alone would leave it the 1e-6 floor).
+    #[test]
+    fn the_prefilter_keeps_a_spot_beyond_a_deep_narrow_cell_in_its_depth_window() {
+        use myriad::cluster_math::DepthSlicing;
+        use myriad::cluster_math::glam::UVec3;
+        let camera = Camera {
+            fov_y: 1e-12,
+            ..Camera::new(
+                Vec3::ZERO,
+                Vec3::NEG_Z,
+                Vec3::Y,
+                60.0,
+                1920,
+                1080,
+                0.1,
+                100.0,
+            )
+        };
+        let grid = ClusterGrid::new(UVec3::new(1, 1, 1), DepthSlicing::Log, 1e9, 2e9);
+        let cell = Cell::of_cluster(&camera, &grid, 0, 0, 0);
+        let p = DVec3::new(0.0, 0.0, -2e9);
+        assert_kept_on_the_band(&cell, p, DVec3::NEG_Z, 1.0, 1e-5);
+    }
+
+    /// A spot of range 1e9 behind the eye, aimed at the near face of the widest cell, one slice
+    /// from 1 to 2e9 deep: the spot reaches 1e9 into the cell, and the oracle's band is 64 ulps
+    /// of the corners there (7.8e5); the slack covers it with `spread` times the depth the light
+    /// reaches (its centre's depth plus twice its range), not the depth plus its range plus 2
+    /// (1.7e5).
+    #[test]
+    fn the_prefilter_keeps_a_long_spot_behind_the_eye_of_a_deep_wide_cell_on_the_band() {
+        let cell = widest_left_cell(1.0, 2e9);
+        assert_kept_on_the_band(&cell, DVec3::NEG_Z, DVec3::Z, 1e9, 3e5);
+    }
+
     #[test]
     fn samples_are_distinct_seeded_and_ascending() {
         let a = sample_clusters(4608, 2000, 7);
