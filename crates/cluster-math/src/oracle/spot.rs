@@ -1343,42 +1343,13 @@ mod tests {
         check_touching_family(7, 1.0, 1e-6, random_angle);
     }
 
-    #[test]
-    fn a_cell_reaching_very_deep_does_not_widen_a_tiny_spots_tolerance() {
-        // A spot 1e-6 long beside the right wall of a slice reaching 10⁷ deep, pointing straight
-        // at the wall: its tolerance band must stay local to the light (about 1e-12 of the depth
-        // 2 where it is), not grow with the cell's far corners (1e-12 of 10⁷ is ten ranges).
-        let r = 1e-6;
+    /// A spot of range `r` beside the right wall (x = 0.1·d) of a slice from depth `s` to each of
+    /// `fars`, at depth 2·`s`, pointing straight at the wall: touching at a gap of 0.95 `r`, not at
+    /// 1.05 `r` or 3 `r` however deep the slice reaches.
+    fn assert_tolerance_stays_local(s: f64, r: f64, fars: [f64; 2]) {
         let wall = DVec3::new(1.0, 0.0, 0.1).normalize(); // outward normal of x = 0.1·d
-        let on_wall = DVec3::new(0.2, 0.0, -2.0);
-        for far in [10.0, 1e7] {
-            let cell = Cell {
-                x_slopes: [-0.1, 0.1],
-                y_slopes: [-0.1, 0.1],
-                depths: [1.0, far],
-            };
-            let spot = |gap: f64| SpotVolume {
-                apex: on_wall + wall * gap,
-                direction: -wall,
-                range: r,
-                angle: 0.5,
-            };
-            assert!(spot_intersects_cell(&spot(0.95 * r), &cell), "far {far}");
-            assert!(!spot_intersects_cell(&spot(1.05 * r), &cell), "far {far}");
-            assert!(!spot_intersects_cell(&spot(3.0 * r), &cell), "far {far}");
-        }
-    }
-
-    #[test]
-    fn a_spot_near_the_eye_keeps_its_tolerance_however_deep_the_cell() {
-        // The test of `a_cell_reaching_very_deep_does_not_widen_a_tiny_spots_tolerance` near the
-        // eye: everything 1e-14 times as large, the spot 1e-20 long. The cut must end a range
-        // past the spot's far depth (about 2e-14), not a fixed length beyond it: a cut at depth 2
-        // or more made the band 1e-12 of that, ten million ranges.
-        let (s, r) = (1e-14, 1e-20);
-        let wall = DVec3::new(1.0, 0.0, 0.1).normalize();
         let on_wall = DVec3::new(0.2, 0.0, -2.0) * s;
-        for far in [10.0 * s, 1e7] {
+        for far in fars {
             let cell = Cell {
                 x_slopes: [-0.1, 0.1],
                 y_slopes: [-0.1, 0.1],
@@ -1394,6 +1365,22 @@ mod tests {
             assert!(!spot_intersects_cell(&spot(1.05 * r), &cell), "far {far}");
             assert!(!spot_intersects_cell(&spot(3.0 * r), &cell), "far {far}");
         }
+    }
+
+    #[test]
+    fn a_cell_reaching_very_deep_does_not_widen_a_tiny_spots_tolerance() {
+        // A spot 1e-6 long in a slice reaching 10⁷ deep: its tolerance band must stay local to
+        // the light (about 1e-12 of the depth 2 where it is), not grow with the cell's far corners
+        // (1e-12 of 10⁷ is ten ranges).
+        assert_tolerance_stays_local(1.0, 1e-6, [10.0, 1e7]);
+    }
+
+    #[test]
+    fn a_spot_near_the_eye_keeps_its_tolerance_however_deep_the_cell() {
+        // The same near the eye: everything 1e-14 times as large, the spot 1e-20 long. The cut
+        // must end a range past the spot's far depth (about 2e-14), not a fixed length beyond it:
+        // a cut at depth 2 or more made the band 1e-12 of that, ten million ranges.
+        assert_tolerance_stays_local(1e-14, 1e-20, [10.0 * 1e-14, 1e7]);
     }
 
     #[test]
