@@ -34,7 +34,10 @@ impl GpuContext {
     /// adapter's own limits (so large light lists fit).
     ///
     /// Every context this makes comes from one wgpu instance per process ([`shared_instance`]),
-    /// so it is safe to call from several threads at once (parallel tests do).
+    /// so it is safe to call from several threads at once (parallel tests do). Keep one device
+    /// per process where you can: NVIDIA's driver deadlocked when a device was destroyed while
+    /// other threads worked on other devices ([`GpuContext::headless_for_tests`] says what was
+    /// seen).
     pub fn headless() -> Result<Self, GpuError> {
         let adapter = pollster::block_on(shared_instance().request_adapter(
             &wgpu::RequestAdapterOptions {
@@ -150,11 +153,24 @@ pub const SKIP_GPU_TESTS_VAR: &str = "MYRIAD_SKIP_GPU_TESTS";
 
 #[cfg(feature = "headless")]
 impl GpuContext {
-    /// For tests: a headless context; `None` only when there is no adapter *and*
-    /// [`SKIP_GPU_TESTS_VAR`] is `1`; otherwise a missing adapter panics with the reason.
+    /// For tests: the process's one headless test context (a clone of it: the same device and
+    /// queue); `None` only when there is no adapter *and* [`SKIP_GPU_TESTS_VAR`] is `1`;
+    /// otherwise a missing adapter panics with the reason.
+    ///
+    /// Why one device for every test in a process, made once and never dropped: on NVIDIA's
+    /// driver (580.159, H200) a device destroyed while other threads work on other devices of
+    /// the same process can deadlock. `tests/gpu_render.rs`, whose tests each made and dropped a
+    /// device, stalled in 5 of 9 runs at 4 and 16 test threads (0 of 1 serially); the stacks of
+    /// a stalled run (eu-stack) had one thread inside `vkDestroyDevice` waiting on the driver, a
+    /// second `vkDestroyDevice` waiting for the Vulkan loader's lock, and threads dropping a queue
+    /// and a render pipeline parked on the driver's own lock. With the one shared device, 12 runs
+    /// of 12 of that binary and 2 of 2 of every other GPU test binary passed at 16 threads. An
+    /// engine has one device too. Tests that need a device of their own (other limits, another
+    /// device's resources) still make one.
     pub fn headless_for_tests() -> Option<Self> {
-        match Self::headless() {
-            Ok(ctx) => Some(ctx),
+        static SHARED: std::sync::OnceLock<Result<GpuContext, String>> = std::sync::OnceLock::new();
+        match SHARED.get_or_init(|| Self::headless().map_err(|e| e.to_string())) {
+            Ok(ctx) => Some(ctx.clone()),
             Err(e) if std::env::var(SKIP_GPU_TESTS_VAR).as_deref() == Ok("1") => {
                 eprintln!("skipping GPU test ({SKIP_GPU_TESTS_VAR}=1): {e}");
                 None

@@ -46,6 +46,28 @@ fn contexts_made_and_dropped_on_many_threads_at_once_all_work() {
     });
 }
 
+/// Every test of a process gets the same device (a clone of one context), whichever thread asks:
+/// devices made and dropped by parallel tests deadlocked NVIDIA's driver
+/// (`GpuContext::headless_for_tests` says what was seen).
+#[test]
+fn tests_share_one_device_across_threads() {
+    let Some(first) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let others: Vec<GpuContext> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..THREADS)
+            .map(|_| scope.spawn(|| GpuContext::headless_for_tests().unwrap()))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for other in &others {
+        assert!(other.device == first.device && other.queue == first.queue);
+    }
+    // A context of one's own is still a device of its own.
+    let own = GpuContext::headless().unwrap();
+    assert!(own.device != first.device);
+}
+
 /// The instance behind every headless context is one per process, whichever thread asks first.
 #[test]
 fn every_thread_gets_the_one_shared_instance() {
