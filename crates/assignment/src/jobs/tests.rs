@@ -578,6 +578,49 @@ fn both_block_widths_give_the_same_task_output() {
     }
 }
 
+/// A task's last word of `n` lights, 33 ≤ n < 64, whose first `64 − n` lights alone pass the
+/// early cull: its mask has the bits of a whole word of `64 − n` lights, yet the other lights —
+/// a zero radius in view (rejected, though its padded radius would give it a box) and a light
+/// behind the eye (culled) — must stay out. The task lists exactly what its first `64 − n`
+/// lights list alone, and counts each of the others once.
+#[test]
+fn a_word_whose_first_lights_alone_survive_lists_none_of_the_others() {
+    let (camera, grid, sets) = frame();
+    for n in 33..64 {
+        let live = 64 - n;
+        let (mut x, mut y, mut z, mut radius) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut rejected, mut culled) = (0, 0);
+        for l in 0..n {
+            let (p, r) = if l < live {
+                (Vec3::new(0.3 * l as f32 - 3.0, 0.5, -5.0 - l as f32), 1.0)
+            } else if l % 2 == 0 {
+                rejected += 1;
+                (Vec3::new(0.2 * l as f32 - 6.0, 0.0, -10.0), 0.0)
+            } else {
+                culled += 1;
+                (Vec3::new(0.0, 0.0, 10.0), 1.0)
+            };
+            x.push(p.x);
+            y.push(p.y);
+            z.push(p.z);
+            radius.push(r);
+        }
+        let mut ctx = culling_context(Method::Binary, &camera, &grid, &sets);
+        ctx.lights = LightInput::points(&x, &y, &z, &radius);
+        let (alone, none_rejected, none_culled) = task_pairs(&ctx, 0, live);
+        assert!(
+            (none_rejected, none_culled) == (0, 0) && alone.len() >= live,
+            "{live} lights alone: rejected {none_rejected}, culled {none_culled}, pairs {}",
+            alone.len()
+        );
+        assert_task_output(
+            task_pairs(&ctx, 0, n),
+            (&alone, rejected, culled),
+            &format!("a word of {n} lights, the first {live} in view"),
+        );
+    }
+}
+
 /// Spot columns whose lights are all point lights (angle `π`) change nothing: `run_task` lists
 /// the same pairs and counts the same rejected and culled lights as without the columns. With
 /// spot columns phase 0b recomputes which lights are sound and which may touch the frustum: a
