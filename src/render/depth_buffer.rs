@@ -255,7 +255,7 @@ pub fn mark_active(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use myriad_scene::glam::{UVec3, Vec3};
+    use myriad_scene::glam::{UVec3, Vec3, Vec4};
 
     /// Every covered pixel's cluster, computed the slow obvious way, is marked; and a pixel near
     /// a slice edge marks both sides.
@@ -318,5 +318,294 @@ mod tests {
             }
             assert_eq!(mask.active_count(), expected.len() + extra);
         }
+    }
+
+    /// A 64 × 48 camera at the origin looking down −Z (its view transform is exact: a world
+    /// point at z = −d is at view depth d), near 0.1, far 100.
+    fn camera() -> Camera {
+        Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 48, 0.1, 100.0)
+    }
+
+    fn stored(camera: &Camera, view_depth: f32) -> f32 {
+        camera.ndc_depth_from_view_depth(view_depth as f64) as f32
+    }
+
+    fn aabb(min: [f32; 3], max: [f32; 3]) -> Aabb {
+        Aabb {
+            min: Vec3::from(min),
+            max: Vec3::from(max),
+        }
+    }
+
+    /// Every drawn pixel's view depth lies inside the fitted grid's range.
+    fn assert_holds_every_drawn_depth(fitted: &ClusterGrid, camera: &Camera, depth: &[f32]) {
+        for &d in depth.iter().filter(|&&d| d > 0.0) {
+            let v = camera.view_depth_from_ndc_depth(d);
+            assert!(
+                fitted.near() <= v && v <= fitted.far(),
+                "stored {d} (view depth {v}) outside [{}, {}]",
+                fitted.near(),
+                fitted.far()
+            );
+        }
+    }
+
+    #[test]
+    fn the_fitted_range_holds_every_drawn_depth_and_little_more() {
+        let camera = camera();
+        let grid = ClusterGrid::new(UVec3::new(16, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        // Background between drawn pixels from 2 to 30; boxes behind the camera and beyond the
+        // far plane are not seen and must not widen the range.
+        let depth: Vec<f32> = [0.0, 2.0, 0.0, 7.3, 30.0, 11.0, 0.0]
+            .iter()
+            .map(|&v| if v == 0.0 { 0.0 } else { stored(&camera, v) })
+            .collect();
+        let unseen = [
+            aabb([-1.0, -1.0, 1.0], [1.0, 1.0, 2.0]),
+            aabb([-1.0, -1.0, -300.0], [1.0, 1.0, -200.0]),
+        ];
+        let fitted = fitted_grid(&grid, &camera, &depth, &unseen);
+        assert_holds_every_drawn_depth(&fitted, &camera, &depth);
+        let (lo, hi) = (
+            camera.view_depth_from_ndc_depth(depth[1]),
+            camera.view_depth_from_ndc_depth(depth[4]),
+        );
+        assert!(
+            fitted.near() >= lo * (1.0 - 2.0 * DEPTH_TOLERANCE),
+            "{fitted:?}"
+        );
+        assert!(
+            fitted.far() <= hi * (1.0 + 2.0 * DEPTH_TOLERANCE),
+            "{fitted:?}"
+        );
+        assert_eq!(
+            (fitted.dims(), fitted.slicing()),
+            (grid.dims(), grid.slicing())
+        );
+        // A pixel exactly at the near plane (stored 1) and one at the far plane (the smallest
+        // stored value that is not background): the fitted range is the whole grid, no wider.
+        let edges = [0.0, 1.0, f32::from_bits(1), 0.0];
+        let fitted = fitted_grid(&grid, &camera, &edges, &[]);
+        assert_holds_every_drawn_depth(&fitted, &camera, &edges);
+        assert_eq!((fitted.near(), fitted.far()), (grid.near(), grid.far()));
+    }
+
+    #[test]
+    fn nothing_drawn_keeps_the_grid() {
+        let camera = camera();
+        let grid = ClusterGrid::new(UVec3::new(16, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        let cleared = [0.0, -0.0, 0.0, -0.0];
+        assert_eq!(fitted_grid(&grid, &camera, &cleared, &[]), grid);
+    }
+
+    #[test]
+    fn blended_draws_widen_the_fitted_range_to_their_depths() {
+        let camera = camera();
+        let grid = ClusterGrid::new(UVec3::new(16, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        let depth = [0.0, stored(&camera, 5.0), stored(&camera, 6.0), 0.0];
+        // A box from 20 to 40 deep, wholly in front of the camera, alone and with the pixels.
+        let deep = aabb([-1.0, -1.0, -40.0], [1.0, 1.0, -20.0]);
+        for pixels in [&[0.0; 4][..], &depth[..]] {
+            let fitted = fitted_grid(&grid, &camera, pixels, &[deep]);
+            assert_holds_every_drawn_depth(&fitted, &camera, pixels);
+            assert!(fitted.far() >= 40.0 && fitted.far() <= 40.0 * (1.0 + 2.0 * DEPTH_TOLERANCE));
+            let nearest = if pixels[1] > 0.0 { 5.0 } else { 20.0 };
+            assert!(fitted.near() <= nearest, "{fitted:?}");
+            assert!(fitted.near() >= nearest * (1.0 - 2.0 * DEPTH_TOLERANCE));
+        }
+        // A box through the near plane is seen from the near plane on.
+        let through = aabb([-1.0, -1.0, -3.0], [1.0, 1.0, 1.0]);
+        let fitted = fitted_grid(&grid, &camera, &depth, &[through]);
+        assert_eq!(fitted.near(), camera.near);
+        assert_holds_every_drawn_depth(&fitted, &camera, &depth);
+    }
+
+    /// Everything drawn lies in front of the grid's near edge, so the widened range collapses onto
+    /// it: the fitted range is still a range, `DEPTH_TOLERANCE` wide.
+    #[test]
+    fn a_range_collapsed_onto_the_grids_near_edge_is_widened_by_the_tolerance() {
+        let camera = camera();
+        let s = stored(&camera, 0.5);
+        let g = camera.view_depth_from_ndc_depth(s) * (1.0 + DEPTH_TOLERANCE);
+        let grid = ClusterGrid::new(UVec3::new(4, 4, 8), DepthSlicing::Log, g, 100.0);
+        let fitted = fitted_grid(&grid, &camera, &[0.0, s, s], &[]);
+        assert_eq!(fitted.near(), g);
+        assert!(
+            fitted.far() >= g * (1.0 + 0.5 * DEPTH_TOLERANCE)
+                && fitted.far() <= g * (1.0 + 2.0 * DEPTH_TOLERANCE),
+            "{fitted:?}"
+        );
+    }
+
+    /// A near-slice edge strictly inside the fitted range is kept; one outside it or exactly on
+    /// either fitted bound leaves no first slice to keep, and the grid falls back to `Log`.
+    #[test]
+    fn a_first_slice_edge_not_strictly_inside_the_fitted_range_falls_back_to_log() {
+        let camera = camera();
+        let depth = [0.0, stored(&camera, 2.0), stored(&camera, 30.0)];
+        let lo = camera.view_depth_from_ndc_depth(depth[1]);
+        let hi = camera.view_depth_from_ndc_depth(depth[2]);
+        let near_slice = |first_slice_depth| DepthSlicing::LogWithNearSlice { first_slice_depth };
+        for (first, kept) in [
+            (5.0, true),
+            (1.0, false),
+            (50.0, false),
+            (lo * (1.0 - DEPTH_TOLERANCE), false),
+            (hi * (1.0 + DEPTH_TOLERANCE), false),
+        ] {
+            let grid = ClusterGrid::new(UVec3::new(4, 4, 8), near_slice(first), 0.1, 100.0);
+            let fitted = fitted_grid(&grid, &camera, &depth, &[]);
+            let expected = if kept {
+                near_slice(first)
+            } else {
+                DepthSlicing::Log
+            };
+            assert_eq!(fitted.slicing(), expected, "first slice edge {first}");
+            assert_holds_every_drawn_depth(&fitted, &camera, &depth);
+        }
+    }
+
+    /// The tile of an NDC coordinate, computed from the camera's projection matrix.
+    fn tile_of_ndc(t: f32, n: u32) -> u32 {
+        ((t * n as f32) as u32).min(n - 1)
+    }
+
+    #[test]
+    fn a_blended_box_marks_its_screen_box_with_a_tile_of_margin_and_no_more() {
+        let camera = camera();
+        let grid = ClusterGrid::new(UVec3::new(16, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        // From 7 to 17 deep, right of and below the centre, its corners well inside tiles and
+        // slices (edges at 4.87, 7.50, 11.5, 17.8).
+        let b = aabb([2.0, -1.5, -17.0], [3.0, -0.5, -7.0]);
+        let mut mask = ActiveClusters::new(&grid);
+        mark_active(&mut mask, &grid, &camera, &[0.0; 64 * 48], &[b]);
+        let clip_from_world = camera.clip_from_world();
+        let (mut x, mut y) = (
+            [f32::INFINITY, f32::NEG_INFINITY],
+            [f32::INFINITY, f32::NEG_INFINITY],
+        );
+        for corner in b.corners() {
+            let clip = clip_from_world * Vec4::from((corner, 1.0));
+            let (nx, ny) = (clip.x / clip.w, clip.y / clip.w);
+            x = [x[0].min(nx), x[1].max(nx)];
+            y = [y[0].min(ny), y[1].max(ny)];
+        }
+        let dims = grid.dims();
+        let i = [
+            tile_of_ndc((x[0] + 1.0) / 2.0, dims.x) - 1,
+            tile_of_ndc((x[1] + 1.0) / 2.0, dims.x) + 1,
+        ];
+        let j = [
+            tile_of_ndc((1.0 - y[1]) / 2.0, dims.y) - 1,
+            tile_of_ndc((1.0 - y[0]) / 2.0, dims.y) + 1,
+        ];
+        let k = [grid.slice_of_depth(7.0), grid.slice_of_depth(17.0)];
+        assert_eq!((i, j, k), ([8, 13], [5, 9], [9, 11]), "the box as set up");
+        for c in 0..grid.cluster_count() as u32 {
+            let p = grid.cluster_coords(c);
+            let inside = (i[0]..=i[1]).contains(&p.x)
+                && (j[0]..=j[1]).contains(&p.y)
+                && (k[0]..=k[1]).contains(&p.z);
+            assert_eq!(mask.is_active(c), inside, "cluster {p}");
+        }
+    }
+
+    #[test]
+    fn a_blended_box_face_on_a_slice_edge_marks_both_sides_of_it() {
+        let camera = camera();
+        let grid = ClusterGrid::new(UVec3::new(16, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        let (front, back) = (grid.slice_start_depth(10), grid.slice_start_depth(12));
+        let b = aabb([-0.5, -0.5, -back], [0.5, 0.5, -front]);
+        let mut mask = ActiveClusters::new(&grid);
+        mark_active(&mut mask, &grid, &camera, &[0.0; 64 * 48], &[b]);
+        // The centre tile: slice 12 holds the back face, slice 9 the GPU's rounding of the front.
+        let (ci, cj) = (grid.tile_x_of_pixel(32, 64), grid.tile_y_of_pixel(24, 48));
+        let marked: Vec<u32> = (0..16)
+            .filter(|&k| mask.is_active(grid.cluster_id(ci, cj, k)))
+            .collect();
+        assert_eq!(marked, [9, 10, 11, 12]);
+    }
+
+    #[test]
+    fn blended_boxes_mark_nothing_wholly_behind_or_beyond_and_everything_they_touch() {
+        let camera = camera();
+        let grid = ClusterGrid::new(UVec3::new(16, 12, 16), DepthSlicing::Log, 0.1, 100.0);
+        let dims = grid.dims();
+        let background = vec![0.0; 64 * 48];
+        let marked = |b: Aabb| {
+            let mut mask = ActiveClusters::new(&grid);
+            mark_active(&mut mask, &grid, &camera, &background, &[b]);
+            mask
+        };
+        let every_tile_of_slices = |mask: &ActiveClusters, first: u32, last: u32| {
+            (first..=last).all(|k| {
+                (0..dims.y).all(|j| (0..dims.x).all(|i| mask.is_active(grid.cluster_id(i, j, k))))
+            })
+        };
+        // Wholly behind the camera, wholly beyond the far plane: never seen.
+        assert_eq!(
+            marked(aabb([-1.0, -1.0, 1.0], [1.0, 1.0, 2.0])).active_count(),
+            0
+        );
+        assert_eq!(
+            marked(aabb([-1.0, -1.0, -300.0], [1.0, 1.0, -200.0])).active_count(),
+            0
+        );
+        // Around the camera, 5 deep: it covers the whole screen from the near plane on.
+        let around = marked(aabb([-1.0, -1.0, -5.0], [1.0, 1.0, 1.0]));
+        assert!(every_tile_of_slices(&around, 0, grid.slice_of_depth(5.0)));
+        // Behind the camera up to the near plane exactly: its face on the near plane is drawn.
+        let at_near = marked(aabb([-1.0, -1.0, -camera.near], [1.0, 1.0, 1.0]));
+        assert!(every_tile_of_slices(&at_near, 0, 0));
+        // From the far plane exactly on: its face on the far plane is in the last slice.
+        let at_far = marked(aabb([-1.0, -1.0, -200.0], [1.0, 1.0, -camera.far]));
+        let (ci, cj) = (grid.tile_x_of_pixel(32, 64), grid.tile_y_of_pixel(24, 48));
+        assert!(at_far.is_active(grid.cluster_id(ci, cj, dims.z - 1)));
+    }
+
+    /// One row of pixels, one tile each, in a row-by-row walk that reuses the previous pixel's
+    /// slices while the depth stays in their run: each pixel gets the slices of its own depth,
+    /// exactly, whichever pixel came before it, on either side of a band's end.
+    #[test]
+    fn each_pixel_marks_its_own_slices_whatever_the_pixel_before_it() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 8, 1, 0.1, 100.0);
+        let grid = ClusterGrid::new(UVec3::new(8, 1, 16), DepthSlicing::Log, 0.1, 100.0);
+        let edges = SliceEdgesNdc::new(&grid, &camera);
+        let k = 10;
+        let edge = grid.slice_start_depth(k);
+        let inside_before = (grid.slice_start_depth(k - 1) * edge).sqrt();
+        let depth = [
+            stored(&camera, edge),          // On the edge: both sides.
+            stored(&camera, inside_before), // Well inside slice k − 1.
+            stored(&camera, inside_before),
+            -edges.below[k as usize], // Where the edge's band starts: both sides.
+            -edges.above[k as usize], // Where it ends: slice k only.
+            0.0,
+            0.0,
+            0.0,
+        ];
+        let mut mask = ActiveClusters::new(&grid);
+        mark_active(&mut mask, &grid, &camera, &depth, &[]);
+        let slices: Vec<Vec<u32>> = (0..8)
+            .map(|i| {
+                (0..16)
+                    .filter(|&z| mask.is_active(grid.cluster_id(i, 0, z)))
+                    .collect()
+            })
+            .collect();
+        let (both, before, after) = (vec![k - 1, k], vec![k - 1], vec![k]);
+        assert_eq!(
+            slices,
+            [
+                both.clone(),
+                before.clone(),
+                before,
+                both,
+                after,
+                vec![],
+                vec![],
+                vec![]
+            ]
+        );
     }
 }
