@@ -84,4 +84,24 @@ mod tests {
         assert_eq!(s.brute_force_evaluations, 40);
         assert!((s.skipped_fraction - (1.0 - 8.0 / 40.0)).abs() < 1e-12);
     }
+
+    #[test]
+    fn the_mean_is_evaluations_per_covered_pixel() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 2, 1, 0.1, 10.0);
+        let grid = ClusterGrid::new(UVec3::new(2, 1, 1), DepthSlicing::Linear, 0.1, 10.0);
+        // Left pixel in a cluster of 1 light, right one in a cluster of 6: 7 over 2 pixels.
+        let s = pixel_stats(&[1.0, 1.0], &camera, &grid, &[1, 6], 8);
+        assert_eq!((s.covered_pixels, s.evaluations, s.max_lights), (2, 7, 6));
+        assert_eq!(s.mean_lights, 3.5);
+        assert_eq!(s.skipped_fraction, 1.0 - 7.0 / 16.0);
+    }
+
+    #[test]
+    fn a_frame_of_background_counts_nothing_and_skips_nothing() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 2, 2, 0.1, 10.0);
+        let grid = ClusterGrid::new(UVec3::new(2, 1, 2), DepthSlicing::Linear, 0.1, 10.0);
+        let s = pixel_stats(&[0.0; 4], &camera, &grid, &[1, 2, 3, 4], 10);
+        // No pixel, so no mean and no saving: zeros, not 0 / 0.
+        assert_eq!(s, PixelStats::default());
+    }
 }

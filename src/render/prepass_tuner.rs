@@ -325,6 +325,99 @@ mod tests {
     }
 
     #[test]
+    fn the_settings_it_was_made_with_are_kept() {
+        assert_eq!(PrepassTuner::new(QUICK).settings(), QUICK);
+        assert_eq!(PrepassTuner::default().settings(), TunerSettings::default());
+    }
+
+    #[test]
+    fn a_decision_prints_the_choice_and_its_medians_in_milliseconds() {
+        let on = PrepassDecision {
+            use_prepass: true,
+            with_seconds: 0.37321,
+            without_seconds: 0.39752,
+            frames_per_side: 3,
+        };
+        assert_eq!(
+            on.to_string(),
+            "depth prepass on (frames 373.21 ms with it, 397.52 ms without, medians of 3 probes each)"
+        );
+        let off = PrepassDecision {
+            use_prepass: false,
+            with_seconds: 0.012,
+            without_seconds: 0.0105,
+            frames_per_side: 5,
+        };
+        assert_eq!(
+            off.to_string(),
+            "depth prepass off (frames 12.00 ms with it, 10.50 ms without, medians of 5 probes each)"
+        );
+    }
+
+    #[test]
+    fn with_no_margin_equal_sides_keep_the_simpler_frame() {
+        let mut tuner = PrepassTuner::new(TunerSettings {
+            margin: 0.0,
+            ..QUICK
+        });
+        run(&mut tuner, 6, |_| 10.0);
+        assert!(!tuner.decision().unwrap().use_prepass);
+    }
+
+    #[test]
+    fn timings_beyond_a_full_side_are_ignored() {
+        let mut tuner = PrepassTuner::new(QUICK);
+        let without = FramePlan {
+            use_prepass: false,
+            probe: true,
+        };
+        let with = FramePlan {
+            use_prepass: true,
+            ..without
+        };
+        // Five frames reported without the prepass: the last two find the side full.
+        for seconds in [10.0, 10.0, 10.0, 1.0, 1.0] {
+            tuner.record(without, seconds);
+        }
+        for _ in 0..3 {
+            tuner.record(with, 12.0);
+        }
+        let d = tuner.decision().expect("three frames a side decide");
+        assert_eq!((d.with_seconds, d.without_seconds), (12.0, 10.0));
+        assert!(!d.use_prepass);
+    }
+
+    #[test]
+    fn the_median_is_the_middle_frame_or_the_upper_of_two() {
+        for (probe_frames, with_times, median) in [
+            (1, &[7.0][..], 7.0),
+            (2, &[9.0, 8.0][..], 9.0),
+            (5, &[5.0, 1.0, 4.0, 2.0, 3.0][..], 3.0),
+        ] {
+            let mut tuner = PrepassTuner::new(TunerSettings {
+                probe_frames,
+                ..QUICK
+            });
+            let mut with_times = with_times.iter();
+            for _ in 0..2 * probe_frames {
+                let plan = tuner.plan();
+                let seconds = if plan.use_prepass {
+                    *with_times
+                        .next()
+                        .expect("no more probes than frames a side")
+                } else {
+                    10.0
+                };
+                tuner.record(plan, seconds);
+            }
+            let d = tuner.decision().expect("decided after a probe");
+            assert_eq!(d.with_seconds, median, "{probe_frames} frames a side");
+            assert_eq!(d.without_seconds, 10.0);
+            assert_eq!(d.frames_per_side, probe_frames);
+        }
+    }
+
+    #[test]
     #[should_panic(expected = "at least one frame")]
     fn a_probe_of_no_frames_is_refused() {
         PrepassTuner::new(TunerSettings {
