@@ -337,6 +337,17 @@ mod tests {
         assert!(sphere_intersects_cell(c, r, &cell));
     }
 
+    /// A centre for a ball of radius `r` around the near end of the cell, inside or outside it
+    /// (up to two radii off in depth).
+    fn centre_near_the_near_end(rng: &mut rand_pcg::Pcg64, cell: &Cell, r: f64) -> DVec3 {
+        cell_point(
+            cell,
+            rng.random_range(-0.3..1.3),
+            rng.random_range(-0.3..1.3),
+            rng.random_range(-0.1..0.05),
+        ) + DVec3::new(0.0, 0.0, rng.random_range(-2.0..2.0) * r)
+    }
+
     #[test]
     fn a_far_wall_beyond_the_ball_does_not_change_the_answer() {
         // The ball cannot reach past depth d + r, so moving the far wall from just beyond it to
@@ -346,13 +357,7 @@ mod tests {
         for n in 0..4000 {
             let cell = crate::oracle::random_cell(&mut rng, 1.0);
             let r = 10f64.powf(rng.random_range(-3.0..0.5));
-            // A centre around the near end of the cell, inside or outside it.
-            let p = cell_point(
-                &cell,
-                rng.random_range(-0.3..1.3),
-                rng.random_range(-0.3..1.3),
-                rng.random_range(-0.1..0.05),
-            ) + DVec3::new(0.0, 0.0, rng.random_range(-2.0..2.0) * r);
+            let p = centre_near_the_near_end(&mut rng, &cell, r);
             let near_far = (-p.z + 2.0 * r).max(cell.depths[0]) * 1.5;
             let local = Cell {
                 depths: [cell.depths[0], near_far],
@@ -384,12 +389,7 @@ mod tests {
         for n in 0..4000 {
             let cell = crate::oracle::random_cell(&mut rng, 1e-16);
             let r = 1e-16 * 10f64.powf(rng.random_range(-1.0..0.5));
-            let p = cell_point(
-                &cell,
-                rng.random_range(-0.3..1.3),
-                rng.random_range(-0.3..1.3),
-                rng.random_range(-0.1..0.05),
-            ) + DVec3::new(0.0, 0.0, rng.random_range(-2.0..2.0) * r);
+            let p = centre_near_the_near_end(&mut rng, &cell, r);
             let local = Cell {
                 depths: [cell.depths[0], (-p.z + 2.0 * r).max(cell.depths[0]) * 1.5],
                 ..cell

@@ -1424,10 +1424,9 @@ mod tests {
         );
     }
 
-    #[test]
-    fn descent_points_away_from_the_closest_part_of_the_volume() {
-        // A 45° spot from the origin down −z with range 1: its rim is the circle of radius
-        // sin 45° at depth cos 45°.
+    /// A 45° spot from the origin down −z with range 1 (its rim is the circle of radius sin 45°
+    /// at depth cos 45°), and sin 45°.
+    fn forty_five_degree_spot() -> (ConvexSpot, f64) {
         let h = std::f64::consts::FRAC_1_SQRT_2;
         let spot = ConvexSpot {
             apex: DVec3::ZERO,
@@ -1436,6 +1435,12 @@ mod tests {
             cos_angle: h,
             sin_angle: h,
         };
+        (spot, h)
+    }
+
+    #[test]
+    fn descent_points_away_from_the_closest_part_of_the_volume() {
+        let (spot, h) = forty_five_degree_spot();
         let close =
             |got: Option<DVec3>, want: DVec3| got.is_some_and(|g| (g - want).length() < 1e-12);
         // Beyond the rim, level with it: straight out from the rim point (h, 0, −h).
@@ -1459,15 +1464,7 @@ mod tests {
 
     #[test]
     fn descent_behind_the_apex_points_from_it_and_the_closed_boundary_has_none() {
-        // The 45° spot of `descent_points_away_from_the_closest_part_of_the_volume`.
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        let spot = ConvexSpot {
-            apex: DVec3::ZERO,
-            axis: DVec3::NEG_Z,
-            range: 1.0,
-            cos_angle: h,
-            sin_angle: h,
-        };
+        let (spot, _) = forty_five_degree_spot();
         // Behind the apex (closest to it): the unit vector from the apex, on the axis and off it.
         assert_eq!(spot.descent(DVec3::new(0.0, 0.0, 2.0)), Some(DVec3::Z));
         let behind = DVec3::new(0.3, 0.4, 1.2);
