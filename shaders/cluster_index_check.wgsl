@@ -17,6 +17,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var depth = sample_depths[i];
     if (check.from_stored_depth == 1u) {
+        // `near_far`: the near plane and near / far (0 for an infinite far plane).
         depth = view_depth_from_ndc_depth(depth, check.near_far.x, check.near_far.y);
     }
     cluster_ids[i] = cluster_of_pixel(

@@ -48,7 +48,7 @@ fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
     // ray through the near-plane point (well conditioned), scaled from the near depth to the
     // pixel's. Unprojecting `depth` itself through the inverse matrix would cancel like the
     // textbook depth formula and land up to percents off the cluster it is shaded from.
-    let view_depth = view_depth_from_ndc_depth(depth, frame.camera_near, frame.camera_far);
+    let view_depth = view_depth_from_ndc_depth(depth, frame.camera_near, frame.camera_near_over_far);
     let on_near = frame.world_rel_from_clip * vec4<f32>(ndc, 1.0, 1.0);
 
     var s: Surface;

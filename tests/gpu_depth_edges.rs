@@ -35,9 +35,15 @@ fn samples(camera: &Camera, grid: &ClusterGrid, random: usize) -> Vec<f32> {
             depths.extend([up, down]);
         }
     }
-    // Random view depths, log-uniform over the camera's range.
+    // Random view depths, log-uniform over the camera's range (with an infinite far plane, to a
+    // hundred times the grid's: beyond it, pixels clamp to the last slice).
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let (near, far) = (camera.near as f64, camera.far as f64);
+    let near = camera.near as f64;
+    let far = if camera.far.is_finite() {
+        camera.far as f64
+    } else {
+        grid.far() as f64 * 100.0
+    };
     for _ in 0..random {
         state = state
             .wrapping_mul(6_364_136_223_846_793_005)
@@ -55,8 +61,12 @@ fn every_cluster_the_gpu_shades_from_a_depth_buffer_is_marked_active() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
         return;
     };
+    // (camera near, camera far, slicing, slices); the grid spans the camera's range, or
+    // [near, 1000] where the far plane is infinite.
     let views = [
         (0.1, 100.0, DepthSlicing::Log, 16),
+        (0.1, f32::INFINITY, DepthSlicing::Log, 32),
+        (1e-6, f32::INFINITY, DepthSlicing::Linear, 16),
         (0.1, 100.0, DepthSlicing::Linear, 64),
         (0.01, 10_000.0, DepthSlicing::Log, 64),
         (1.0, 1.0e6, DepthSlicing::Log, 32),
@@ -73,7 +83,8 @@ fn every_cluster_the_gpu_shades_from_a_depth_buffer_is_marked_active() {
     for (near, far, slicing, z) in views {
         let width = 128;
         let probe = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, width, 1, near, far);
-        let grid = ClusterGrid::new(UVec3::new(8, 4, z), slicing, near, far);
+        let grid_far = if far.is_finite() { far } else { 1000.0 };
+        let grid = ClusterGrid::new(UVec3::new(8, 4, z), slicing, near, grid_far);
         let depths = samples(&probe, &grid, 20_000);
         // The samples as a depth buffer, row by row (the last row padded with background).
         let height = depths.len().div_ceil(width as usize) as u32;
@@ -94,8 +105,7 @@ fn every_cluster_the_gpu_shades_from_a_depth_buffer_is_marked_active() {
             .collect();
         let stored_depths = SampleDepths::Stored {
             depths: &depths,
-            near,
-            far,
+            camera: &camera,
         };
         let gpu = gpu_cluster_ids_of(&ctx, &grid, width, height, &pixels, stored_depths).unwrap();
         let mut mask = ActiveClusters::new(&grid);

@@ -45,9 +45,10 @@ fn cluster_of_pixel(pixel: vec2<u32>, depth: f32, target_size: vec2<u32>, dims: 
 }
 
 // View depth (distance along the view axis) of a reversed-Z depth-buffer value (1 at near, 0 at
-// far), exactly the CPU's `Camera::view_depth_from_ndc_depth` formula: it only adds and
+// far), exactly the CPU's `Camera::view_depth_from_ndc_depth` formula, `f·n / (n + ndc·(f − n))`
+// divided through by f: `near_over_far` is n/f, 0 for an infinite far plane. It only adds and
 // multiplies positive numbers, so it stays within a few ulps of the true depth however small the
 // near plane is.
-fn view_depth_from_ndc_depth(ndc_depth: f32, near: f32, far: f32) -> f32 {
-    return far * near / (near + ndc_depth * (far - near));
+fn view_depth_from_ndc_depth(ndc_depth: f32, near: f32, near_over_far: f32) -> f32 {
+    return near / (near_over_far + ndc_depth * (1.0 - near_over_far));
 }

@@ -20,7 +20,7 @@ struct Frame {
     grid_dims: vec4<u32>,
     // Camera near and far planes (the depth buffer's range).
     camera_near: f32,
-    camera_far: f32,
+    camera_near_over_far: f32,
     // Constant ambient term, as a fraction of albedo.
     ambient: f32,
     // Exposure applied before tone mapping.

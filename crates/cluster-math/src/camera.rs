@@ -30,7 +30,8 @@ pub struct Camera {
     pub height: u32,
     /// Near plane view depth (> 0).
     pub near: f32,
-    /// Far plane view depth (> near).
+    /// Far plane view depth (> near), or `f32::INFINITY` for an infinite far plane (the
+    /// reversed-Z projection of engines that clip nothing far away).
     pub far: f32,
 }
 
@@ -60,15 +61,15 @@ impl Camera {
     }
 
     /// What makes this camera unusable, if anything: [`Self::view_problem`], or a depth range
-    /// not `0 < near < far` (finite), a near plane below [`crate::ClusterGrid::MIN_NEAR`], or a
-    /// range whose `near·far` passes `f32::MAX`: depth is then reconstructed as infinity
-    /// ([`Self::view_depth_from_ndc_depth`], in f32 as on the GPU). For engines that take
-    /// cameras from users.
+    /// not `0 < near < far` (`far` finite or `+∞`), a near plane below
+    /// [`crate::ClusterGrid::MIN_NEAR`], or a finite range whose `near·far` passes `f32::MAX`
+    /// (such units leave the shaders' squared distances no room; use smaller ones). For engines
+    /// that take cameras from users.
     pub fn problem(&self) -> Option<String> {
         self.view_problem().or_else(|| {
-            if !(self.near > 0.0 && self.near < self.far && self.far.is_finite()) {
+            if !(self.near > 0.0 && self.near.is_finite() && self.near < self.far) {
                 return Some(format!(
-                    "depth range must satisfy 0 < near < far (finite), got [{}, {}]",
+                    "depth range must satisfy 0 < near < far (far finite or infinite), got [{}, {}]",
                     self.near, self.far
                 ));
             }
@@ -81,10 +82,9 @@ impl Camera {
                     crate::ClusterGrid::MIN_NEAR
                 ));
             }
-            (!(self.near * self.far).is_finite()).then(|| {
+            (self.far.is_finite() && !(self.near * self.far).is_finite()).then(|| {
                 format!(
-                    "depth range [{}, {}]: near·far overflows f32, so depths cannot be \
-                     reconstructed from the depth buffer; use smaller units",
+                    "depth range [{}, {}]: near·far overflows f32; use smaller units",
                     self.near, self.far
                 )
             })
@@ -187,15 +187,21 @@ impl Camera {
     /// the stored value is `1 − n/d`, and beyond `d ≈ 1.7·10⁷·n` it rounds to exactly 1.0, the
     /// cleared background: with `near = 1e-8` everything past 0.17 m vanished and clustered shading
     /// read no light at all, and with `near = 1e-6` a 30 m courtyard lost its far walls.
-    /// `B = f·n/(f − n)` is computed in f64 so the near plane maps to 1 to the last bit.
+    /// `B = f·n/(f − n)` is computed in f64 so the near plane maps to 1 to the last bit. An
+    /// infinite far plane is the limit, stored depth exactly `n/d`: `A = 0`, `B = n`.
     pub fn clip_from_view(&self) -> Mat4 {
         let (n, f) = (self.near as f64, self.far as f64);
+        let (a, b) = if f.is_infinite() {
+            (0.0, n)
+        } else {
+            (n / (f - n), f * n / (f - n))
+        };
         let t = self.tan_half_fov();
         Mat4::from_cols(
             glam::Vec4::new(1.0 / t.x, 0.0, 0.0, 0.0),
             glam::Vec4::new(0.0, 1.0 / t.y, 0.0, 0.0),
-            glam::Vec4::new(0.0, 0.0, (n / (f - n)) as f32, -1.0),
-            glam::Vec4::new(0.0, 0.0, (f * n / (f - n)) as f32, 0.0),
+            glam::Vec4::new(0.0, 0.0, a as f32, -1.0),
+            glam::Vec4::new(0.0, 0.0, b as f32, 0.0),
         )
     }
 
@@ -216,24 +222,37 @@ impl Camera {
     }
 
     /// View depth (positive distance along the view direction) of a wgpu depth-buffer value
-    /// produced by [`Self::clip_from_view`] (reversed Z): `depth = f·n / (n + ndc·(f − n))`.
-    /// Infinite when `f·n` overflows f32, a camera [`Self::problem`] refuses.
+    /// produced by [`Self::clip_from_view`] (reversed Z): `depth = f·n / (n + ndc·(f − n))`,
+    /// computed as `n / (a + ndc·(1 − a))` with `a = n/f` ([`Self::near_over_far`]), so an
+    /// infinite far plane (`a = 0`: `n / ndc`) needs no other formula and no `f·n` can overflow.
     ///
     /// Only positive numbers are added and multiplied, so f32 keeps it to a few ulps of the
     /// stored value's exact depth for any near plane, also where a GPU fuses the multiply-add.
-    /// The shading passes (`shaders/common/cluster.wgsl`) use this same formula, and shade the
-    /// point at this depth on the pixel's ray, so the cluster a pixel reads is the cluster of the
-    /// position it lights.
+    /// The shading passes (`shaders/common/cluster.wgsl`) use this same formula with the same
+    /// `a`, and shade the point at this depth on the pixel's ray, so the cluster a pixel reads
+    /// is the cluster of the position it lights. The cleared background (0) is `f` (infinite
+    /// for an infinite far plane).
     pub fn view_depth_from_ndc_depth(&self, ndc_depth: f32) -> f32 {
-        let (n, f) = (self.near, self.far);
-        f * n / (n + ndc_depth * (f - n))
+        let a = self.near_over_far();
+        self.near / (a + ndc_depth * (1.0 - a))
+    }
+
+    /// `near / far` rounded once from f64 (0 for an infinite far plane): the one constant besides
+    /// `near` that turns a stored depth into view depth ([`Self::view_depth_from_ndc_depth`]);
+    /// the renderer hands it to its shaders.
+    pub fn near_over_far(&self) -> f32 {
+        (self.near as f64 / self.far as f64) as f32
     }
 
     /// The exact depth-buffer value of view depth `depth` (the inverse of
     /// [`Self::view_depth_from_ndc_depth`], in f64): `n(f − depth) / (depth(f − n))`, 1 at `near`,
-    /// 0 at `far`. For code that compares stored depths with view depths, such as slice edges.
+    /// 0 at `far` (`n / depth` for an infinite far plane). For code that compares stored depths
+    /// with view depths, such as slice edges.
     pub fn ndc_depth_from_view_depth(&self, depth: f64) -> f64 {
         let (n, f) = (self.near as f64, self.far as f64);
+        if f.is_infinite() {
+            return n / depth;
+        }
         n * (f - depth) / (depth * (f - n))
     }
 }
@@ -323,21 +342,74 @@ mod tests {
         }
     }
 
+    /// An infinite far plane (engines' reversed-Z default) is the limit of the finite ones: the
+    /// stored depth is `n/d` from the matrix, nothing is clipped far away, the conversion back is
+    /// `n / ndc` with the background (0) infinitely far, and the camera is usable.
+    #[test]
+    fn an_infinite_far_plane_stores_near_over_depth() {
+        for near in [1e-12f32, 0.1, 10.0] {
+            let c = Camera::new(
+                Vec3::ZERO,
+                Vec3::NEG_Z,
+                Vec3::Y,
+                60.0,
+                64,
+                64,
+                near,
+                f32::INFINITY,
+            );
+            assert_eq!(c.problem(), None);
+            assert_eq!(c.near_over_far(), 0.0);
+            let m = c.clip_from_view();
+            assert!(m.is_finite(), "{m:?}");
+            assert!(m.determinant() != 0.0);
+            for depth in [near, near * 1.5, near * 1e3, near * 1e20, near * 1e30] {
+                let clip = m * glam::Vec4::new(0.3, -0.2, -depth, 1.0);
+                let ndc = clip.z / clip.w;
+                let want = near as f64 / depth as f64;
+                assert!(
+                    (ndc as f64 / want - 1.0).abs() < 1e-6,
+                    "near {near}: {depth} -> {ndc}, want {want}"
+                );
+                assert_eq!(c.ndc_depth_from_view_depth(depth as f64), want);
+                if ndc > 0.0 {
+                    let back = c.view_depth_from_ndc_depth(ndc);
+                    assert!(
+                        (back / depth - 1.0).abs() <= 1e-6,
+                        "{depth} -> {ndc} -> {back}"
+                    );
+                }
+            }
+            assert_eq!(c.view_depth_from_ndc_depth(1.0), near);
+            assert_eq!(c.view_depth_from_ndc_depth(0.0), f32::INFINITY);
+        }
+    }
+
     /// The stored depth → view depth conversion stays within a few f32 ulps of the exact value of
     /// the same stored depth, for any near plane, also when a GPU fuses the multiply-add: the
     /// shaders use this formula, and the active-cluster mask allows the GPU only 1e-5 (relative)
     /// of difference from the CPU. The textbook `f·n / (f − ndc·(f − n))` was 2e-2 off here.
     #[test]
     fn view_depth_from_stored_depth_is_accurate_for_any_near_plane() {
-        for (near, far) in [(0.1f32, 100.0f32), (1e-5, 50.0), (1e-12, 1e6), (1.0, 1e30)] {
+        for (near, far) in [
+            (0.1f32, 100.0f32),
+            (1e-5, 50.0),
+            (1e-12, 1e6),
+            (1.0, 1e30),
+            (1e19, 1e19 * 1.5),
+            (0.1, f32::INFINITY),
+            (1e-12, f32::INFINITY),
+        ] {
             let c = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64, near, far);
             let (n, f) = (near as f64, far as f64);
+            let a = c.near_over_far();
             let mut worst = 0.0f64;
             let mut d = f32::MIN_POSITIVE;
             while d <= 1.0 {
-                let exact = f * n / (n + d as f64 * (f - n));
-                let fused = f32::mul_add(d, far - near, near);
-                for got in [c.view_depth_from_ndc_depth(d), far * near / fused] {
+                // `f·n / (n + d·(f − n))`, divided through by `f` so that `f = ∞` is its limit.
+                let exact = n / (n / f + d as f64 * (1.0 - n / f));
+                let fused = f32::mul_add(d, 1.0 - a, a);
+                for got in [c.view_depth_from_ndc_depth(d), near / fused] {
                     worst = worst.max(((got as f64 - exact) / exact).abs());
                 }
                 // Every binade down to the smallest normal, where the far scene is stored, and

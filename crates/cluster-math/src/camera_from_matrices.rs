@@ -146,8 +146,9 @@ impl Camera {
     /// Either depth direction is accepted (reversed or not, read off the matrix) and either
     /// handedness of view space, as long as the pair is not mirrored; `clip_space` names the NDC
     /// conventions the projection was built for. An infinite far plane gives `far =
-    /// f32::INFINITY`: fine for assignment with a finite [`crate::ClusterGrid`], refused by
-    /// [`Camera::problem`] for rendering, so set `far` before rendering with it. A far plane read
+    /// f32::INFINITY`: assignment slices depth by a finite [`crate::ClusterGrid`], and the
+    /// renderer draws with it ([`Camera::clip_from_view`] is then the infinite reversed-Z
+    /// projection). A far plane read
     /// from a matrix whose depth is not reversed is only as good as the matrix keeps it: there
     /// `far = B / (1 − a)` with `a ≈ 1`, so an f32 matrix of near 0.1 and far 500 gives it to
     /// ~1e-4 (the near plane, and every plane of a reversed matrix, to f32 rounding).

@@ -166,6 +166,14 @@ fn camera_problems_are_named() {
         ),
         (
             Camera {
+                far: f32::NAN,
+                ..good
+            },
+            "0 < near < far",
+        ),
+        (
+            Camera {
+                near: f32::INFINITY,
                 far: f32::INFINITY,
                 ..good
             },
@@ -192,6 +200,16 @@ fn camera_problems_are_named() {
         ..good
     };
     assert_eq!(at_floor.problem(), None);
+    // An infinite far plane (reversed-Z engines, `Camera::from_matrices`) renders: the stored
+    // depth is `near / depth` (`Camera::clip_from_view`); no `near·far` to overflow.
+    for near in [ClusterGrid::MIN_NEAR, 0.1, 1e19] {
+        let infinite = Camera {
+            near,
+            far: f32::INFINITY,
+            ..good
+        };
+        assert_eq!(infinite.problem(), None, "near {near}");
+    }
 }
 
 #[test]

@@ -6,7 +6,7 @@ use crate::layout::ClusterCheckUniforms;
 use crate::readback::map_and_read;
 use crate::shaders::PassShader;
 use crate::{GpuContext, GpuError};
-use myriad_cluster_math::ClusterGrid;
+use myriad_cluster_math::{Camera, ClusterGrid};
 use wgpu::util::DeviceExt;
 
 /// What the sample depths of a check are.
@@ -14,15 +14,14 @@ use wgpu::util::DeviceExt;
 pub enum SampleDepths<'a> {
     /// View depths, as `ClusterGrid::cluster_of_pixel` takes them.
     View(&'a [f32]),
-    /// Depth-buffer values of a camera with these near and far planes, turned into view depth
-    /// on the GPU exactly as the shading passes do (`view_depth_from_ndc_depth`).
+    /// Depth-buffer values of `camera`'s projection, turned into view depth on the GPU exactly
+    /// as the shading passes do (`view_depth_from_ndc_depth`, from its near plane and
+    /// `Camera::near_over_far`).
     Stored {
         /// The stored depths.
         depths: &'a [f32],
-        /// The camera's near plane.
-        near: f32,
-        /// The camera's far plane.
-        far: f32,
+        /// The camera that drew them (its depth range is what matters).
+        camera: &'a Camera,
     },
 }
 
@@ -50,7 +49,9 @@ pub fn gpu_cluster_ids_of(
 ) -> Result<Vec<u32>, GpuError> {
     let (depths, from_stored_depth, near_far) = match samples {
         SampleDepths::View(d) => (d, 0, [0.0; 4]),
-        SampleDepths::Stored { depths, near, far } => (depths, 1, [near, far, 0.0, 0.0]),
+        SampleDepths::Stored { depths, camera } => {
+            (depths, 1, [camera.near, camera.near_over_far(), 0.0, 0.0])
+        }
     };
     if pixels.len() != depths.len() || pixels.is_empty() {
         return Err(GpuError::InvalidInput(format!(

@@ -31,8 +31,10 @@ pub struct FrameUniforms {
     pub grid_dims: [u32; 4],
     /// Camera near plane.
     pub camera_near: f32,
-    /// Camera far plane.
-    pub camera_far: f32,
+    /// `near / far` (`Camera::near_over_far`; 0 for an infinite far plane): with `camera_near`,
+    /// what turns a stored depth into view depth. Not the far plane itself, which may be
+    /// infinite, a value WGSL lets a shader compiler assume never occurs.
+    pub camera_near_over_far: f32,
     /// Constant ambient term, as a fraction of albedo.
     pub ambient: f32,
     /// Exposure before tone mapping.
@@ -96,7 +98,8 @@ pub struct ClusterCheckUniforms {
     pub from_stored_depth: u32,
     /// Grid X, Y, Z; `w` unused.
     pub grid_dims: [u32; 4],
-    /// The camera's near and far planes (for `from_stored_depth`); `zw` unused.
+    /// The camera's near plane and `near / far` (for `from_stored_depth`, as
+    /// [`FrameUniforms::camera_near_over_far`]); `zw` unused.
     pub near_far: [f32; 4],
 }
 

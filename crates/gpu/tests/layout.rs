@@ -45,7 +45,7 @@ fn structs_match_naga_layout() {
             "Frame",
             size_of::<FrameUniforms>(),
             rust_offsets!(FrameUniforms: clip_from_world_rel, world_rel_from_clip, camera_position, target_size,
-                light_count, heat_max, grid_dims, camera_near, camera_far, ambient, exposure),
+                light_count, heat_max, grid_dims, camera_near, camera_near_over_far, ambient, exposure),
         ),
         (
             "Light",

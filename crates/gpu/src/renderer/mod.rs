@@ -402,12 +402,14 @@ impl Renderer {
         check_camera(camera)?;
         let (width, height) = (camera.width, camera.height);
         self.ensure_gbuffer(&ctx.device, width, height)?;
-        // A camera can pass `check_camera` with a near below the grids' floor.
+        // A camera can pass `check_camera` with a near below the grids' floor. The prepass reads
+        // no lists: its one-cluster grid only fills the frame's uniforms, so an infinite far
+        // plane may stand at f32's largest value there.
         let grid = ClusterGrid::try_new(
             glam::UVec3::ONE,
             myriad_cluster_math::DepthSlicing::Linear,
             camera.near,
-            camera.far,
+            camera.far.min(f32::MAX),
         )
         .map_err(|e| GpuError::InvalidInput(e.to_string()))?;
         let frame = FrameDesc {
@@ -732,9 +734,10 @@ fn missing_lists(grid: &ClusterGrid) -> GpuError {
 }
 
 /// Refuses a camera the renderer cannot draw with: [`Camera::problem`] (a non-finite eye, a field
-/// of view outside (0, π), a zero size, or a depth range not `0 < near < far` finite — the
-/// projection is built from near and far, so unlike the assignment the renderer needs a finite
-/// far plane). Such a camera rendered a blank image with `Ok`, and the prepass panicked.
+/// of view outside (0, π), a zero size, or a depth range not `0 < near < far`). An infinite far
+/// plane is drawn with the infinite reversed-Z projection (`Camera::clip_from_view`); the lists'
+/// grid stays finite, and pixels beyond its far edge read its last slice. Such a camera rendered
+/// a blank image with `Ok`, and the prepass panicked.
 fn check_camera(camera: &Camera) -> Result<(), GpuError> {
     match camera.problem() {
         Some(problem) => Err(GpuError::InvalidInput(format!(
@@ -767,7 +770,7 @@ pub fn frame_uniforms(frame: &FrameDesc<'_>, light_count: u32, max_count: u32) -
         heat_max: frame.settings.heat_max.unwrap_or(max_count).max(1),
         grid_dims: [dims.x, dims.y, dims.z, 0],
         camera_near: camera.near,
-        camera_far: camera.far,
+        camera_near_over_far: camera.near_over_far(),
         ambient: frame.settings.ambient,
         exposure: frame.settings.exposure,
     }
