@@ -9,8 +9,9 @@
 //! brute force renders, and keep the adapter's loop guard.
 
 use myriad_assignment::{Assigner, LightInput, LightLists, Method};
+use myriad_cluster_math::glam::camera::rh::{proj::directx, view};
 use myriad_cluster_math::glam::{UVec3, Vec3};
-use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use myriad_cluster_math::{Camera, ClipSpace, ClusterGrid, DepthSlicing};
 use myriad_gpu::layout::{MaterialUniforms, Vertex};
 use myriad_gpu::wgpu;
 use myriad_gpu::{
@@ -132,23 +133,27 @@ impl Lights {
     }
 }
 
+/// The engine's camera, from its own matrices: a look-at view and the infinite reversed-Z
+/// projection most engines use. `Camera::from_matrices` reads them back (`far` is infinite); the
+/// lists' grid slices the depths the scene spans, 0.1 to 60.
 fn view() -> (Camera, ClusterGrid) {
-    let camera = Camera::new(
+    let view_from_world = view::look_at_mat4(
         Vec3::new(0.0, 6.0, 6.0),
         Vec3::new(0.0, 0.0, -14.0),
         Vec3::Y,
-        60.0,
+    );
+    let aspect = SIZE.0 as f32 / SIZE.1 as f32;
+    let clip_from_view = directx::perspective_infinite_reverse(60f32.to_radians(), aspect, 0.1);
+    let camera = Camera::from_matrices(
+        view_from_world,
+        clip_from_view,
+        ClipSpace::ZeroToOneYUp,
         SIZE.0,
         SIZE.1,
-        0.1,
-        60.0,
-    );
-    let grid = ClusterGrid::new(
-        UVec3::new(16, 9, 24),
-        DepthSlicing::Log,
-        camera.near,
-        camera.far,
-    );
+    )
+    .expect("a centred, right-handed perspective");
+    assert!(camera.far.is_infinite());
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, 60.0);
     (camera, grid)
 }
 
