@@ -19,6 +19,13 @@ fn max_channel_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
     (worst, differing)
 }
 
+/// Pixels with a channel above 40/255: lit, not background or shadow.
+fn lit_pixels(rgba: &[u8]) -> usize {
+    rgba.chunks(4)
+        .filter(|p| p[..3].iter().any(|&c| c > 40))
+        .count()
+}
+
 fn dump(name: &str, rgba: &[u8], w: u32, h: u32) {
     if let Ok(dir) = std::env::var("MYRIAD_DUMP_IMAGES") {
         let path = std::path::Path::new(&dir).join(name);
@@ -95,10 +102,7 @@ fn clustered_and_tiled_equal_brute_force_on_the_default_scene() {
     dump("heat.png", &heat, w, h);
     check_heat_map(&viewer, &scene, &heat);
     // The scene is lit: equal images must not be equally black.
-    let lit = images[0]
-        .chunks(4)
-        .filter(|p| p[..3].iter().any(|&c| c > 40))
-        .count();
+    let lit = lit_pixels(&images[0]);
     assert!(lit > (w * h / 4) as usize, "only {lit} lit pixels");
     let (worst, differing) = max_channel_difference(&images[0], &images[2]);
     eprintln!(
@@ -163,10 +167,7 @@ fn a_near_plane_far_below_the_scene_keeps_clustered_equal_to_brute_force() {
             covered >= reference && reference > 256 * 128 / 2,
             "near {near}: {covered} pixels drawn, {reference} at near 0.1"
         );
-        let lit = images[1]
-            .chunks(4)
-            .filter(|p| p[..3].iter().any(|&c| c > 40))
-            .count();
+        let lit = lit_pixels(&images[1]);
         assert!(lit > 256 * 128 / 4, "near {near}: only {lit} lit pixels");
         let (worst, differing) = max_channel_difference(&images[0], &images[1]);
         assert!(
@@ -205,10 +206,7 @@ fn an_infinite_far_plane_renders_the_finite_cameras_image() {
     let (reference, finite_depth) = frame(&finite, Shading::BruteForce);
     let (brute, infinite_depth) = frame(&infinite, Shading::BruteForce);
     let (clustered, _) = frame(&infinite, Shading::Clustered);
-    let lit = brute
-        .chunks(4)
-        .filter(|p| p[..3].iter().any(|&c| c > 40))
-        .count();
+    let lit = lit_pixels(&brute);
     assert!(lit > (w * h / 4) as usize, "only {lit} lit pixels");
     // The same pixels are drawn, each at the same view depth, each stored as near / depth.
     let (near, mut drawn, mut worst_depth) = (infinite.camera.near as f64, 0, 0.0f64);
@@ -593,10 +591,7 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
             .unwrap();
     }
     let image = viewer.image().unwrap();
-    let lit = image
-        .chunks(4)
-        .filter(|p| p[..3].iter().any(|&c| c > 40))
-        .count();
+    let lit = lit_pixels(&image);
     assert!(lit > 192 * 96 / 8, "only {lit} lit pixels");
 }
 
