@@ -61,6 +61,29 @@ pub(crate) fn frame_marks_on_this_thread() -> u64 {
     FRAME_MARKS.with(std::cell::Cell::get)
 }
 
+/// Plots a frame's GPU pass times (`Renderer::last_pass_times`) in milliseconds, each pass that
+/// ran on its own plot (`GPU G-buffer ms`, `GPU shading ms`, `GPU forward ms`, `GPU upload ms`),
+/// once a client runs: the GPU's side of the frame beside the CPU's spans. The loops that read
+/// the times anyway call it (`run_frames`, `myriad render`'s timed frames); reading them costs a
+/// wait for the GPU, so a loop that does not should not start to for this.
+pub fn plot_pass_times(times: Option<&myriad_gpu::PassTimes>) {
+    let Some(t) = times else {
+        return;
+    };
+    if let Some(ms) = t.gbuffer_ms {
+        crate::profile_plot!("GPU G-buffer ms", ms);
+    }
+    if let Some(ms) = t.shading_ms {
+        crate::profile_plot!("GPU shading ms", ms);
+    }
+    if let Some(ms) = t.forward_ms {
+        crate::profile_plot!("GPU forward ms", ms);
+    }
+    if let Some(ms) = t.upload_ms {
+        crate::profile_plot!("GPU upload ms", ms);
+    }
+}
+
 /// Plots `value` on the Tracy plot `name` (a static name per call site) once a client runs.
 #[cfg(feature = "tracy")]
 #[macro_export]

@@ -284,8 +284,9 @@ impl FrameSamples {
         self.encode.push(report.encode_seconds * 1e3);
         self.wall
             .push((t.elapsed().as_secs_f64() + report.encode_seconds) * 1e3);
-        self.passes
-            .push(viewer.renderer.last_pass_times(&viewer.ctx)?);
+        let passes = viewer.renderer.last_pass_times(&viewer.ctx)?;
+        myriad::profiling::plot_pass_times(passes.as_ref());
+        self.passes.push(passes);
         self.pipelines_after = viewer.renderer.pipelines_built();
         Ok(())
     }

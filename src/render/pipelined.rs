@@ -255,6 +255,8 @@ impl GpuStage<'_> {
         crate::profile_span!("wait for GPU");
         self.ctx.wait_idle()?;
         let gpu_wait_seconds = start.elapsed().as_secs_f64();
+        let gpu_passes = self.renderer.last_pass_times(self.ctx)?;
+        crate::profiling::plot_pass_times(gpu_passes.as_ref());
         Ok(StageTimes {
             animate_seconds: work.animate_seconds,
             cull_seconds: work.cull_seconds,
@@ -264,7 +266,7 @@ impl GpuStage<'_> {
             upload_bytes: report.upload_bytes,
             encode_seconds: report.encode_seconds,
             gpu_wait_seconds,
-            gpu_passes: self.renderer.last_pass_times(self.ctx)?,
+            gpu_passes,
             pairs: work.stats.pairs,
         })
     }
