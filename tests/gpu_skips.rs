@@ -72,15 +72,18 @@ fn each_saving_leaves_the_image_unchanged() {
     };
     let model = atrium();
     let mut viewer: Option<Viewer> = None;
-    // The last: the main camera with a near plane 10⁵ times closer than the scene (the fitted
-    // range and the active clusters come from a depth buffer whose f32 values are coarse there).
+    // (glTF camera, near plane or 0 for the camera's own, infinite far plane). The fourth: the
+    // main camera with a near plane 10⁵ times closer than the scene (the fitted range and the
+    // active clusters come from a depth buffer whose f32 values are coarse there); the last, an
+    // engine's infinite far plane over the scene's finite grid.
     let views = [
-        ("Main", 0.0),
-        ("Overview", 0.0),
-        ("Courtyard", 0.0),
-        ("Main", 1e-5),
+        ("Main", 0.0, false),
+        ("Overview", 0.0, false),
+        ("Courtyard", 0.0, false),
+        ("Main", 1e-5, false),
+        ("Courtyard", 0.0, true),
     ];
-    for (camera, near) in views {
+    for (camera, near, infinite_far) in views {
         for spots in [true, false] {
             let mut scene =
                 RenderScene::from_model(&model, "atrium", Some(camera), 1000, 1, 256, 128).unwrap();
@@ -88,6 +91,9 @@ fn each_saving_leaves_the_image_unchanged() {
                 scene.camera.near = near;
                 let grid = &scene.grid;
                 scene.grid = ClusterGrid::new(grid.dims(), grid.slicing(), near, grid.far());
+            }
+            if infinite_far {
+                scene.camera.far = f32::INFINITY;
             }
             if !spots {
                 scene.lights = without_spots(&scene.lights);
@@ -104,7 +110,8 @@ fn each_saving_leaves_the_image_unchanged() {
                 let d = max_channel_difference(&image, &reference);
                 assert!(
                     d <= 1,
-                    "{camera} (near {near}), spots {spots}: {name} changes the image by {d}/255"
+                    "{camera} (near {near}, infinite far {infinite_far}), spots {spots}: {name} \
+                     changes the image by {d}/255"
                 );
                 if skips.cull {
                     assert!(
