@@ -56,6 +56,8 @@ mod scene;
 pub mod shaders;
 mod targets;
 mod timing;
+#[cfg(feature = "tracy")]
+mod tracy_zones;
 
 #[cfg(feature = "headless")]
 pub use context::shared_instance;

@@ -8,6 +8,9 @@
 //! timestamps written into the encoder before and after them, which needs
 //! `TIMESTAMP_QUERY_INSIDE_ENCODERS` too. Without it, or in a frame that copied nothing, the
 //! upload time is `None`; what the CPU spends staging is `FrameReport::upload_seconds` either way.
+//!
+//! With the `tracy` feature, reading a frame's times also hands them to Tracy as GPU zones
+//! (`tracy_zones.rs`), each pass once.
 
 use crate::readback::map_and_read;
 use crate::{GpuContext, GpuError};
@@ -73,6 +76,19 @@ pub(crate) struct PassTimer {
     inside_encoders: bool,
     /// Whether this frame's upload wrote its pair (and copied something).
     uploaded: bool,
+    /// The Tracy GPU zones, and which of this frame's were emitted (a mutex: reading takes
+    /// `&self`, and the renderer stays `Sync`).
+    #[cfg(feature = "tracy")]
+    zones: std::sync::Mutex<ZoneState>,
+}
+
+/// Which of the frame's timed pieces are Tracy zones already.
+#[cfg(feature = "tracy")]
+#[derive(Debug, Default)]
+struct ZoneState {
+    zones: crate::tracy_zones::GpuZones,
+    passes: [bool; PASSES as usize],
+    upload: bool,
 }
 
 impl PassTimer {
@@ -104,7 +120,15 @@ impl PassTimer {
             ran: [false; PASSES as usize],
             inside_encoders: ctx.has_encoder_timestamps(),
             uploaded: false,
+            #[cfg(feature = "tracy")]
+            zones: Default::default(),
         }
+    }
+
+    /// Tracy GPU zones emitted so far (`tracy` feature).
+    #[cfg(feature = "tracy")]
+    pub fn zones_emitted(&self) -> u64 {
+        self.zones.lock().expect("zone state").zones.emitted()
     }
 
     /// Marks a new frame: no pass has run and nothing was uploaded yet, except the G-buffer
@@ -114,6 +138,15 @@ impl PassTimer {
         self.ran = [false; PASSES as usize];
         self.ran[TimedPass::GBuffer as usize] = gbuffer;
         self.uploaded = false;
+        #[cfg(feature = "tracy")]
+        {
+            // A kept G-buffer's zone was its prepass's.
+            let state = self.zones.get_mut().expect("zone state");
+            let kept = gbuffer && state.passes[TimedPass::GBuffer as usize];
+            state.passes = [false; PASSES as usize];
+            state.passes[TimedPass::GBuffer as usize] = kept;
+            state.upload = false;
+        }
     }
 
     /// Writes the timestamp before the upload's copies (where the device allows it).
@@ -172,11 +205,42 @@ impl PassTimer {
             let i = pass as usize;
             self.ran[i].then(|| between(2 * i))
         };
+        #[cfg(feature = "tracy")]
+        self.emit_zones(ctx, ticks)?;
         Ok(Some(PassTimes {
             gbuffer_ms: ms(TimedPass::GBuffer),
             shading_ms: ms(TimedPass::Shading),
             forward_ms: ms(TimedPass::Forward),
             upload_ms: self.uploaded.then(|| between(UPLOAD_QUERY as usize)),
         }))
+    }
+
+    /// Hands this frame's timed pieces not yet handed over to Tracy as GPU zones.
+    #[cfg(feature = "tracy")]
+    fn emit_zones(&self, ctx: &GpuContext, ticks: &[u64]) -> Result<(), GpuError> {
+        use crate::tracy_zones::TimedZone;
+        let mut state = self.zones.lock().expect("zone state");
+        let mut zones = Vec::new();
+        for pass in [TimedPass::GBuffer, TimedPass::Shading, TimedPass::Forward] {
+            let i = pass as usize;
+            if self.ran[i] && !state.passes[i] {
+                state.passes[i] = true;
+                zones.push(TimedZone {
+                    pass: Some(pass),
+                    start: ticks[2 * i],
+                    end: ticks[2 * i + 1],
+                });
+            }
+        }
+        if self.uploaded && !state.upload {
+            state.upload = true;
+            let i = UPLOAD_QUERY as usize;
+            zones.push(TimedZone {
+                pass: None,
+                start: ticks[i],
+                end: ticks[i + 1],
+            });
+        }
+        state.zones.emit(ctx, zones)
     }
 }

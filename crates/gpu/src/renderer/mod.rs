@@ -374,6 +374,15 @@ impl Renderer {
         self.timer.read(ctx)
     }
 
+    /// Tracy GPU zones this renderer has emitted (the `tracy` feature): each timed pass of a
+    /// frame becomes one, on a GPU track of its own, when [`Renderer::last_pass_times`] reads
+    /// the frame's times while a Tracy client runs. A profiling session can check its GPU track
+    /// is fed; 0 before the client starts and on devices without timestamp queries.
+    #[cfg(feature = "tracy")]
+    pub fn gpu_zones_emitted(&self) -> u64 {
+        self.timer.zones_emitted()
+    }
+
     /// Records, encodes and submits one frame into `target` (a single-sample view of mip 0 of a
     /// texture of the camera's size, in exactly the renderer's output format). Returns without
     /// waiting for the GPU. A target wgpu would reject (another sRGB-ness in the view, a mip of

@@ -1,0 +1,89 @@
+//! With the `tracy` feature, a frame's timed GPU pieces (G-buffer, shading and forward passes, the
+//! upload's copies) become Tracy GPU zones when the frame's times are read while a client runs:
+//! one zone each, however often the times are read, none before the client starts, and a
+//! G-buffer kept from a depth prepass counts once. (What a profiler then draws is Tracy's; this
+//! checks what the renderer hands it.)
+
+use myriad::assignment::Method;
+use myriad::gpu::{GpuContext, PassTimes};
+use myriad::render::{RenderScene, Shading, Skips, Viewer};
+
+/// The timed pieces of a frame's times.
+fn timed(times: &PassTimes) -> u64 {
+    [
+        times.gbuffer_ms,
+        times.shading_ms,
+        times.forward_ms,
+        times.upload_ms,
+    ]
+    .iter()
+    .flatten()
+    .count() as u64
+}
+
+#[test]
+fn each_timed_pass_of_a_read_frame_is_one_gpu_zone_once_the_client_runs() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    if !ctx.has_timestamps() {
+        assert!(!ctx.describe().contains("llvmpipe"), "{}", ctx.describe());
+        eprintln!(
+            "no timestamp queries on {}: no zones to check",
+            ctx.describe()
+        );
+        return;
+    }
+    let scene = RenderScene::default_scene(200, 96, 48).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let read = |viewer: &Viewer| {
+        viewer
+            .renderer
+            .last_pass_times(&viewer.ctx)
+            .unwrap()
+            .expect("timestamps")
+    };
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    assert!(timed(&read(&viewer)) >= 2);
+    assert_eq!(
+        viewer.renderer.gpu_zones_emitted(),
+        0,
+        "zones before the client"
+    );
+
+    let session = myriad::profiling::start();
+    let mut zones = 0;
+    for skips in [Skips::NONE, Skips::ALL, Skips::NONE] {
+        // `Skips::ALL` draws the G-buffer as a depth prepass, then shades it in a second frame.
+        let frame = viewer
+            .frame_with_skips(&scene, Method::Refined, skips)
+            .unwrap();
+        let times = read(&viewer);
+        zones += timed(&times);
+        assert!(
+            times.gbuffer_ms.is_some() && times.shading_ms.is_some(),
+            "{times:?}"
+        );
+        assert_eq!(
+            viewer.renderer.gpu_zones_emitted(),
+            zones,
+            "{skips:?} (reused: {}): {times:?}",
+            frame.reused
+        );
+        // Read again: the same frame, no new zone.
+        read(&viewer);
+        assert_eq!(viewer.renderer.gpu_zones_emitted(), zones);
+    }
+    // A frame whose times are never read leaves no zone; the next one read counts its own.
+    viewer
+        .frame(&scene, Shading::BruteForce, Method::Refined, false)
+        .unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    zones += timed(&read(&viewer));
+    assert_eq!(viewer.renderer.gpu_zones_emitted(), zones);
+    drop(session);
+}
