@@ -11,7 +11,9 @@
 //!
 //! The GPU clock is tied to the CPU's once per renderer, when its first zones are emitted: a
 //! timestamp written by an empty compute pass, waited for, then handed to
-//! `Client::new_gpu_context` — off by the wait's latency at most.
+//! `Client::new_gpu_context` — off by the wait's latency at most. It is not tied again later:
+//! a GPU that resets its clock in a low-power state (Tracy's docs name AMD's) would drift off the
+//! CPU's timeline in a long capture, where a periodic `sync_gpu_time` would be the fix.
 
 use crate::readback::map_and_read;
 use crate::timing::TimedPass;
