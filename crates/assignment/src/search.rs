@@ -658,6 +658,34 @@ mod tests {
         }
     }
 
+    /// The planes' largest stray is rounded *up* to f32 before the slack is added: plane 1 at
+    /// coordinate `0.1` strays by `1 − 0.1f32`, which f32 cannot hold and rounds *down* to
+    /// nearest, so a margin rounded to nearest would sit below the stray it must cover.
+    #[test]
+    fn exact_margin_rounds_the_planes_stray_up() {
+        let stray = 1.0 - f64::from(0.1f32);
+        let nearest = stray as f32;
+        assert!(
+            f64::from(nearest) < stray,
+            "the stray must round down to nearest"
+        );
+        // Slack 2⁻¹⁰ (two planes); the sum and this difference are exact in f32.
+        let margin = exact_margin([0.0f32, 0.1].into_iter());
+        assert_eq!(margin - 1.0 / 1024.0, nearest.next_up());
+        assert!(f64::from(margin - 1.0 / 1024.0) >= stray);
+    }
+
+    /// Past 2¹² planes the slack is 4 ulps of the largest index a guess may compute, two past
+    /// the last plane's (see [`exact_margin`]): 8190 planes reach 8192 = 2¹³, whose ulp is 2⁻¹⁰,
+    /// so their slack is 2⁻⁸; one plane fewer stays below 2¹³ (2⁻⁹), and 4093 below 2¹² get
+    /// the floor of 2⁻¹⁰.
+    #[test]
+    fn exact_margin_slack_is_four_ulps_of_the_largest_guess() {
+        assert_eq!(exact_margin((0..8190).map(|i| i as f32)), 1.0 / 256.0);
+        assert_eq!(exact_margin((0..8189).map(|i| i as f32)), 1.0 / 512.0);
+        assert_eq!(exact_margin((0..4093).map(|i| i as f32)), 1.0 / 1024.0);
+    }
+
     /// [`LOG2_APPROX_ERROR`] bounds the approximation on every mantissa of the extreme exponents
     /// (its worst, where the final subtractions round coarsest) and of the unit binades.
     #[test]
