@@ -237,4 +237,200 @@ mod tests {
             assert_eq!(point.spot_cos_outer, GpuLight::POINT_COS_OUTER);
         }
     }
+
+    #[test]
+    fn invalid_lights_are_counted_and_become_dark_records_at_the_camera() {
+        let nan = f32::NAN;
+        let inf = f32::INFINITY;
+        // Row 0 is valid; each other row has one bad value: a NaN position, an infinite, zero
+        // or negative radius, a negative or NaN colour, an infinite intensity.
+        let columns = LightColumns {
+            x: &[1.0, nan, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            y: &[2.0; 8],
+            z: &[3.0; 8],
+            radius: &[2.0, 1.0, inf, 0.0, -1.0, 1.0, 1.0, 1.0],
+            r: &[0.5, 1.0, 1.0, 1.0, 1.0, -0.5, nan, 1.0],
+            g: &[0.25; 8],
+            b: &[1.0; 8],
+            intensity: &[2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, inf],
+            spot: None,
+        };
+        // Stale records from an earlier frame are replaced, not appended to.
+        let mut out = vec![GpuLight::default(); 3];
+        let camera = DVec3::new(0.5, -1.0, 10.0);
+        assert_eq!(fill_gpu_lights(&columns, camera, &mut out), 7);
+        assert_eq!(out.len(), 8);
+        assert_eq!(
+            out[0],
+            GpuLight {
+                position: [0.5, 3.0, -7.0],
+                radius: 2.0,
+                color: [1.0, 0.5, 2.0],
+                spot_cos_outer: GpuLight::POINT_COS_OUTER,
+                spot_dir: [0.0; 3],
+                spot_cos_inner: 1.0,
+            }
+        );
+        for (i, skipped) in out.iter().enumerate().skip(1) {
+            assert_eq!(*skipped, GpuLight::default(), "row {i}");
+        }
+    }
+
+    #[test]
+    fn spots_with_a_bad_angle_or_axis_are_counted_and_become_dark_records() {
+        let nan = f32::NAN;
+        let one = [1.0f32; 8];
+        // Row 0 is a valid spot, row 6 a valid point light (angle π); rows 1–5 have a NaN,
+        // infinite, zero or negative angle or a NaN axis; row 7 a good spot on a NaN radius.
+        let columns = LightColumns {
+            x: &[0.0; 8],
+            y: &[0.0; 8],
+            z: &[0.0; 8],
+            radius: &[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, nan],
+            r: &one,
+            g: &one,
+            b: &one,
+            intensity: &one,
+            spot: Some(SpotColumns {
+                dir_x: &[0.0, 1.0, 1.0, 1.0, 1.0, nan, 0.0, 1.0],
+                dir_y: &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                dir_z: &[-2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                angle: &[
+                    0.5,
+                    nan,
+                    f32::INFINITY,
+                    0.0,
+                    -0.5,
+                    0.5,
+                    std::f32::consts::PI,
+                    0.5,
+                ],
+            }),
+        };
+        let mut out = Vec::new();
+        assert_eq!(fill_gpu_lights(&columns, DVec3::ZERO, &mut out), 6);
+        assert_eq!(
+            out[0],
+            GpuLight {
+                position: [0.0; 3],
+                radius: 1.0,
+                color: [1.0; 3],
+                spot_cos_outer: 0.5f32.cos(),
+                spot_dir: [0.0, 0.0, -1.0],
+                // Full strength inside 0.8 of the outer angle.
+                spot_cos_inner: 0.4f32.cos(),
+            }
+        );
+        assert_eq!(
+            out[6],
+            GpuLight {
+                position: [0.0; 3],
+                radius: 1.0,
+                color: [1.0; 3],
+                spot_cos_outer: GpuLight::POINT_COS_OUTER,
+                spot_dir: [0.0; 3],
+                spot_cos_inner: 1.0,
+            }
+        );
+        for i in [1, 2, 3, 4, 5, 7] {
+            assert_eq!(out[i], GpuLight::default(), "row {i}");
+        }
+    }
+
+    #[test]
+    fn light_columns_of_unequal_length_are_refused() {
+        let two = [1.0f32; 2];
+        let columns = LightColumns {
+            x: &two,
+            y: &two,
+            z: &two,
+            radius: &two,
+            r: &two,
+            g: &two,
+            b: &[1.0],
+            intensity: &two,
+            spot: None,
+        };
+        assert_eq!(
+            columns.check(),
+            Err("light columns differ in length: 2 positions, a column of 1".to_string())
+        );
+        let spot = SpotColumns {
+            dir_x: &two,
+            dir_y: &two,
+            dir_z: &two,
+            angle: &[0.5; 3],
+        };
+        let spots = LightColumns {
+            b: &two,
+            spot: Some(spot),
+            ..columns
+        };
+        assert_eq!(
+            spots.check(),
+            Err("light columns differ in length: 2 positions, a column of 3".to_string())
+        );
+        let equal = LightColumns {
+            spot: Some(SpotColumns {
+                angle: &two,
+                ..spot
+            }),
+            ..spots
+        };
+        assert_eq!(equal.check(), Ok(()));
+        assert_eq!((equal.len(), equal.is_empty()), (2, false));
+        let none = LightColumns {
+            x: &[],
+            y: &[],
+            z: &[],
+            radius: &[],
+            r: &[],
+            g: &[],
+            b: &[],
+            intensity: &[],
+            spot: None,
+        };
+        assert_eq!((none.len(), none.is_empty()), (0, true));
+    }
+
+    #[test]
+    fn cluster_lists_are_checked_against_the_grid_and_the_lights() {
+        // Cluster 0 holds light 2, cluster 1 lights 0 and 1: the last run ends exactly at the
+        // end of the indices, and the largest index is the last light.
+        let lists = ClusterLists {
+            offsets: &[0, 1],
+            counts: &[1, 2],
+            indices: &[2, 0, 1],
+        };
+        assert_eq!(lists.check(2, 3), Ok(()));
+        assert_eq!(lists.check(2, 4), Ok(()), "lights no list names are fine");
+        assert_eq!((lists.lights_named(), lists.max_count()), (3, 2));
+        assert_eq!(
+            lists.check(2, 2),
+            Err("light index 2 in the lists, but only 2 lights".to_string())
+        );
+        let past_the_end = ClusterLists {
+            counts: &[1, 3],
+            ..lists
+        };
+        assert_eq!(
+            past_the_end.check(2, 3),
+            Err("cluster 1's list runs past the 3 indices".to_string())
+        );
+        let other_grid = ClusterLists {
+            offsets: &[0, 1, 3],
+            ..lists
+        };
+        assert_eq!(
+            other_grid.check(2, 3),
+            Err("light lists describe 3 offsets and 2 counts for a grid of 2 clusters".to_string())
+        );
+        let empty = ClusterLists {
+            offsets: &[0],
+            counts: &[0],
+            indices: &[],
+        };
+        assert_eq!(empty.check(1, 0), Ok(()));
+        assert_eq!((empty.lights_named(), empty.max_count()), (0, 0));
+    }
 }
