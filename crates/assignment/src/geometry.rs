@@ -852,4 +852,62 @@ mod tests {
         assert!((r - 3.0f32.sqrt()).abs() < 1e-6);
         assert_eq!(band_radius(5.0, 2.0, 7.0, 8.0), 0.0);
     }
+
+    /// A band nearer than the centre (the slices in front of a sphere's middle) is bounded by
+    /// the cross-section at its far edge, as a band beyond the centre is by the one at its near
+    /// edge: the same distance from the centre gives the same radius on either side, and one
+    /// distance that differs from the centre's depth and the band's edge in every operation
+    /// (`dc − db`, not `dc + db` or `dc / db`) gives its own exact value.
+    #[test]
+    fn band_radius_of_a_band_in_front_of_the_centre() {
+        assert_eq!(band_radius(5.0, 2.0, 3.0, 4.0), 3.0f32.sqrt());
+        assert_eq!(
+            band_radius(5.0, 2.0, 3.0, 4.0),
+            band_radius(5.0, 2.0, 6.0, 7.0)
+        );
+        // Distance 1.5 of radius 2.5: (2.5 − 1.5)(2.5 + 1.5) = 4.
+        assert_eq!(band_radius(6.0, 2.5, 1.0, 4.5), 2.0);
+        assert_eq!(band_radius(6.0, 2.5, 2.0, 6.0), 2.5);
+        assert_eq!(band_radius(6.0, 2.5, 9.0, 10.0), 0.0);
+    }
+
+    /// A centre on the band's edge is inside the band: the radius comes back exactly, even for a
+    /// radius whose square underflows f32 (`sqrt(r·r)` would give 0 for this one).
+    #[test]
+    fn band_radius_of_a_centre_on_the_band_edge_is_the_radius() {
+        let r = 1e-30f32;
+        assert_eq!((r * r).sqrt(), 0.0);
+        assert_eq!(band_radius(1.0, r, 1.0, 2.0), r);
+        assert_eq!(band_radius(2.0, r, 1.0, 2.0), r);
+    }
+
+    /// A spot's view-space axis is its world axis turned into view space and made unit, whatever
+    /// its length (one 1e-20 long, whose f32 square is subnormal, included); a zero axis gives
+    /// zero, which callers treat as a point light.
+    #[test]
+    fn spot_view_axis_turns_and_normalises_the_axis() {
+        use glam::{Mat3, Vec3};
+        // World x, y, z to view y, z, x.
+        let turn = Mat3::from_cols(Vec3::Y, Vec3::Z, Vec3::X);
+        assert_eq!(spot_view_axis(Mat3::IDENTITY, 0.0, 0.0, -2.0), Vec3::NEG_Z);
+        assert_eq!(spot_view_axis(turn, 1e-20, 0.0, 0.0), Vec3::Y);
+        assert_eq!(spot_view_axis(turn, 0.0, 0.0, 5e3), Vec3::X);
+        assert_eq!(spot_view_axis(turn, 0.0, -7.0, 0.0), Vec3::NEG_Z);
+        assert_eq!(spot_view_axis(turn, 0.0, 0.0, 0.0), Vec3::ZERO);
+    }
+
+    /// The box's slope range takes each side at the depth where its slope is extreme: a side
+    /// left of the eye at the near depth, right of it at the far depth, and the reverse for the
+    /// right side — exactly, with values that tell near from far and left from right.
+    #[test]
+    fn box_slopes_take_each_side_at_its_extreme_depth() {
+        // Straddling the view axis: both sides at the near depth.
+        assert_eq!(box_slopes(-2.0, 3.0, 1.0, 4.0), (-2.0, 3.0));
+        // Wholly right of it: the left side at the far depth.
+        assert_eq!(box_slopes(1.0, 2.0, 1.0, 4.0), (0.25, 2.0));
+        // Wholly left of it: the right side at the far depth.
+        assert_eq!(box_slopes(-3.0, -1.0, 2.0, 4.0), (-1.5, -0.25));
+        // A side on the axis has slope 0 at any depth.
+        assert_eq!(box_slopes(0.0, 0.0, 2.0, 4.0), (0.0, 0.0));
+    }
 }
