@@ -220,27 +220,35 @@ impl PassTimer {
     fn emit_zones(&self, ctx: &GpuContext, ticks: &[u64]) -> Result<(), GpuError> {
         use crate::tracy_zones::TimedZone;
         let mut state = self.zones.lock().expect("zone state");
-        let mut zones = Vec::new();
+        // At most the three passes and the upload: on the stack, no allocation per read.
+        let mut zones = [TimedZone {
+            pass: None,
+            start: 0,
+            end: 0,
+        }; PASSES as usize + 1];
+        let mut n = 0;
         for pass in [TimedPass::GBuffer, TimedPass::Shading, TimedPass::Forward] {
             let i = pass as usize;
             if self.ran[i] && !state.passes[i] {
                 state.passes[i] = true;
-                zones.push(TimedZone {
+                zones[n] = TimedZone {
                     pass: Some(pass),
                     start: ticks[2 * i],
                     end: ticks[2 * i + 1],
-                });
+                };
+                n += 1;
             }
         }
         if self.uploaded && !state.upload {
             state.upload = true;
             let i = UPLOAD_QUERY as usize;
-            zones.push(TimedZone {
+            zones[n] = TimedZone {
                 pass: None,
                 start: ticks[i],
                 end: ticks[i + 1],
-            });
+            };
+            n += 1;
         }
-        state.zones.emit(ctx, zones)
+        state.zones.emit(ctx, &mut zones[..n])
     }
 }

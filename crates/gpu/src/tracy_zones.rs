@@ -21,6 +21,7 @@ use crate::{GpuContext, GpuError};
 use tracy_client::{Client, GpuContextType, span_location};
 
 /// One timed piece of a frame: which, and its start and end ticks.
+#[derive(Clone, Copy)]
 pub(crate) struct TimedZone {
     pub pass: Option<TimedPass>,
     pub start: u64,
@@ -51,7 +52,7 @@ impl GpuZones {
 
     /// Emits `zones` (the upload's copies when `pass` is `None`) in order of their start, once a
     /// client runs; nothing otherwise.
-    pub fn emit(&mut self, ctx: &GpuContext, mut zones: Vec<TimedZone>) -> Result<(), GpuError> {
+    pub fn emit(&mut self, ctx: &GpuContext, zones: &mut [TimedZone]) -> Result<(), GpuError> {
         let Some(client) = Client::running() else {
             return Ok(());
         };
@@ -77,8 +78,8 @@ impl GpuZones {
             return Ok(());
         };
         // Tracy wants the timestamps in increasing order.
-        zones.sort_by_key(|z| z.start);
-        for zone in zones {
+        zones.sort_unstable_by_key(|z| z.start);
+        for &mut zone in zones {
             let location = match zone.pass {
                 None => span_location!("GPU: upload copies"),
                 Some(TimedPass::GBuffer) => span_location!("GPU: G-buffer pass"),
