@@ -203,8 +203,10 @@ pub(crate) fn refine_scratch_len(dims: glam::UVec3) -> usize {
 }
 
 /// Refinement of one slice `k` of a light's box: calls `row(j, i0, i1)` for every row of the slice
-/// the sphere (shrunk to the slab) can touch, with the tightened x tile span. `gaps` is scratch of
-/// at least [`refine_scratch_len`].
+/// the sphere (shrunk to the slab) can touch, with the tightened x tile span — or returns `true`
+/// without calling it when the slab's disc reaches the box's farthest corner, so that every
+/// cluster of the box's slice is kept (the caller then pushes the slice whole, as one span of
+/// rows). `gaps` is scratch of at least [`refine_scratch_len`].
 ///
 /// A cluster `(i, j)` of the slab is kept when `dx² ≤ R_k² − dy²`, where `dx` (`dy`) is the distance
 /// from the centre to the column's (row's) band of x (y) over the slab's depths `[ka, kb]` — the
@@ -220,6 +222,7 @@ pub(crate) fn refine_scratch_len(dims: glam::UVec3) -> usize {
 /// identical lists on `paper` 1000 and `uniform` 100k/1M, `paper` 1000 `refined` 1.35× faster.)
 #[allow(clippy::too_many_arguments)] // One light's columns, passed by value in the hot loop.
 #[inline(always)]
+#[must_use = "`true` keeps the box's whole slice, and `row` was called for none of its rows"]
 pub(crate) fn refine_slice(
     cx: f32,
     cy: f32,
@@ -230,18 +233,18 @@ pub(crate) fn refine_slice(
     planes: &FramePlanes<'_>,
     gaps: &mut [f32],
     mut row: impl FnMut(u32, u32, u32),
-) {
+) -> bool {
     let sets = planes.sets;
     let ka = fmax(sets.z_depths[k as usize], b.z.da);
     let kb = fmin(sets.z_depths[k as usize + 1], b.z.db);
     if !(ka <= kb) {
-        return;
+        return false;
     }
     let rk = band_radius(dc, r, ka, kb);
     let columns = (b.i1 - b.i0 + 1) as usize;
     let xs = &sets.x_slopes[b.i0 as usize..][..columns + 1];
     // The farthest column and row sit at the box's ends (the gaps fall towards the centre). When
-    // the slab's disc reaches that corner nothing can be cut: every row whole, no per-row work.
+    // the slab's disc reaches that corner nothing can be cut: the whole slice, no per-row work.
     let row_gap = |j: u32| {
         let (top, bottom) = (sets.y_slopes[j as usize], sets.y_slopes[j as usize + 1]);
         let y_lo = fmin(bottom * ka, bottom * kb);
@@ -253,10 +256,7 @@ pub(crate) fn refine_slice(
     let gap_last = fmin(xs[columns - 1] * ka, xs[columns - 1] * kb) - cx;
     let dx = fmax(fmax(gap_first, gap_last), 0.0);
     if dy <= rk && dx * dx <= (rk - dy) * (rk + dy) {
-        for j in b.j0..=b.j1 {
-            row(j, b.i0, b.i1);
-        }
-        return;
+        return true;
     }
     let (left, rest) = gaps.split_at_mut(columns);
     let (right, rooms) = rest.split_at_mut(columns);
@@ -300,6 +300,7 @@ pub(crate) fn refine_slice(
             row(j, b.i0 + cut_left, b.i1 - cut_right);
         }
     }
+    false
 }
 
 /// Conservative cone-vs-sphere test for spot lights: may a spot (apex, unit axis, cos/sin of the
@@ -528,10 +529,7 @@ mod tests {
                 continue;
             };
             for k in b.z.k0..=b.z.k1 {
-                let mut got = Vec::new();
-                refine_slice(cx, cy, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
-                    got.extend((i0..=i1).map(|i| (j, i)))
-                });
+                let got = refined_clusters(cx, cy, dc, r, &b, k, &planes, &mut gaps);
                 let want = kept_by_definition(cx, cy, dc, r, &b, k, &sets);
                 assert_eq!(
                     got, want,
@@ -544,6 +542,30 @@ mod tests {
             }
         }
         (kept, cut, whole_slices)
+    }
+
+    /// The clusters `(j, i)` of slice `k` of box `b` that `refine_slice` keeps, row by row: the
+    /// rows it calls back with, or every row of the box when it keeps the slice whole.
+    #[allow(clippy::too_many_arguments)] // The same light, box and slice as `refine_slice` takes.
+    fn refined_clusters(
+        cx: f32,
+        cy: f32,
+        dc: f32,
+        r: f32,
+        b: &ClusterBox,
+        k: u32,
+        planes: &FramePlanes<'_>,
+        gaps: &mut [f32],
+    ) -> Vec<(u32, u32)> {
+        let mut got = Vec::new();
+        let whole = refine_slice(cx, cy, dc, r, b, k, planes, gaps, |j, i0, i1| {
+            got.extend((i0..=i1).map(|i| (j, i)))
+        });
+        if whole {
+            assert!(got.is_empty(), "a slice kept whole also called `row`");
+            got.extend((b.j0..=b.j1).flat_map(|j| (b.i0..=b.i1).map(move |i| (j, i))));
+        }
+        got
     }
 
     /// The clusters `(j, i)` of slice `k` of box `b` that `refine_slice`'s definition keeps:
@@ -659,10 +681,7 @@ mod tests {
                     else {
                         continue;
                     };
-                    let mut got = Vec::new();
-                    refine_slice(cx, 0.0, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
-                        got.extend((i0..=i1).map(|i| (j, i)))
-                    });
+                    let got = refined_clusters(cx, 0.0, dc, r, &b, k, &planes, &mut gaps);
                     let context = format!("slice {k}, column {c}, left {left}, cx {cx}");
                     assert_eq!(
                         got,
@@ -699,10 +718,7 @@ mod tests {
             let dc = z - r;
             assert!(dc + r == z && z - dc == r, "slice {k}");
             let b = whole_box(&grid, dc, r);
-            let mut got = Vec::new();
-            refine_slice(0.0, 0.0, dc, r, &b, k, &planes, &mut gaps, |j, i0, i1| {
-                got.extend((i0..=i1).map(|i| (j, i)))
-            });
+            let got = refined_clusters(0.0, 0.0, dc, r, &b, k, &planes, &mut gaps);
             assert_eq!(
                 got,
                 vec![(d.y / 2, d.x / 2)],

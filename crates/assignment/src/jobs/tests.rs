@@ -252,9 +252,20 @@ fn emit_lists_exactly_each_methods_definition() {
             let mut rows = Vec::new();
             let mut gaps = vec![0.0; geometry::refine_scratch_len(d)];
             for k in bx.z.k0..=bx.z.k1 {
-                geometry::refine_slice(cx, cy, dc, r, &bx, k, &planes, &mut gaps, |j, i0, i1| {
-                    rows.extend((i0..=i1).map(|i| grid.cluster_id(i, j, k)))
-                });
+                let whole = geometry::refine_slice(
+                    cx,
+                    cy,
+                    dc,
+                    r,
+                    &bx,
+                    k,
+                    &planes,
+                    &mut gaps,
+                    |j, i0, i1| rows.extend((i0..=i1).map(|i| grid.cluster_id(i, j, k))),
+                );
+                if whole {
+                    rows.extend(box_clusters(&grid, &bx, |_, _, kk| kk == k));
+                }
             }
             rows.sort_unstable();
             rows
