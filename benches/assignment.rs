@@ -19,7 +19,9 @@
 //!   scaling), `uniform` 1M `refined`, `sphere` 100k (`binary`, `refined`; the single-threaded
 //!   engine reference of 1.5–2.1 ms). These run as a frame job would, on a pool worker (the timed
 //!   loop inside `ThreadPool::install`); `paper/*-from-outside` time the same calls from the
-//!   benchmark's own thread, which pays the hand-off to rayon's pool and back every frame.
+//!   benchmark's own thread, which pays the hand-off to rayon's pool and back every frame, and
+//!   `paper/*-from-pool-member` from a thread that joined its pool (`use_current_thread`), as an
+//!   engine's main thread can.
 //!   `scaling` calls from outside too.
 //!
 //! ## What is timed
@@ -40,7 +42,8 @@ use myriad::cluster_math::{ClusterGrid, DepthSlicing, glam::UVec3};
 use myriad::scene::{Preset, Scene};
 use std::cell::OnceCell;
 use std::hint::black_box;
-use std::time::Duration;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 /// Seed of every generated scene.
 const SEED: u64 = 1;
@@ -95,6 +98,57 @@ enum Caller<'a> {
     /// The benchmark's own thread, outside any pool: each parallel frame is handed to rayon's
     /// global pool and this thread woken when it is done (`Assigner` does it in one hand-off).
     Outside,
+}
+
+/// A thread of the benchmark's own that is also worker 0 of a pool of one worker per core
+/// (`ThreadPoolBuilder::use_current_thread`): an engine's main thread made a member of its job
+/// pool, as README's "Things to know" suggests. Its calls start their parallel regions on the
+/// spot, as a worker's do, with no hand-off. It owns its scene, assigner and lists (a thread
+/// that joins a pool stays in it, so the timed loop runs there, not on criterion's thread).
+struct PoolMember {
+    requests: mpsc::Sender<(Method, u64)>,
+    elapsed: mpsc::Receiver<Duration>,
+}
+
+impl PoolMember {
+    /// Starts the thread, which joins its pool and generates `lights` lights of `preset`.
+    fn start(preset: Preset, lights: usize) -> Self {
+        let (requests, calls) = mpsc::channel::<(Method, u64)>();
+        let (times, elapsed) = mpsc::channel();
+        std::thread::spawn(move || {
+            let _pool = rayon::ThreadPoolBuilder::new()
+                .use_current_thread()
+                .build()
+                .expect("cannot start a rayon pool with this thread in it");
+            let scene = preset.generate(lights, SEED);
+            let input = myriad::light_input(&scene.lights);
+            let mut assigner = Assigner::new();
+            let mut lists = LightLists::new();
+            for (method, iterations) in calls {
+                let mut run = || {
+                    let lists = &mut lists;
+                    assigner.assign(method, black_box(&input), &scene.camera, &scene.grid, lists)
+                };
+                run();
+                let start = Instant::now();
+                for _ in 0..iterations {
+                    black_box(run());
+                }
+                if times.send(start.elapsed()).is_err() {
+                    return;
+                }
+            }
+        });
+        Self { requests, elapsed }
+    }
+
+    /// Time of `iterations` calls of `method` in a row on the member thread (after one untimed).
+    fn time(&self, method: Method, iterations: u64) -> Duration {
+        self.requests
+            .send((method, iterations))
+            .expect("the pool member thread stopped");
+        self.elapsed.recv().expect("the pool member thread stopped")
+    }
 }
 
 /// Times `method` on `lights` lights of `preset` (generated on first use into `scene`, then kept
@@ -179,6 +233,14 @@ fn targets(c: &mut Criterion) {
     for method in [Method::Binary, Method::Refined] {
         let id = BenchmarkId::new(format!("paper/{}-from-outside", method.name()), 1_000);
         bench_assign(&mut group, id, method, paper, None, Caller::Outside);
+    }
+    // And from a thread that joined the pool, as an engine's main thread can: no hand-off.
+    let member = PoolMember::start(Preset::Paper, 1_000);
+    for method in [Method::Binary, Method::Refined] {
+        let id = BenchmarkId::new(format!("paper/{}-from-pool-member", method.name()), 1_000);
+        timing(&mut group, method, 1_000);
+        group.throughput(Throughput::Elements(1_000));
+        group.bench_function(id, |b| b.iter_custom(|n| member.time(method, n)));
     }
 
     let uniform_100k = (Preset::Uniform, 100_000, &OnceCell::new());

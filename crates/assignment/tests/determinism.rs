@@ -238,3 +238,55 @@ fn one_assigner_switching_methods_and_grids_lists_as_fresh_ones_do() {
         );
     }
 }
+
+/// An engine's main thread made worker 0 of its own pool (`ThreadPoolBuilder::use_current_thread`,
+/// the way README's "Calling from an engine" recommends) assigns on that pool, with no hand-off:
+/// the frame is split for the pool's seven threads (a count no CI machine's global pool has) and
+/// runs on them, and the lists are the ones a one-thread pool writes. The thread is spawned for
+/// the test, since a thread that joins a pool stays in it.
+#[test]
+fn a_thread_that_joined_its_pool_assigns_on_it() {
+    let scene = make_scene(&SceneParams {
+        seed: 5,
+        lights: 8000,
+        ..SceneParams::WIDE
+    });
+    let input = scene.lights.input(false);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for method in [Method::Binary, Method::Refined] {
+        let mut reference = LightLists::new();
+        one.install(|| {
+            Assigner::new().assign(method, &input, &scene.camera, &scene.grid, &mut reference)
+        });
+        let (stats, lists) = std::thread::scope(|s| {
+            s.spawn(|| {
+                let _pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(7)
+                    .use_current_thread()
+                    .build()
+                    .unwrap();
+                assert_eq!(rayon::current_thread_index(), Some(0));
+                assert_eq!(rayon::current_num_threads(), 7);
+                let mut lists = LightLists::new();
+                let stats = Assigner::new()
+                    .with_parallelism(myriad_assignment::Parallelism::Always)
+                    .assign(method, &input, &scene.camera, &scene.grid, &mut lists);
+                (stats, lists)
+            })
+            .join()
+            .unwrap()
+        });
+        assert!(stats.parallel, "{method}: the frame ran on the pool");
+        assert_eq!(
+            stats.tasks, 28,
+            "{method}: four tasks per thread of the joined pool"
+        );
+        assert!(
+            stats.pairs > 0 && lists == reference,
+            "{method}: lists differ"
+        );
+    }
+}
