@@ -256,3 +256,112 @@ fn tuned_frames_probe_both_sides_hold_the_choice_and_leave_the_image_unchanged()
     let (_, frame) = render(&mut viewer, &scene, cull_only);
     assert!(frame.tuning.is_none());
 }
+
+/// A probe frame that is reused whole ran neither side's work: it must not count as a timing,
+/// and the probe waits, planning the same frame again. The margin of 0.99 makes the first
+/// decision "without the prepass" whatever the timings, so the probe after the held frames starts
+/// on the side the cached frame already has, and nothing changes, so every frame from there on
+/// is reused. The tuner keeps the settings it was given.
+#[test]
+fn a_reused_probe_frame_is_not_timed_and_the_probe_waits() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let settings = TunerSettings {
+        probe_frames: 1,
+        hold_frames: 2,
+        margin: 0.99,
+    };
+    viewer.set_prepass_tuner(settings);
+    assert_eq!(viewer.prepass_tuner_settings(), settings);
+    let skips = Skips {
+        tune_prepass: true,
+        ..Skips::ALL
+    };
+    let frames: Vec<_> = (0..7)
+        .map(|_| render(&mut viewer, &scene, skips).1)
+        .collect();
+    let plans: Vec<FramePlan> = frames.iter().map(|f| f.tuning.unwrap().plan).collect();
+    let plan = |use_prepass, probe| FramePlan { use_prepass, probe };
+    // One probe frame a side, then the decision held two frames (the second reused).
+    assert_eq!(
+        plans[..4],
+        [
+            plan(false, true),
+            plan(true, true),
+            plan(false, false),
+            plan(false, false)
+        ]
+    );
+    assert!(!frames[2].reused && frames[3].reused);
+    // The next probe starts without the prepass, like the cached frame: reused, so untimed, so
+    // planned again.
+    for (n, frame) in frames.iter().enumerate().skip(4) {
+        assert_eq!(plans[n], plan(false, true), "frame {n}: {plans:?}");
+        assert!(frame.reused, "frame {n}");
+    }
+    assert!(!viewer.prepass_decision().unwrap().use_prepass);
+}
+
+/// Skipping frames shade with the viewer's settings: at twice the exposure a frame with no
+/// savings is the plain frame at twice the exposure, not the default look.
+#[test]
+fn skipping_frames_shade_with_the_viewers_settings() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let (default_look, _) = render(&mut viewer, &scene, Skips::NONE);
+    viewer.settings.exposure = 2.0;
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    let plain = viewer.image().unwrap();
+    assert!(max_channel_difference(&plain, &default_look) > 8);
+    let (skipping, _) = render(&mut viewer, &scene, Skips::NONE);
+    let d = max_channel_difference(&skipping, &plain);
+    assert!(
+        d <= 1,
+        "the skipping frame differs from the plain one by {d}/255"
+    );
+}
+
+/// Without the `variants` saving a frame forces every shader path (the spot-cone code on a
+/// scene without spot lights), and with it builds only what the scene needs: after each, the
+/// pipelines of that kind of frame are already built, and the spot-free scene's frame left the
+/// forced ones unbuilt.
+#[test]
+fn without_feature_variants_every_shader_path_is_built() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    scene.lights = without_spots(&scene.lights);
+    let mut forced = Viewer::new(ctx.clone(), &scene).unwrap();
+    render(&mut forced, &scene, Skips::NONE);
+    forced.settings.force_all_features = true;
+    assert_eq!(
+        forced.prepare(&scene, Shading::Clustered, false),
+        0,
+        "a frame without `variants` left shader paths unbuilt"
+    );
+    let mut varied = Viewer::new(ctx, &scene).unwrap();
+    let variants = Skips {
+        feature_variants: true,
+        ..Skips::NONE
+    };
+    render(&mut varied, &scene, variants);
+    assert_eq!(
+        varied.prepare(&scene, Shading::Clustered, false),
+        0,
+        "a frame with `variants` did not build the spot-free paths"
+    );
+    varied.settings.force_all_features = true;
+    assert!(
+        varied.prepare(&scene, Shading::Clustered, false) > 0,
+        "a frame with `variants` built the spot paths a scene without spots does not need"
+    );
+}

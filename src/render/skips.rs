@@ -504,7 +504,7 @@ fn appearance_dirty(a: &Lights, b: &Lights) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::Skips;
+    use super::{Lights, Skips, appearance_dirty, geometry_dirty};
 
     #[test]
     fn savings_parse_by_name_and_print_back() {
@@ -557,5 +557,66 @@ mod tests {
         let twice = "depth,depth".parse::<Skips>().unwrap_err();
         assert!(twice.contains("twice"), "{twice}");
         assert!("".parse::<Skips>().is_err());
+    }
+
+    /// A change of any one position, radius or spot-cone column makes the cached lists stale
+    /// (full frame); a change of any one colour or intensity column only the uploaded lights
+    /// (lists kept); identical lights are neither. One column at a time, so a check that needs
+    /// two columns to change together shows.
+    #[test]
+    fn each_light_column_change_is_seen_as_geometry_or_appearance() {
+        let lights = myriad_scene::atrium().lights;
+        assert!(lights.has_spots(), "the spot columns are compared too");
+        assert!(!geometry_dirty(&lights, &lights.clone()));
+        assert!(!appearance_dirty(&lights, &lights.clone()));
+        type Column = fn(&mut Lights) -> &mut Vec<f32>;
+        let geometric: [(&str, Column); 8] = [
+            ("x", |l| &mut l.x),
+            ("y", |l| &mut l.y),
+            ("z", |l| &mut l.z),
+            ("radius", |l| &mut l.radius),
+            ("spot_dir_x", |l| &mut l.spot_dir_x),
+            ("spot_dir_y", |l| &mut l.spot_dir_y),
+            ("spot_dir_z", |l| &mut l.spot_dir_z),
+            ("spot_angle", |l| &mut l.spot_angle),
+        ];
+        let appearance: [(&str, Column); 4] = [
+            ("r", |l| &mut l.r),
+            ("g", |l| &mut l.g),
+            ("b", |l| &mut l.b),
+            ("intensity", |l| &mut l.intensity),
+        ];
+        let changed = |column: Column| {
+            let mut changed = lights.clone();
+            column(&mut changed)[3] += 0.25;
+            changed
+        };
+        for (name, column) in geometric {
+            let changed = changed(column);
+            assert!(geometry_dirty(&lights, &changed), "{name}");
+            assert!(!appearance_dirty(&lights, &changed), "{name}");
+        }
+        for (name, column) in appearance {
+            let changed = changed(column);
+            assert!(appearance_dirty(&lights, &changed), "{name}");
+            assert!(!geometry_dirty(&lights, &changed), "{name}");
+        }
+    }
+
+    /// Frames the tuner plans without the prepass keep every other saving and drop the two that
+    /// need it, and the tuning of them.
+    #[test]
+    fn without_the_prepass_only_active_depth_and_tuning_are_dropped() {
+        let tuned = Skips {
+            tune_prepass: true,
+            ..Skips::ALL
+        };
+        let expected = Skips {
+            cull: true,
+            reuse_unchanged: true,
+            feature_variants: true,
+            ..Skips::NONE
+        };
+        assert_eq!(tuned.without_prepass(), expected);
     }
 }
