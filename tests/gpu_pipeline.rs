@@ -3,7 +3,9 @@
 //! culling the lights before assignment and upload sends fewer and changes no image.
 
 use myriad::assignment::Method;
-use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer, read_rgba8};
+use myriad::gpu::{
+    GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer, ShadingSettings, read_rgba8,
+};
 use myriad::render::{GpuStage, LoopReport, RenderScene, max_channel_difference, run_frames};
 
 fn frames(
@@ -13,6 +15,25 @@ fn frames(
     cull: bool,
     count: usize,
 ) -> (Vec<Vec<u8>>, LoopReport) {
+    frames_with(
+        ctx,
+        scene,
+        pipelined,
+        cull,
+        count,
+        ShadingSettings::default(),
+    )
+}
+
+/// `frames` with the GPU stage shading with `settings`.
+fn frames_with(
+    ctx: &GpuContext,
+    scene: &RenderScene,
+    pipelined: bool,
+    cull: bool,
+    count: usize,
+    settings: ShadingSettings,
+) -> (Vec<Vec<u8>>, LoopReport) {
     let mut renderer = Renderer::new(ctx, HEADLESS_FORMAT);
     let gpu_scene = renderer.upload_scene(ctx, &scene.geometry).unwrap();
     let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height).unwrap();
@@ -21,7 +42,7 @@ fn frames(
         renderer: &mut renderer,
         scene: &gpu_scene,
         target: &target,
-        settings: Default::default(),
+        settings,
     };
     let mut images = Vec::new();
     let report = run_frames(
@@ -96,5 +117,36 @@ fn culled_frames_upload_fewer_lights_and_look_the_same() {
         );
         assert_eq!(c.lights_uploaded, pipelined.frames[n].lights_uploaded);
         assert!(c.cull_seconds > 0.0 && a.cull_seconds == 0.0);
+    }
+}
+
+/// Both loops shade with the GPU stage's settings and say which loop ran: at twice the exposure
+/// each frame is brighter than the same frame at the default exposure.
+#[test]
+fn the_loops_shade_with_the_stages_settings() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(1000, 160, 80).unwrap();
+    let brighter = ShadingSettings {
+        exposure: 2.0,
+        ..ShadingSettings::default()
+    };
+    for pipelined in [false, true] {
+        let (plain, report) = frames(&ctx, &scene, pipelined, true, 2);
+        assert_eq!(report.pipelined, pipelined);
+        let (bright, _) = frames_with(&ctx, &scene, pipelined, true, 2, brighter);
+        for n in 0..2 {
+            let d = max_channel_difference(&plain[n], &bright[n]);
+            assert!(
+                d > 8,
+                "pipelined {pipelined}, frame {n}: exposure 2 changed {d}/255"
+            );
+            let sum = |image: &[u8]| image.iter().map(|&v| u64::from(v)).sum::<u64>();
+            assert!(
+                sum(&bright[n]) > sum(&plain[n]),
+                "pipelined {pipelined}, frame {n}"
+            );
+        }
     }
 }

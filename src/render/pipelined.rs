@@ -391,4 +391,59 @@ mod tests {
             .count();
         assert!(moved > scene.lights.len() / 2, "{moved} lights moved");
     }
+
+    /// Frame N shows the lights at N / 60 s: frame 60 equals the scene systems' orbits animated
+    /// to one second.
+    #[test]
+    fn frame_sixty_is_one_second_of_orbiting() {
+        let scene = RenderScene::default_scene(2000, 64, 32).unwrap();
+        let mut cpu = CpuStage::new(&scene, Method::Refined, false);
+        let mut work = empty_work();
+        cpu.run(60, &mut work);
+        let (mut x, mut z) = (scene.lights.x.clone(), scene.lights.z.clone());
+        animate_orbits(&cpu.orbits, 1.0, &mut x, &mut z);
+        for i in 0..scene.lights.len() {
+            let off = (work.lights.x[i] - x[i])
+                .abs()
+                .max((work.lights.z[i] - z[i]).abs());
+            assert!(off < 1e-4, "light {i} is {off} m from its place at 1 s");
+        }
+        assert_ne!(x, scene.lights.x, "one second moved the lights");
+    }
+
+    /// A frame's stage sum adds each of the six timed stages once; a loop's frame time is its
+    /// wall time per frame, its steady frame time the span from the first frame's end to the last
+    /// one's per frame after the first, and a stage's mean is over the frames.
+    #[test]
+    fn loop_times_are_sums_spans_and_means_over_frames() {
+        // Powers of two: a stage dropped, subtracted or multiplied changes the sum.
+        let frame = |s: f64| StageTimes {
+            animate_seconds: s,
+            cull_seconds: 2.0 * s,
+            assign_seconds: 4.0 * s,
+            upload_seconds: 8.0 * s,
+            encode_seconds: 16.0 * s,
+            gpu_wait_seconds: 32.0 * s,
+            ..StageTimes::default()
+        };
+        assert_eq!(frame(1.0).sum_seconds(), 63.0);
+        let report = LoopReport {
+            frames: vec![frame(1.0), frame(2.0), frame(3.0), frame(6.0)],
+            wall_seconds: 2.0,
+            finished_at: vec![1.0, 1.5, 2.5, 4.0],
+            ..LoopReport::default()
+        };
+        assert_eq!(report.frame_seconds(), 0.5);
+        assert_eq!(report.steady_frame_seconds(), Some(1.0));
+        assert_eq!(report.mean(|f| f.animate_seconds), 3.0);
+        let one_frame = LoopReport {
+            finished_at: vec![1.0],
+            ..report
+        };
+        assert_eq!(
+            one_frame.steady_frame_seconds(),
+            None,
+            "no span after one frame"
+        );
+    }
 }
