@@ -151,6 +151,10 @@ fn to_rgba8(pixels: &ImagePixels) -> TextureRgba8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use myriad_scene::glam::Mat4;
+    use myriad_scene::{
+        Aabb, Image, ImageSource, Instance, Mesh, Primitive, TangentSource, TextureRef,
+    };
 
     #[test]
     fn atrium_flattens_with_blended_draws_and_every_triangle() {
@@ -191,5 +195,148 @@ mod tests {
                 .collect(),
         };
         assert_eq!(to_rgba8(&float).pixels, vec![128, 255, 0, 255]);
+    }
+
+    /// A 2 × 4 quad in the local z = 0 plane (two triangles) drawn with `material`.
+    fn quad(material: Option<usize>) -> Primitive {
+        let positions = vec![
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(2.0, 4.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+        ];
+        Primitive {
+            bounds: Aabb::from_points(positions.iter().copied()),
+            normals: vec![Vec3::Z; positions.len()],
+            positions,
+            tex_coords: Vec::new(),
+            tangents: Vec::new(),
+            tangent_source: TangentSource::None,
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material,
+        }
+    }
+
+    /// An image named by materials; `pixels` `None` as when loaded as a reference only.
+    fn image(pixels: Option<ImagePixels>) -> Image {
+        Image {
+            name: None,
+            source: ImageSource::Uri {
+                uri: "texture.png".into(),
+                mime_type: None,
+            },
+            pixels,
+        }
+    }
+
+    /// Each decoded image becomes one texture, numbered in the order materials first use it: a
+    /// material names the texture its image became (shared by every material of that image), and
+    /// an image without pixels gives its materials none.
+    #[test]
+    fn materials_name_the_texture_their_image_became() {
+        let pixels = |v: u8| ImagePixels {
+            width: 1,
+            height: 1,
+            format: PixelFormat::R8,
+            data: vec![v],
+        };
+        let mut model = Model::new("textured");
+        model.images = vec![
+            image(None),
+            image(Some(pixels(10))),
+            image(Some(pixels(20))),
+        ];
+        let textured = |index: usize| Material {
+            base_color_texture: Some(TextureRef {
+                image: index,
+                tex_coord: 0,
+            }),
+            ..Material::default()
+        };
+        model.materials = vec![textured(0), textured(2), textured(1), textured(2)];
+        let geometry = scene_geometry(&model);
+        geometry.check().unwrap();
+        let named: Vec<_> = geometry
+            .materials
+            .iter()
+            .map(|m| m.base_color_texture)
+            .collect();
+        // The four materials, then the default one for primitives without a material.
+        assert_eq!(named, [None, Some(0), Some(1), Some(0), None]);
+        let greys: Vec<u8> = geometry.textures.iter().map(|t| t.pixels[0]).collect();
+        assert_eq!(greys, [20, 10], "texture 0 is image 2, texture 1 image 1");
+    }
+
+    /// A draw's centre (what blended draws are sorted by) is the middle of its world-space
+    /// bounds: the instance's transform applied.
+    #[test]
+    fn a_draw_is_centred_on_its_world_space_bounds() {
+        let mut model = Model::new("quad");
+        model.meshes.push(Mesh {
+            name: None,
+            primitives: vec![quad(None)],
+        });
+        model.instances.push(Instance {
+            mesh: 0,
+            world_from_local: Mat4::from_translation(Vec3::new(10.0, 0.0, -6.0)),
+            node: 0,
+            name: None,
+        });
+        let geometry = scene_geometry(&model);
+        geometry.check().unwrap();
+        assert_eq!(geometry.draws.len(), 1);
+        // World bounds (10, 0, -6)..(12, 4, -6).
+        assert_eq!(geometry.draws[0].center, Vec3::new(11.0, 2.0, -6.0));
+    }
+
+    /// Every 8-, 16- and 32-bit layout converts pixel by pixel, not only its first pixel: grey
+    /// spreads to RGB, a missing alpha is opaque, 16-bit keeps the high byte, floats are clamped
+    /// and scaled. Two pixels in a column, so a pixel count of `width / height` or a stride
+    /// error shows.
+    #[test]
+    fn every_pixel_of_each_layout_converts() {
+        let convert = |format, data: Vec<u8>| {
+            let pixels = ImagePixels {
+                width: 1,
+                height: 2,
+                format,
+                data,
+            };
+            let texture = to_rgba8(&pixels);
+            assert_eq!((texture.width, texture.height), (1, 2), "{format:?}");
+            texture.pixels
+        };
+        assert_eq!(
+            convert(PixelFormat::R8, vec![10, 20]),
+            [10, 10, 10, 255, 20, 20, 20, 255]
+        );
+        assert_eq!(
+            convert(PixelFormat::R8G8, vec![10, 200, 20, 100]),
+            [10, 10, 10, 200, 20, 20, 20, 100]
+        );
+        assert_eq!(
+            convert(PixelFormat::R8G8B8, vec![1, 2, 3, 4, 5, 6]),
+            [1, 2, 3, 255, 4, 5, 6, 255]
+        );
+        assert_eq!(
+            convert(PixelFormat::R8G8B8A8, vec![1, 2, 3, 4, 5, 6, 7, 8]),
+            [1, 2, 3, 4, 5, 6, 7, 8]
+        );
+        let wide: Vec<u8> = [0x11u8, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]
+            .iter()
+            .flat_map(|&high| [0x0f, high])
+            .collect();
+        assert_eq!(
+            convert(PixelFormat::R16G16B16A16, wide),
+            [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]
+        );
+        let floats: Vec<u8> = [0.0f32, 0.25, 1.0, 0.5, 1.5, -0.5, 0.2, 1.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        assert_eq!(
+            convert(PixelFormat::R32G32B32A32Float, floats),
+            [0, 64, 255, 128, 255, 0, 51, 255]
+        );
     }
 }

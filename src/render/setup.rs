@@ -178,4 +178,61 @@ mod tests {
             .to_string();
         assert!(err.contains("no camera named \"Main\""), "{err}");
     }
+
+    /// A scene has the model's own lights first, then surface lights up to the count asked for,
+    /// numbered on from the model's (`source_index` is the row); a model without surfaces renders
+    /// with its own lights, and only asking for more than it has is refused.
+    #[test]
+    fn surface_lights_fill_up_to_the_count_after_the_models_own() {
+        let mut model = myriad_scene::atrium();
+        let own = model.lights.len();
+        assert!(own > 0);
+        let scene = RenderScene::from_model(&model, "atrium", None, own + 100, 7, 64, 32).unwrap();
+        assert_eq!(scene.lights.len(), own + 100);
+        assert_eq!(scene.lights.x[..own], model.lights.x[..]);
+        let rows: Vec<u32> = (0..(own + 100) as u32).collect();
+        assert_eq!(scene.lights.source_index, rows);
+
+        model.meshes.clear();
+        model.instances.clear();
+        let bare = RenderScene::from_model(&model, "bare", None, own, 7, 64, 32).unwrap();
+        assert_eq!(bare.lights.len(), own);
+        let err = RenderScene::from_model(&model, "bare", None, own + 1, 7, 64, 32)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("cannot place 1 lights on its surfaces"),
+            "{err}"
+        );
+    }
+
+    /// The blended bounds are one box per alpha-blended draw, around that draw's vertices, and
+    /// none for opaque draws: a model without blended materials has no forward-pass work.
+    #[test]
+    fn blended_bounds_box_the_blended_draws_only() {
+        let mut model = myriad_scene::atrium();
+        let scene = RenderScene::from_model(&model, "atrium", None, 10, 1, 64, 32).unwrap();
+        let geometry = &scene.geometry;
+        let blended: Vec<_> = geometry
+            .draws
+            .iter()
+            .filter(|d| geometry.materials[d.material as usize].blend == myriad_gpu::Blend::Blended)
+            .collect();
+        assert!(!blended.is_empty() && blended.len() < geometry.draws.len());
+        assert!(scene.has_blended());
+        assert_eq!(scene.blended_bounds.len(), blended.len());
+        for (bounds, draw) in scene.blended_bounds.iter().zip(blended) {
+            // A draw's centre is the middle of its vertices' box.
+            let middle = (bounds.min + bounds.max) * 0.5;
+            assert!(
+                (middle - draw.center).length() < 1e-4,
+                "{bounds:?}, {draw:?}"
+            );
+        }
+        for material in &mut model.materials {
+            material.alpha_mode = myriad_scene::AlphaMode::Opaque;
+        }
+        let opaque = RenderScene::from_model(&model, "opaque atrium", None, 10, 1, 64, 32).unwrap();
+        assert!(!opaque.has_blended() && opaque.blended_bounds.is_empty());
+    }
 }

@@ -231,3 +231,29 @@ impl Viewer {
         &self.lists
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use myriad_scene::glam::UVec3;
+
+    /// Reports and file names tell the strategies apart by these names.
+    #[test]
+    fn each_strategy_has_its_own_name() {
+        let names: Vec<_> = Shading::ALL.iter().map(|s| s.name()).collect();
+        assert_eq!(names, ["clustered", "tiled", "brute force"]);
+    }
+
+    /// Tiled shading assigns to the scene grid's tiles with one depth slice over the same range;
+    /// clustered and brute force keep the scene grid.
+    #[test]
+    fn tiles_are_the_grid_with_one_slice() {
+        let scene = ClusterGrid::new(UVec3::new(24, 12, 16), DepthSlicing::Log, 0.5, 80.0);
+        let tiles = Shading::Tiled.grid(&scene);
+        assert_eq!(tiles.dims(), UVec3::new(24, 12, 1));
+        assert_eq!(tiles.slicing(), DepthSlicing::Linear);
+        assert_eq!((tiles.near(), tiles.far()), (0.5, 80.0));
+        assert_eq!(Shading::Clustered.grid(&scene), scene);
+        assert_eq!(Shading::BruteForce.grid(&scene), scene);
+    }
+}
