@@ -133,4 +133,73 @@ mod tests {
             .count();
         assert!(lit > 20, "only {lit} label pixels");
     }
+
+    /// The whole strip of a legend for 250 lights on a 96-pixel-wide image, pixel by pixel:
+    /// background, the ramp across the bar (rows 3..13, 4-pixel margins) from its first to its
+    /// last colour, and the labels "0", "125" and "250" in the 3×5 font at twice its size, left-,
+    /// centre- and right-aligned on the bar. Where the labels go and which digits they show is
+    /// what a reader of the PNG relies on; a shifted, mirrored or wrong digit is caught here.
+    #[test]
+    fn legend_strip_is_background_ramp_and_the_three_labels_pixel_for_pixel() {
+        const TEXT: [&str; 10] = [
+            "....######...........................##....######..######..........######..######..######.......",
+            "....######...........................##....######..######..........######..######..######.......",
+            "....##..##.........................####........##..##..................##..##......##..##.......",
+            "....##..##.........................####........##..##..................##..##......##..##.......",
+            "....##..##...........................##....######..######..........######..######..##..##.......",
+            "....##..##...........................##....######..######..........######..######..##..##.......",
+            "....##..##...........................##....##..........##..........##..........##..##..##.......",
+            "....##..##...........................##....##..........##..........##..........##..##..##.......",
+            "....######.........................######..######..######..........######..######..######.......",
+            "....######.........................######..######..######..........######..######..######.......",
+        ];
+        let (w, h) = (96, 2);
+        let image: Vec<u8> = (0..w * h * 4).map(|v| v as u8).collect();
+        let (out, new_h) = with_heat_legend(&image, w, h, 250);
+        assert_eq!(new_h, h + LEGEND_HEIGHT);
+        assert_eq!(out.len(), (w * new_h * 4) as usize);
+        assert_eq!(&out[..image.len()], &image[..], "the image above is kept");
+        for y in 0..LEGEND_HEIGHT {
+            for x in 0..w {
+                let want = match y {
+                    3..13 if (4..92).contains(&x) => heat_color((x - 4) as f32 / 87.0),
+                    16..26 if TEXT[(y - 16) as usize].as_bytes()[x as usize] == b'#' => [230; 3],
+                    _ => [16; 3],
+                };
+                let i = (((h + y) * w + x) * 4) as usize;
+                assert_eq!(
+                    out[i..i + 4],
+                    [want[0], want[1], want[2], 255],
+                    "legend pixel ({x}, {y})"
+                );
+            }
+        }
+    }
+
+    /// On an image too narrow for its labels (12 pixels, labels "10000" and "20000") the margin
+    /// shrinks to a quarter of the width and the labels are cut at the right edge: nothing they
+    /// would draw past it wraps into the next row, so the strip's last two rows stay background.
+    #[test]
+    fn labels_wider_than_a_narrow_image_are_clipped_at_its_edge_not_wrapped() {
+        let (w, h) = (12, 2);
+        let image = vec![7u8; (w * h * 4) as usize];
+        let (out, new_h) = with_heat_legend(&image, w, h, 20_000);
+        assert_eq!(out.len(), (w * new_h * 4) as usize);
+        let px = |x: u32, y: u32| {
+            let i = ((y * w + x) * 4) as usize;
+            [out[i], out[i + 1], out[i + 2], out[i + 3]]
+        };
+        // A 3-pixel margin (12 / 4), then the ramp's first colour.
+        let first = heat_color(0.0);
+        assert_eq!(px(2, h + 5), [16, 16, 16, 255]);
+        assert_eq!(px(3, h + 5), [first[0], first[1], first[2], 255]);
+        // The digits' last row is h + 25: nothing lit below it.
+        for y in h + 26..new_h {
+            for x in 0..w {
+                assert_eq!(px(x, y), [16, 16, 16, 255], "pixel ({x}, {y})");
+            }
+        }
+        // The labels were drawn (cut, not dropped): their bottom row is lit up to the edge.
+        assert_eq!(px(w - 1, h + 25), [230, 230, 230, 255]);
+    }
 }
