@@ -891,3 +891,57 @@ fn the_upload_copies_are_timed_on_the_gpu_when_anything_is_copied() {
         assert!(times.is_none(), "{times:?}");
     }
 }
+
+/// Each GPU time is its own piece's: positive, no longer than the wall-clock time from starting
+/// the frame to the GPU going idle, the sum `total_ms` reports, and a brute-force shading pass
+/// over 4000 lights takes longer than the same frame's G-buffer pass. A time read from the
+/// wrong or an unwritten query, or converted from ticks with the wrong scale, breaks one of
+/// these (the other timing tests only check that times are there).
+#[test]
+fn pass_times_are_each_pass_own_and_within_the_frame_wall_time() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    if !ctx.has_timestamps() {
+        // llvmpipe (CI's adapter) has timestamps: the checks below must run there.
+        assert!(!ctx.describe().contains("llvmpipe"), "{}", ctx.describe());
+        return;
+    }
+    let scene = RenderScene::default_scene(4000, 96, 48).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer.prepare(&scene, Shading::BruteForce, false);
+    let start = std::time::Instant::now();
+    let frame = viewer
+        .frame(&scene, Shading::BruteForce, Method::Refined, false)
+        .unwrap();
+    viewer.ctx.wait_idle().unwrap();
+    let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    let t = viewer
+        .renderer
+        .last_pass_times(&viewer.ctx)
+        .unwrap()
+        .expect("an adapter with timestamps times every frame");
+    let mut timed = vec![("gbuffer", t.gbuffer_ms), ("shading", t.shading_ms)];
+    if frame.report.forward_pass {
+        timed.push(("forward", t.forward_ms));
+    } else {
+        assert_eq!(t.forward_ms, None, "{t:?}");
+    }
+    if viewer.ctx.has_encoder_timestamps() {
+        timed.push(("upload", t.upload_ms));
+    }
+    for (what, ms) in timed {
+        let ms = ms.unwrap_or_else(|| panic!("no {what} time: {t:?}"));
+        assert!(
+            ms > 0.0 && ms <= wall_ms,
+            "{what} {ms} ms of {wall_ms} ms: {t:?}"
+        );
+    }
+    let parts = [t.gbuffer_ms, t.shading_ms, t.forward_ms, t.upload_ms];
+    let sum: f64 = parts.into_iter().flatten().sum();
+    assert_eq!(t.total_ms(), sum, "{t:?}");
+    assert!(
+        t.shading_ms.unwrap() > t.gbuffer_ms.unwrap(),
+        "brute-force shading of 4000 lights vs the G-buffer: {t:?}"
+    );
+}
