@@ -381,6 +381,42 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
         .unwrap();
 }
 
+/// The uploaded scene counts its triangles and knows whether it has blended draws, and those are
+/// drawn: the atrium's frame runs the forward pass and differs from the same scene without its
+/// blended draws, whose frame runs none.
+#[test]
+fn an_uploaded_scene_counts_its_triangles_and_draws_its_blended_geometry() {
+    use myriad::gpu::Blend;
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let atrium = RenderScene::default_scene(200, 96, 48).unwrap();
+    let mut opaque = atrium.clone();
+    let materials = &atrium.geometry.materials;
+    opaque
+        .geometry
+        .draws
+        .retain(|d| materials[d.material as usize].blend == Blend::Opaque);
+    opaque.blended_bounds.clear();
+    assert!(opaque.geometry.draws.len() < atrium.geometry.draws.len());
+    let mut images = Vec::new();
+    for (scene, blended) in [(&atrium, true), (&opaque, false)] {
+        let mut viewer = Viewer::new(ctx.clone(), scene).unwrap();
+        assert_eq!(
+            viewer.scene.triangle_count(),
+            scene.geometry.indices.len() / 3
+        );
+        assert_eq!(viewer.scene.has_blended(), blended);
+        let frame = viewer
+            .frame(scene, Shading::BruteForce, Method::Refined, false)
+            .unwrap();
+        assert_eq!(frame.report.forward_pass, blended);
+        images.push(viewer.image().unwrap());
+    }
+    let (_, differing) = max_channel_difference(&images[0], &images[1]);
+    assert!(differing > 0, "the blended draws changed no pixel");
+}
+
 /// The default scene with `lights` lights at `width × height`, on a viewer that has rendered one
 /// clustered frame (`None` where GPU tests are skipped).
 fn viewer_after_one_frame(lights: usize, width: u32, height: u32) -> Option<(RenderScene, Viewer)> {

@@ -365,3 +365,171 @@ fn upload_texture(
         )
         .create_view(&wgpu::TextureViewDescriptor::default())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Four vertices, two triangles in one opaque draw, one opaque and one blended material,
+    /// and a 2×2 texture the opaque material names: every reference in range.
+    fn valid() -> SceneGeometry {
+        let material = |blend| MaterialDesc {
+            uniforms: MaterialUniforms::default(),
+            blend,
+            base_color_texture: None,
+        };
+        SceneGeometry {
+            vertices: vec![Vertex::default(); 4],
+            indices: vec![0, 1, 2, 2, 1, 3],
+            draws: vec![Draw {
+                first_index: 0,
+                index_count: 6,
+                material: 0,
+                center: Vec3::ZERO,
+            }],
+            materials: vec![
+                MaterialDesc {
+                    base_color_texture: Some(0),
+                    ..material(Blend::Opaque)
+                },
+                material(Blend::Blended),
+            ],
+            textures: vec![texture(2, 2)],
+        }
+    }
+
+    fn texture(width: u32, height: u32) -> TextureRgba8 {
+        TextureRgba8 {
+            width,
+            height,
+            pixels: vec![200; (width * height * 4) as usize],
+        }
+    }
+
+    fn draw(first_index: u32, index_count: u32, material: u32) -> Draw {
+        Draw {
+            first_index,
+            index_count,
+            material,
+            center: Vec3::ZERO,
+        }
+    }
+
+    /// `has_blended` is true only when a draw uses a blended material: a blended material no
+    /// draw names does not count, nor does a draw naming a material out of range.
+    #[test]
+    fn has_blended_counts_only_drawn_blended_materials() {
+        let mut geometry = valid();
+        assert!(!geometry.has_blended(), "the blended material is not drawn");
+        geometry.draws.push(draw(0, 3, 1));
+        assert!(geometry.has_blended());
+        geometry.draws[1].material = 7;
+        assert!(
+            !geometry.has_blended(),
+            "out of range counts as not blended"
+        );
+    }
+
+    /// Each reference `check` guards is refused just past its bound and accepted at it: the
+    /// last vertex, a draw ending at the last index, the last material and the last texture.
+    #[test]
+    fn check_accepts_references_up_to_their_bounds_and_refuses_one_past() {
+        assert_eq!(valid().check(), Ok(()));
+        let with = |change: &dyn Fn(&mut SceneGeometry)| {
+            let mut geometry = valid();
+            change(&mut geometry);
+            geometry.check()
+        };
+        // Indices against the vertex count.
+        assert_eq!(with(&|g| g.indices[5] = 3), Ok(()));
+        let e = with(&|g| g.indices[5] = 4).unwrap_err();
+        assert!(e.contains("index 4 >= vertex count 4"), "{e}");
+        // A draw's range against the indices: ending at the last one is fine.
+        assert_eq!(with(&|g| g.draws[0] = draw(3, 3, 0)), Ok(()));
+        let e = with(&|g| g.draws[0] = draw(6, 3, 0)).unwrap_err();
+        assert!(e.contains("draw 0 covers indices 6..9 of 6"), "{e}");
+        let e = with(&|g| g.draws[0] = draw(3, 6, 0)).unwrap_err();
+        assert!(e.contains("draw 0 covers indices 3..9 of 6"), "{e}");
+        // Whole triangles only, even inside the index buffer.
+        let e = with(&|g| g.draws[0] = draw(0, 4, 0)).unwrap_err();
+        assert!(e.contains("draw 0 covers indices 0..4 of 6"), "{e}");
+        // Materials.
+        assert_eq!(with(&|g| g.draws[0].material = 1), Ok(()));
+        let e = with(&|g| g.draws[0].material = 2).unwrap_err();
+        assert!(e.contains("draw 0 names material 2 of 2"), "{e}");
+        // Textures, named by a material or not.
+        assert_eq!(
+            with(&|g| g.materials[1].base_color_texture = Some(0)),
+            Ok(())
+        );
+        let e = with(&|g| g.materials[1].base_color_texture = Some(1)).unwrap_err();
+        assert!(e.contains("material 1 names texture 1 of 1"), "{e}");
+        for (width, height, bytes) in [(2, 2, 12), (2, 2, 20), (0, 2, 0), (2, 0, 0)] {
+            let e = with(&|g| {
+                g.textures.push(TextureRgba8 {
+                    width,
+                    height,
+                    pixels: vec![0; bytes],
+                })
+            })
+            .unwrap_err();
+            let want = format!("texture 1 is {width}x{height} with {bytes} bytes");
+            assert!(e.contains(&want), "{e}");
+        }
+    }
+
+    /// `check_limits` accepts a texture side and buffer sizes equal to the device's limits and
+    /// refuses one more.
+    #[test]
+    fn check_limits_accepts_sizes_at_the_limit_and_refuses_beyond() {
+        let geometry = valid();
+        let vertex_bytes = std::mem::size_of_val(geometry.vertices.as_slice()) as u64;
+        let limits = wgpu::Limits {
+            max_texture_dimension_2d: 2,
+            max_buffer_size: vertex_bytes,
+            ..wgpu::Limits::default()
+        };
+        assert_eq!(geometry.check_limits(&limits), Ok(()));
+        let mut tall = geometry.clone();
+        tall.textures.push(texture(1, 3));
+        let e = tall.check_limits(&limits).unwrap_err();
+        assert!(e.contains("texture 1 is 1x3"), "{e}");
+        let mut more = geometry.clone();
+        more.vertices.push(Vertex::default());
+        let e = more.check_limits(&limits).unwrap_err();
+        assert!(e.contains("the vertex buffer needs"), "{e}");
+        let mut indices = geometry.clone();
+        indices.indices.resize(vertex_bytes as usize / 4 + 1, 0);
+        let e = indices.check_limits(&limits).unwrap_err();
+        assert!(e.contains("the index buffer needs"), "{e}");
+    }
+
+    /// `fit_textures` scales only textures with a side above the limit, to the limit on their
+    /// long side with the aspect kept (a short side rounds down, to at least 1 pixel), one note
+    /// each; a texture at the limit, or one whose bytes do not match its size, is left as it is.
+    #[test]
+    fn fit_textures_scales_only_oversized_textures_keeping_the_aspect() {
+        let mut geometry = valid();
+        let mut odd = texture(8, 8);
+        odd.pixels.pop();
+        geometry.textures = vec![texture(8, 6), texture(4, 4), texture(1, 9), odd.clone()];
+        let notes = geometry.fit_textures(4);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].starts_with("texture 0 scaled from 8x6 to 4x3"),
+            "{notes:?}"
+        );
+        assert!(
+            notes[1].starts_with("texture 2 scaled from 1x9 to 1x4"),
+            "{notes:?}"
+        );
+        let sizes: Vec<_> = geometry
+            .textures
+            .iter()
+            .map(|t| (t.width, t.height, t.pixels.len()))
+            .collect();
+        assert_eq!(sizes, [(4, 3, 48), (4, 4, 64), (1, 4, 16), (8, 8, 255)]);
+        assert!(geometry.textures[0].pixels.iter().all(|&p| p == 200));
+        assert_eq!(geometry.textures[3], odd);
+    }
+}
