@@ -169,4 +169,19 @@ mod tests {
             "a size that disagrees with the pixels"
         );
     }
+
+    /// `save_png` creates the missing directories above the file and writes a PNG that decodes
+    /// to the same pixels.
+    #[test]
+    fn saved_png_creates_its_directories_and_decodes_to_the_same_pixels() {
+        let rgba: Vec<u8> = (0..2 * 3 * 4).map(|v| (v * 7) as u8).collect();
+        let dir = std::env::temp_dir().join(format!("myriad-gpu-save-png-{}", std::process::id()));
+        let path = dir.join("nested").join("image.png");
+        let _ = std::fs::remove_dir_all(&dir);
+        save_png(&path, &rgba, 2, 3).unwrap();
+        let back = image::open(&path).unwrap().to_rgba8();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(back.dimensions(), (2, 3));
+        assert_eq!(back.into_raw(), rgba);
+    }
 }
