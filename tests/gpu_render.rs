@@ -314,6 +314,23 @@ fn targets_beyond_the_device_limit_are_errors_not_panics() {
     assert!(e.to_string().contains("pixels a side"), "{e}");
 }
 
+/// Targets of exactly the device's largest side are made, in either direction: the limit is
+/// inclusive (one pixel more is the error `targets_beyond_the_device_limit_are_errors_not_panics`
+/// checks).
+#[test]
+fn targets_at_the_device_limit_are_made() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let max = ctx.device.limits().max_texture_dimension_2d;
+    for (w, h) in [(max, 1), (1, max)] {
+        let target = myriad::gpu::HeadlessTarget::new(&ctx.device, w, h).unwrap();
+        assert_eq!((target.texture.width(), target.texture.height()), (w, h));
+        let gbuffer = myriad::gpu::GBuffer::new(&ctx.device, w, h).unwrap();
+        assert_eq!(gbuffer.size, (w, h));
+    }
+}
+
 #[test]
 fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
     let Some(ctx) = GpuContext::headless_for_tests() else {

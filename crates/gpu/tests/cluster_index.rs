@@ -4,8 +4,8 @@
 
 use glam::UVec3;
 use myriad_cluster_math::{ClusterGrid, DepthSlicing};
-use myriad_gpu::GpuContext;
 use myriad_gpu::cluster_check::gpu_cluster_ids;
+use myriad_gpu::{GpuContext, GpuError};
 
 fn next_up(x: f32, steps: i32) -> f32 {
     let mut v = x;
@@ -173,4 +173,37 @@ fn nan_depth_maps_to_slice_zero_on_the_gpu_too() {
     for (s, p) in pixels.iter().enumerate() {
         assert_eq!(gpu[s], grid.cluster_of_pixel(p[0], p[1], depths[s], 16, 16));
     }
+}
+
+/// Sample lists the check cannot run are `InvalidInput` errors, before any GPU work: pixels and
+/// depths of different lengths, no samples, and more samples than one dispatch's workgroups
+/// (64 a group) can take; exactly as many as that limit allows still run, one id per sample.
+#[test]
+fn sample_lists_of_unequal_length_none_or_past_one_dispatch_are_refused() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let grid = ClusterGrid::new(UVec3::new(4, 4, 8), DepthSlicing::Log, 0.1, 100.0);
+    let invalid = |pixels: &[[u32; 2]], depths: &[f32], want: &str| match gpu_cluster_ids(
+        &ctx, &grid, 16, 16, pixels, depths,
+    ) {
+        Err(GpuError::InvalidInput(e)) => assert!(e.contains(want), "{e}"),
+        other => panic!("{} samples: {other:?}", pixels.len()),
+    };
+    invalid(&[[0, 0], [1, 1]], &[1.0], "2 pixels and 1 depths");
+    invalid(&[[0, 0]], &[1.0, 2.0], "1 pixels and 2 depths");
+    invalid(&[], &[], "0 pixels and 0 depths");
+    let max_groups = ctx.device.limits().max_compute_workgroups_per_dimension as usize;
+    let most = max_groups * 64;
+    let pixels = vec![[3, 5]; most + 1];
+    let depths = vec![50.0; most + 1];
+    invalid(
+        &pixels,
+        &depths,
+        &format!("need {} workgroups", max_groups + 1),
+    );
+    let ids = gpu_cluster_ids(&ctx, &grid, 16, 16, &pixels[..most], &depths[..most]).unwrap();
+    let want = grid.cluster_of_pixel(3, 5, 50.0, 16, 16);
+    assert_eq!(ids.len(), most);
+    assert!(ids.iter().all(|&id| id == want));
 }
