@@ -40,6 +40,29 @@ const SCALE: u32 = 2;
 /// Height of the legend strip.
 pub const LEGEND_HEIGHT: u32 = 28;
 
+/// The labels under the bar and the x of each one's left edge: the largest count's
+/// (right-aligned on the bar's end), 0's (left-aligned) and then the middle's (centred), each only
+/// where its box — its digits and a font pixel of space after them — overlaps none placed before.
+/// On a narrow image the middle label would run into the last one (on a 64-pixel image "125" and
+/// "250" overlapped and read as "8"s); it is left out there, and the ramp's ends keep theirs.
+fn placed_labels(margin: u32, bar_width: u32, heat_max: u32) -> Vec<(String, u32)> {
+    let mut placed: Vec<(String, u32)> = Vec::with_capacity(3);
+    let text_width = |text: &str| text.len() as u32 * 4 * SCALE;
+    for (value, at) in [(heat_max, 1.0), (0, 0.0), (heat_max / 2, 0.5)] {
+        let text = value.to_string();
+        let width = text_width(&text);
+        let anchor = margin + (at * (bar_width - 1) as f32) as u32;
+        let x0 = anchor.saturating_sub((width as f32 * at) as u32);
+        let clear = placed
+            .iter()
+            .all(|(other, x)| x0 + width <= *x || x + text_width(other) <= x0);
+        if clear {
+            placed.push((text, x0));
+        }
+    }
+    placed
+}
+
 /// Returns the image with a legend strip appended below it, and the new height. `heat_max` is
 /// the light count at the top of the ramp.
 pub fn with_heat_legend(rgba: &[u8], width: u32, height: u32, heat_max: u32) -> (Vec<u8>, u32) {
@@ -72,12 +95,7 @@ pub fn with_heat_legend(rgba: &[u8], width: u32, height: u32, heat_max: u32) -> 
     }
     // Labels at 0, the middle and the end of the bar.
     let text_y = height + 16;
-    let labels = [(0, 0.0), (heat_max / 2, 0.5), (heat_max, 1.0)];
-    for (value, at) in labels {
-        let text = value.to_string();
-        let text_width = text.len() as u32 * 4 * SCALE;
-        let anchor = margin + (at * (bar_width - 1) as f32) as u32;
-        let x0 = anchor.saturating_sub((text_width as f32 * at) as u32);
+    for (text, x0) in placed_labels(margin, bar_width, heat_max) {
         for (n, ch) in text.bytes().enumerate() {
             let glyph = DIGITS[(ch - b'0') as usize];
             for (row, bits) in glyph.iter().enumerate() {
@@ -201,5 +219,39 @@ mod tests {
         }
         // The labels were drawn (cut, not dropped): their bottom row is lit up to the edge.
         assert_eq!(px(w - 1, h + 25), [230, 230, 230, 255]);
+    }
+    /// Placed labels never overlap (their boxes keep a font pixel apart), the largest count is
+    /// always labelled, 0 wherever it fits beside it, and the middle label only where it fits
+    /// between them — from the 64-pixel image whose "125" ran into "250" to a 1920-pixel one.
+    #[test]
+    fn placed_labels_never_overlap_and_keep_the_ramps_ends() {
+        for heat_max in [0, 1, 9, 250, 20_000, 4_000_000_000] {
+            for width in 1..=1920u32 {
+                let margin = 4.min(width / 4);
+                let bar_width = width.saturating_sub(2 * margin).max(1);
+                let labels = placed_labels(margin, bar_width, heat_max);
+                let context = format!("width {width}, max {heat_max}");
+                assert_eq!(labels[0].0, heat_max.to_string(), "{context}");
+                let boxes: Vec<(u32, u32)> = labels
+                    .iter()
+                    .map(|(text, x)| (*x, x + text.len() as u32 * 4 * SCALE))
+                    .collect();
+                for (a, &(a0, a1)) in boxes.iter().enumerate() {
+                    for &(b0, b1) in &boxes[a + 1..] {
+                        assert!(a1 <= b0 || b1 <= a0, "{context}: {labels:?} overlap");
+                    }
+                }
+                if width >= 400 && heat_max > 1 {
+                    assert_eq!(labels.len(), 3, "{context}: {labels:?}");
+                }
+            }
+        }
+        let texts = |width: u32| -> Vec<String> {
+            let margin = 4.min(width / 4);
+            let labels = placed_labels(margin, width - 2 * margin, 250);
+            labels.into_iter().map(|(text, _)| text).collect()
+        };
+        assert_eq!(texts(64), ["250", "0"], "the middle label does not fit");
+        assert_eq!(texts(96), ["250", "0", "125"]);
     }
 }
