@@ -172,7 +172,11 @@ impl std::error::Error for InvalidFrame {}
 
 /// Runs light assignment and keeps all of its scratch storage between frames, so steady-state
 /// frames allocate nothing. One `Assigner` per concurrent frame; it uses the current rayon pool
-/// (install your own with `ThreadPool::install` to pick the thread count).
+/// (install your own with `ThreadPool::install` to pick the thread count). A thread that calls it
+/// every frame from outside any pool, as an engine's main thread does, pays a hand-off into the
+/// pool and back per parallel frame; made a member of the pool
+/// (`ThreadPoolBuilder::use_current_thread`) it starts its frames as a worker does, without one
+/// (README, "Things to know", has what that saved in the benches: part of the hand-off's cost).
 #[derive(Default)]
 pub struct Assigner {
     planes: PlaneSets,
