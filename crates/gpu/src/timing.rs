@@ -82,13 +82,75 @@ pub(crate) struct PassTimer {
     zones: std::sync::Mutex<ZoneState>,
 }
 
-/// Which of the frame's timed pieces are Tracy zones already.
+/// The renderer's Tracy GPU context and which of the frame's timed pieces are zones already.
 #[cfg(feature = "tracy")]
 #[derive(Debug, Default)]
 struct ZoneState {
     zones: crate::tracy_zones::GpuZones,
+    handed: Handed,
+}
+
+/// One timed piece of a frame for Tracy: which (`None`: the upload's copies), and its start and
+/// end ticks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(not(feature = "tracy"), allow(dead_code))] // Built without the feature for its test.
+pub(crate) struct TimedZone {
+    pub pass: Option<TimedPass>,
+    pub start: u64,
+    pub end: u64,
+}
+
+/// Which of a frame's timed pieces were handed to Tracy already: each once, however often the
+/// frame's times are read.
+#[derive(Debug, Default)]
+#[cfg_attr(not(feature = "tracy"), allow(dead_code))] // Built without the feature for its test.
+struct Handed {
     passes: [bool; PASSES as usize],
     upload: bool,
+}
+
+#[cfg_attr(not(feature = "tracy"), allow(dead_code))]
+impl Handed {
+    /// The pieces of this frame that ran (`ran` per pass, `uploaded`) and are not handed over
+    /// yet, each with its pair of `ticks` (the resolved queries, in query order), now marked as
+    /// handed. At most the three passes and the upload: on the stack, no allocation per read.
+    /// Returns them and how many there are.
+    fn take_new(
+        &mut self,
+        ran: &[bool; PASSES as usize],
+        uploaded: bool,
+        ticks: &[u64],
+    ) -> ([TimedZone; PASSES as usize + 1], usize) {
+        let mut zones = [TimedZone {
+            pass: None,
+            start: 0,
+            end: 0,
+        }; PASSES as usize + 1];
+        let mut n = 0;
+        for pass in [TimedPass::GBuffer, TimedPass::Shading, TimedPass::Forward] {
+            let i = pass as usize;
+            if ran[i] && !self.passes[i] {
+                self.passes[i] = true;
+                zones[n] = TimedZone {
+                    pass: Some(pass),
+                    start: ticks[2 * i],
+                    end: ticks[2 * i + 1],
+                };
+                n += 1;
+            }
+        }
+        if uploaded && !self.upload {
+            self.upload = true;
+            let i = UPLOAD_QUERY as usize;
+            zones[n] = TimedZone {
+                pass: None,
+                start: ticks[i],
+                end: ticks[i + 1],
+            };
+            n += 1;
+        }
+        (zones, n)
+    }
 }
 
 impl PassTimer {
@@ -141,11 +203,11 @@ impl PassTimer {
         #[cfg(feature = "tracy")]
         {
             // A kept G-buffer's zone was its prepass's.
-            let state = self.zones.get_mut().expect("zone state");
-            let kept = gbuffer && state.passes[TimedPass::GBuffer as usize];
-            state.passes = [false; PASSES as usize];
-            state.passes[TimedPass::GBuffer as usize] = kept;
-            state.upload = false;
+            let handed = &mut self.zones.get_mut().expect("zone state").handed;
+            let kept = gbuffer && handed.passes[TimedPass::GBuffer as usize];
+            handed.passes = [false; PASSES as usize];
+            handed.passes[TimedPass::GBuffer as usize] = kept;
+            handed.upload = false;
         }
     }
 
@@ -218,37 +280,44 @@ impl PassTimer {
     /// Hands this frame's timed pieces not yet handed over to Tracy as GPU zones.
     #[cfg(feature = "tracy")]
     fn emit_zones(&self, ctx: &GpuContext, ticks: &[u64]) -> Result<(), GpuError> {
-        use crate::tracy_zones::TimedZone;
         let mut state = self.zones.lock().expect("zone state");
-        // At most the three passes and the upload: on the stack, no allocation per read.
-        let mut zones = [TimedZone {
-            pass: None,
-            start: 0,
-            end: 0,
-        }; PASSES as usize + 1];
-        let mut n = 0;
-        for pass in [TimedPass::GBuffer, TimedPass::Shading, TimedPass::Forward] {
-            let i = pass as usize;
-            if self.ran[i] && !state.passes[i] {
-                state.passes[i] = true;
-                zones[n] = TimedZone {
-                    pass: Some(pass),
-                    start: ticks[2 * i],
-                    end: ticks[2 * i + 1],
-                };
-                n += 1;
-            }
-        }
-        if self.uploaded && !state.upload {
-            state.upload = true;
-            let i = UPLOAD_QUERY as usize;
-            zones[n] = TimedZone {
-                pass: None,
-                start: ticks[i],
-                end: ticks[i + 1],
-            };
-            n += 1;
-        }
+        let (mut zones, n) = state.handed.take_new(&self.ran, self.uploaded, ticks);
         state.zones.emit(ctx, &mut zones[..n])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each piece becomes a zone with its own pair of ticks (pass `p` at queries `2p`, `2p + 1`,
+    /// the upload at the pair after the passes'), in pass order then the upload, and each only
+    /// once: a second read of the same frame hands over nothing, a piece that ran later in the
+    /// frame only itself. Ticks are all different, so a pair taken from the wrong slots, or its
+    /// start and end swapped, shows.
+    #[test]
+    fn each_piece_is_handed_once_with_its_own_ticks() {
+        let ticks: Vec<u64> = (0..QUERIES as u64).map(|q| 1000 + 37 * q * q).collect();
+        let zone = |pass: Option<TimedPass>, first: usize| TimedZone {
+            pass,
+            start: ticks[first],
+            end: ticks[first + 1],
+        };
+        let mut handed = Handed::default();
+        let (zones, n) = handed.take_new(&[true, true, false], true, &ticks);
+        assert_eq!(
+            zones[..n],
+            [
+                zone(Some(TimedPass::GBuffer), 0),
+                zone(Some(TimedPass::Shading), 2),
+                zone(None, UPLOAD_QUERY as usize),
+            ]
+        );
+        assert_eq!(handed.take_new(&[true, true, false], true, &ticks).1, 0);
+        let (zones, n) = handed.take_new(&[true, true, true], true, &ticks);
+        assert_eq!(zones[..n], [zone(Some(TimedPass::Forward), 4)]);
+        let mut fresh = Handed::default();
+        let (zones, n) = fresh.take_new(&[false, false, true], false, &ticks);
+        assert_eq!(zones[..n], [zone(Some(TimedPass::Forward), 4)]);
     }
 }

@@ -16,17 +16,9 @@
 //! CPU's timeline in a long capture, where a periodic `sync_gpu_time` would be the fix.
 
 use crate::readback::map_and_read;
-use crate::timing::TimedPass;
+use crate::timing::{TimedPass, TimedZone};
 use crate::{GpuContext, GpuError};
 use tracy_client::{Client, GpuContextType, span_location};
-
-/// One timed piece of a frame: which, and its start and end ticks.
-#[derive(Clone, Copy)]
-pub(crate) struct TimedZone {
-    pub pass: Option<TimedPass>,
-    pub start: u64,
-    pub end: u64,
-}
 
 /// The renderer's Tracy GPU context, once a client runs and a frame's times are read.
 #[derive(Default)]
