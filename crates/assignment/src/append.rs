@@ -50,7 +50,8 @@ use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 /// between threads — written by the task of a light range, read by the part of a slice range.
 /// `binary` on `paper` 1000 pushes 6,458 rows as 1,448 spans, and with 2 threads its frame took
 /// 56–66 µs instead of 71–77 µs (`myriad bench --threads 2`, interleaved builds; `refined`, whose
-/// rows are cut one by one, unchanged). The price is a rows loop per span in the append, paid
+/// rows are cut one by one, unchanged — it now sends the slices its refinement keeps whole, of
+/// three rows or more, as such spans too: see `jobs::emit`). The price is a rows loop per span in the append, paid
 /// where boxes are one row tall: `uniform` 100k ran 3.6% more instructions (docs/measured.md).
 /// Folding `refined`'s equal neighbouring rows into one span too made it 20% slower. `len` and
 /// `rows` are 16 bits each, so a span stays 12 bytes; the rare longer ones are pushed in pieces
