@@ -19,7 +19,9 @@
 //!   scaling), `uniform` 1M `refined`, `sphere` 100k (`binary`, `refined`; the single-threaded
 //!   engine reference of 1.5–2.1 ms). These run as a frame job would, on a pool worker (the timed
 //!   loop inside `ThreadPool::install`); `paper/*-from-outside` time the same calls from the
-//!   benchmark's own thread, which pays the hand-off to rayon's pool and back every frame, and
+//!   benchmark's own thread, which works alongside helper jobs it spawns on rayon's pool
+//!   (`OutsideCalls::Join`), `paper/*-from-outside-hand-off` with `OutsideCalls::HandOff`, which
+//!   pays the hand-off to rayon's pool and back every frame, and
 //!   `paper/*-from-pool-member` from a thread that joined its pool (`use_current_thread`), as an
 //!   engine's main thread can.
 //!   `scaling` calls from outside too.
@@ -37,7 +39,7 @@
 use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, SamplingMode, Throughput, measurement::WallTime,
 };
-use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::assignment::{Assigner, LightLists, Method, OutsideCalls};
 use myriad::cluster_math::{ClusterGrid, DepthSlicing, glam::UVec3};
 use myriad::scene::{Preset, Scene};
 use std::cell::OnceCell;
@@ -95,9 +97,11 @@ enum Caller<'a> {
     /// A worker of this pool, as a frame job of an engine's job system: the whole timed loop runs
     /// inside `ThreadPool::install`, so the assignment's parallel regions start on the spot.
     Worker(&'a rayon::ThreadPool),
-    /// The benchmark's own thread, outside any pool: each parallel frame is handed to rayon's
-    /// global pool and this thread woken when it is done (`Assigner` does it in one hand-off).
-    Outside,
+    /// The benchmark's own thread, outside any pool, as an engine's main thread: with
+    /// `OutsideCalls::Join` (the default) it works on each parallel frame alongside helper jobs
+    /// it spawns on rayon's global pool; with `HandOff` the frame is handed to a worker and this
+    /// thread woken when it is done.
+    Outside(OutsideCalls),
 }
 
 /// A thread of the benchmark's own that is also worker 0 of a pool of one worker per core
@@ -168,7 +172,10 @@ fn bench_assign(
         let scene = scene.get_or_init(|| preset.generate(lights, SEED));
         let grid = grid.unwrap_or(scene.grid);
         let input = myriad::light_input(&scene.lights);
-        let mut assigner = Assigner::new();
+        let mut assigner = match caller {
+            Caller::Outside(calls) => Assigner::new().with_outside_calls(calls),
+            Caller::Worker(_) => Assigner::new(),
+        };
         let mut lists = LightLists::new();
         let mut timed = || {
             let mut run = || {
@@ -180,7 +187,7 @@ fn bench_assign(
         };
         match caller {
             Caller::Worker(pool) => pool.install(timed),
-            Caller::Outside => timed(),
+            Caller::Outside(_) => timed(),
         }
         black_box(&lists);
     });
@@ -201,7 +208,8 @@ fn scaling(c: &mut Criterion) {
             for method in METHODS {
                 let id = BenchmarkId::new(method.name(), lights);
                 let source = (Preset::Uniform, lights, scene);
-                bench_assign(&mut group, id, method, source, Some(grid), Caller::Outside);
+                let caller = Caller::Outside(OutsideCalls::Join);
+                bench_assign(&mut group, id, method, source, Some(grid), caller);
             }
         }
         group.finish();
@@ -229,10 +237,17 @@ fn targets(c: &mut Criterion) {
         let id = BenchmarkId::new(format!("paper/{}", method.name()), 1_000);
         bench_assign(&mut group, id, method, paper, None, worker);
     }
-    // The same from outside any pool: what a 1000-light frame pays for the hand-off.
+    // The same from outside any pool, the caller working alongside helpers (the default) and
+    // handing the frame off: what a 1000-light frame pays for being called from outside.
     for method in [Method::Binary, Method::Refined] {
-        let id = BenchmarkId::new(format!("paper/{}-from-outside", method.name()), 1_000);
-        bench_assign(&mut group, id, method, paper, None, Caller::Outside);
+        for (calls, suffix) in [
+            (OutsideCalls::Join, ""),
+            (OutsideCalls::HandOff, "-hand-off"),
+        ] {
+            let name = format!("paper/{}-from-outside{suffix}", method.name());
+            let id = BenchmarkId::new(name, 1_000);
+            bench_assign(&mut group, id, method, paper, None, Caller::Outside(calls));
+        }
     }
     // And from a thread that joined the pool, as an engine's main thread can: no hand-off.
     let member = PoolMember::start(Preset::Paper, 1_000);

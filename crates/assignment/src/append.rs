@@ -37,6 +37,7 @@
 //! `myriad bench`, serial: `uniform` 250 lights 28 → 19.5 µs, 1000 lights 50 → 42 µs.)
 
 use crate::active::ActiveView;
+use crate::fan_out::{self, FanOut};
 use crate::jobs::TaskOutput;
 use crossbeam::utils::CachePadded;
 use rayon::prelude::*;
@@ -222,12 +223,12 @@ pub(crate) fn part_bases(
 }
 
 /// Builds every part's lists into `out` (sized for `clusters` clusters): count, scan, fill and
-/// close, part by part, in parallel over parts when `parallel`. `bases` comes from
+/// close, part by part, in parallel over parts unless `fan_out` is serial. `bases` comes from
 /// [`part_bases`], whose total must fit u32 offsets.
 pub(crate) fn build_lists(
     tasks: &[CachePadded<TaskOutput>],
     parts: Parts,
-    parallel: bool,
+    fan_out: FanOut,
     active: Option<&ActiveView<'_>>,
     bases: &[u64],
     clusters: usize,
@@ -246,7 +247,7 @@ pub(crate) fn build_lists(
         tasks,
         parts,
         bases,
-        parallel,
+        parallel: fan_out == FanOut::Pool,
         // About four pieces of work per thread, for the work stealing to even out.
         grain: (total + clusters as u64) / (4 * rayon::current_num_threads() as u64),
         active: active.map(|a| a.flags),
@@ -256,7 +257,50 @@ pub(crate) fn build_lists(
         offsets: &mut out.offsets,
         indices: &mut out.indices,
     };
-    job.run(0..parts.count, chunk);
+    match fan_out {
+        FanOut::WithCaller { helpers } => {
+            let pieces = Pieces {
+                job: &job,
+                next: 0,
+                rest: Some(chunk),
+            };
+            fan_out::with_caller(pieces, helpers, |(range, chunk)| {
+                job.run_parts(range, chunk)
+            });
+        }
+        FanOut::Pool | FanOut::Serial => job.run(0..parts.count, chunk),
+    }
+}
+
+/// Runs of consecutive parts of about [`PartJob::grain`] work each, with their arrays: the
+/// pieces a caller outside the pool and its helpers take one at a time (`fan_out.rs`), as
+/// rayon's workers steal the halves of [`PartJob::run`].
+struct Pieces<'j, 'a> {
+    job: &'j PartJob<'j>,
+    next: usize,
+    rest: Option<Chunk<'a>>,
+}
+
+impl<'a> Iterator for Pieces<'_, 'a> {
+    type Item = (std::ops::Range<usize>, Chunk<'a>);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let job = self.job;
+        let (start, count) = (self.next, job.parts.count);
+        if start == count {
+            return None;
+        }
+        let end = (start + 1..count)
+            .find(|&p| job.work(p) - job.work(start) >= job.grain)
+            .unwrap_or(count);
+        let rest = self.rest.take()?;
+        let clusters = ((end - start) * job.parts.clusters).min(rest.counts.len());
+        let pairs = (job.bases[end] - job.bases[start]) as usize;
+        let (piece, rest) = rest.split_at(clusters, pairs);
+        self.rest = Some(rest);
+        self.next = end;
+        Some((start..end, piece))
+    }
 }
 
 /// The output arrays of a range of parts.
@@ -316,6 +360,11 @@ impl PartJob<'_> {
             rayon::join(|| self.run(start..mid, left), || self.run(mid..end, right));
             return;
         }
+        self.run_parts(range, chunk);
+    }
+
+    /// Builds parts `range`, whose arrays are `chunk`, one after another.
+    fn run_parts(&self, range: std::ops::Range<usize>, chunk: Chunk<'_>) {
         let mut rest = chunk;
         for part in range {
             let clusters = self.parts.clusters.min(rest.counts.len());

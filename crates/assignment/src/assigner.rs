@@ -3,6 +3,7 @@
 use crate::ActiveClusters;
 use crate::append::{self, Parts};
 use crate::cone::{self, TileCone};
+use crate::fan_out::{self, FanOut};
 use crate::jobs::{self, FrameContext, TaskOutput};
 use crate::linear::{self, LinearScratch};
 use crate::pacing::{Pacing, Parallelism};
@@ -77,6 +78,27 @@ pub enum AppendStrategy {
     /// One shared counter per cluster, `fetch_add` in the count and the fill passes, then a sort
     /// of every list to make the order deterministic. Kept to measure against.
     AtomicCounters,
+}
+
+/// How a parallel frame called from a thread outside any rayon pool (an engine's main thread)
+/// runs. Calls from a pool's worker, or from a thread that joined its pool
+/// (`ThreadPoolBuilder::use_current_thread`), always start their parallel regions on the spot.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OutsideCalls {
+    /// The calling thread works on the frame's tasks and parts itself, alongside one helper job
+    /// per other thread of the global pool, spawned as each region starts (`fan_out.rs`): the
+    /// frame starts at once and the caller only waits for the helpers' last items, spinning. It
+    /// costs one small heap allocation per helper and region (rayon boxes a spawned job):
+    /// 2 × (threads − 1) per frame. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
+    /// medians of the `targets` bench, three runs: `binary` 25.1–25.8 µs against 30.9–34.2 µs
+    /// handed off, `refined` 38.7–39.8 against 44.2–50.1 µs; 21–23 and 36–44 µs on a worker).
+    #[default]
+    Join,
+    /// The whole frame moves onto a pool worker in one hand-off and the calling thread sleeps
+    /// until it is done: two cross-thread wake-ups per frame, but nothing allocated per frame
+    /// (only rayon's injection queue allocates, a block per 63 jobs injected by anyone: one
+    /// per 63 frames here). For an engine that must keep off the allocator in steady state.
+    HandOff,
 }
 
 /// What one assignment did.
@@ -171,12 +193,15 @@ impl std::fmt::Display for InvalidFrame {
 impl std::error::Error for InvalidFrame {}
 
 /// Runs light assignment and keeps all of its scratch storage between frames, so steady-state
-/// frames allocate nothing. One `Assigner` per concurrent frame; it uses the current rayon pool
+/// frames allocate nothing (called from outside any pool, rayon's job boxes aside: see
+/// [`OutsideCalls`]). One `Assigner` per concurrent frame; it uses the current rayon pool
 /// (install your own with `ThreadPool::install` to pick the thread count). A thread that calls it
-/// every frame from outside any pool, as an engine's main thread does, pays a hand-off into the
-/// pool and back per parallel frame; made a member of the pool
-/// (`ThreadPoolBuilder::use_current_thread`) it starts its frames as a worker does, without one
-/// (README, "Things to know", has what that saved in the benches: part of the hand-off's cost).
+/// every frame from outside any pool, as an engine's main thread does, works on each parallel
+/// frame itself alongside helper jobs it spawns on the global pool ([`OutsideCalls::Join`]:
+/// one small allocation per helper, rayon's boxed job) or hands the frame to a worker
+/// ([`OutsideCalls::HandOff`]: no allocation, two cross-thread wake-ups); made a member of the
+/// pool (`ThreadPoolBuilder::use_current_thread`) it starts its frames as a worker does (README,
+/// "Things to know", has the three timed side by side).
 #[derive(Default)]
 pub struct Assigner {
     planes: PlaneSets,
@@ -205,6 +230,7 @@ pub struct Assigner {
     /// When the previous frame ended and how big it was: whether the next runs in parallel.
     pacing: Pacing,
     parallelism: Parallelism,
+    outside_calls: OutsideCalls,
     atomic: append::AtomicCounters,
     pair_budget: Option<u64>,
 }
@@ -225,6 +251,13 @@ impl Assigner {
     /// [`Assigner::assign`]).
     pub fn with_parallelism(mut self, parallelism: Parallelism) -> Self {
         self.parallelism = parallelism;
+        self
+    }
+
+    /// Selects how a frame called from a thread outside any rayon pool uses the pool (the
+    /// default: the calling thread works alongside helpers it spawns; see [`OutsideCalls`]).
+    pub fn with_outside_calls(mut self, outside_calls: OutsideCalls) -> Self {
+        self.outside_calls = outside_calls;
         self
     }
 
@@ -337,18 +370,24 @@ impl Assigner {
                 .parallelism
                 .limits()
                 .is_none_or(|limits| self.pacing.parallel(start, lights.len(), limits));
-        let stats = if parallel
-            && rayon::current_thread_index().is_none()
-            && plan_tasks(lights.len(), method) > 1
-        {
-            // Called from outside the pool (an engine's main thread, a benchmark loop): move the
-            // whole frame onto a worker in one hand-off. Otherwise each parallel region would
-            // inject its jobs and park this thread until they finish — a cross-thread wake-up
-            // per region. Even one costs: criterion times `paper` 1000 `binary` at 46–63 µs from
-            // outside the pool against 33–59 µs on a worker (`benches/assignment.rs`).
-            rayon::scope(|_| self.assign_frame(frame, true, out))
+        let split = plan_tasks(lights.len(), method) > 1;
+        let stats = if parallel && split && rayon::current_thread_index().is_none() {
+            match (self.outside_calls, self.append) {
+                // Called from outside the pool (an engine's main thread, a benchmark loop): work
+                // on the frame alongside helpers spawned on the pool (`fan_out.rs`)...
+                (OutsideCalls::Join, AppendStrategy::PartitionedByDepth) => {
+                    let helpers = rayon::current_num_threads() - 1;
+                    self.assign_frame(frame, FanOut::WithCaller { helpers }, out)
+                }
+                // ...or move the whole frame onto a worker in one hand-off. Otherwise each
+                // parallel region would inject its jobs and park this thread until they finish
+                // — a cross-thread wake-up per region.
+                _ => rayon::scope(|_| self.assign_frame(frame, FanOut::Pool, out)),
+            }
+        } else if parallel {
+            self.assign_frame(frame, FanOut::Pool, out)
         } else {
-            self.assign_frame(frame, parallel, out)
+            self.assign_frame(frame, FanOut::Serial, out)
         };
         let threads = if stats.parallel {
             (stats.tasks as usize).min(rayon::current_num_threads())
@@ -365,7 +404,7 @@ impl Assigner {
     fn assign_frame(
         &mut self,
         frame: Frame<'_>,
-        parallel: bool,
+        fan_out: FanOut,
         out: &mut LightLists,
     ) -> AssignStats {
         let budget = self
@@ -378,7 +417,7 @@ impl Assigner {
             // One cluster holds at most every light (< 2³² by `assert_consistent`): always fits.
             let last_resort = attempt_frame.grid.dims() == glam::UVec3::ONE;
             let limit = if last_resort { u32::MAX as u64 } else { budget };
-            if let Ok(mut stats) = self.assign_once(&attempt_frame, parallel, limit, out) {
+            if let Ok(mut stats) = self.assign_once(&attempt_frame, fan_out, limit, out) {
                 stats.grid_dims = attempt_frame.grid.dims().to_array();
                 stats.coarsened = coarsened;
                 stats.over_budget = stats.pairs > budget;
@@ -395,7 +434,7 @@ impl Assigner {
     fn assign_once(
         &mut self,
         frame: &Frame<'_>,
-        parallel: bool,
+        fan_out: FanOut,
         budget: u64,
         out: &mut LightLists,
     ) -> Result<AssignStats, u64> {
@@ -480,12 +519,12 @@ impl Assigner {
             tan_half_fov,
             cull: jobs::FrustumCull::of_grid(&self.planes, grid),
         };
-        let parallel = parallel && tasks > 1;
+        let fan_out = if tasks > 1 { fan_out } else { FanOut::Serial };
         let gather = |(t, task): (usize, &mut CachePadded<TaskOutput>)| {
             let (begin, end) = (t * n / tasks, (t + 1) * n / tasks);
             jobs::run_task(&ctx, begin, end, task);
         };
-        for_each_task(&mut self.tasks[..tasks], parallel, gather);
+        for_each_task(&mut self.tasks[..tasks], fan_out, gather);
         let work = &self.tasks[..tasks];
         let pairs = match self.append {
             AppendStrategy::PartitionedByDepth => {
@@ -496,7 +535,7 @@ impl Assigner {
                 append::build_lists(
                     work,
                     parts,
-                    parallel,
+                    fan_out,
                     view.as_ref(),
                     &self.part_bases,
                     clusters,
@@ -512,7 +551,7 @@ impl Assigner {
                     stride,
                     clusters,
                     active,
-                    parallel,
+                    fan_out.parallel(),
                     budget,
                     out,
                 )?
@@ -524,7 +563,7 @@ impl Assigner {
         }
         stats.pairs = pairs as u64;
         stats.tasks = tasks as u32;
-        stats.parallel = parallel;
+        stats.parallel = fan_out.parallel();
         Ok(stats)
     }
 }
@@ -567,17 +606,20 @@ fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
     }
 }
 
-/// Runs `f` over the tasks, on the pool when `parallel`: one job per task (`with_max_len(1)`), so
-/// the pool's work stealing moves single tasks between workers. Without it rayon's splitter hands
-/// each worker one contiguous piece of tasks, run in one go.
-fn for_each_task<F>(tasks: &mut [CachePadded<TaskOutput>], parallel: bool, f: F)
+/// Runs `f` over the tasks as `fan_out` says. On the pool: one job per task (`with_max_len(1)`),
+/// so the pool's work stealing moves single tasks between workers (without it rayon's splitter
+/// hands each worker one contiguous piece of tasks, run in one go). With the caller: one task at a
+/// time from a shared queue, the same grain.
+fn for_each_task<F>(tasks: &mut [CachePadded<TaskOutput>], fan_out: FanOut, f: F)
 where
     F: Fn((usize, &mut CachePadded<TaskOutput>)) + Sync + Send,
 {
-    if parallel {
-        tasks.par_iter_mut().enumerate().with_max_len(1).for_each(f);
-    } else {
-        tasks.iter_mut().enumerate().for_each(f);
+    match fan_out {
+        FanOut::Pool => tasks.par_iter_mut().enumerate().with_max_len(1).for_each(f),
+        FanOut::WithCaller { helpers } => {
+            fan_out::with_caller(tasks.iter_mut().enumerate(), helpers, f)
+        }
+        FanOut::Serial => tasks.iter_mut().enumerate().for_each(f),
     }
 }
 

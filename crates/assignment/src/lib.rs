@@ -66,6 +66,7 @@ mod active;
 mod append;
 mod assigner;
 mod cone;
+mod fan_out;
 mod geometry;
 mod input;
 mod jobs;
@@ -78,7 +79,8 @@ mod search;
 
 pub use active::ActiveClusters;
 pub use assigner::{
-    AppendStrategy, AssignStats, Assigner, InvalidFrame, Method, SERIAL_LIGHTS, coarser_grid,
+    AppendStrategy, AssignStats, Assigner, InvalidFrame, Method, OutsideCalls, SERIAL_LIGHTS,
+    coarser_grid,
 };
 pub use input::{LightInput, SpotInput};
 pub use lists::LightLists;

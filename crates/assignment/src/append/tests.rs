@@ -140,9 +140,10 @@ fn both_strategies_build_exactly_the_listed_pairs() {
                     mask,
                 );
                 let want = reference(&tasks, parts.count, w, clusters, mask.map(|m| m.flags));
-                for parallel in [false, true] {
+                let helpers = threads - 1;
+                for fan_out in [FanOut::Serial, FanOut::Pool, FanOut::WithCaller { helpers }] {
                     let what = format!(
-                        "{threads} threads, {slices_per_part} slices a part, masked {masked}, parallel {parallel}"
+                        "{threads} threads, {slices_per_part} slices a part, masked {masked}, {fan_out:?}"
                     );
                     let mut bases = vec![5; 3];
                     let total = part_bases(&tasks, parts, &mut bases);
@@ -153,9 +154,14 @@ fn both_strategies_build_exactly_the_listed_pairs() {
                         counts: vec![77; 2],
                         indices: vec![77; 2 * want.indices.len() + 3],
                     };
-                    pool.install(|| {
-                        build_lists(&tasks, parts, parallel, mask, &bases, clusters, &mut out)
-                    });
+                    let mut build =
+                        || build_lists(&tasks, parts, fan_out, mask, &bases, clusters, &mut out);
+                    // With the caller: from this thread, outside the pool, as `Assigner` does.
+                    if fan_out == FanOut::Pool {
+                        pool.install(build);
+                    } else {
+                        build();
+                    }
                     assert_eq!(out.offsets, want.offsets, "{what}");
                     assert_eq!(out.counts, want.counts, "{what}");
                     assert_eq!(out.indices, want.indices, "{what}");
@@ -169,7 +175,7 @@ fn both_strategies_build_exactly_the_listed_pairs() {
                                 w,
                                 clusters,
                                 mask,
-                                parallel,
+                                fan_out.parallel(),
                                 budget,
                                 out,
                             )
