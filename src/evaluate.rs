@@ -1,7 +1,9 @@
 //! Accuracy and speed of assignment methods: pair-by-pair comparison with the exact method, and
 //! the "time against error" measurement behind `myriad bench`.
 
-use myriad_assignment::{AssignStats, Assigner, LightInput, LightLists, Method, Parallelism};
+use myriad_assignment::{
+    AssignStats, Assigner, LightInput, LightLists, Method, OutsideCalls, Parallelism,
+};
 use myriad_cluster_math::{Camera, ClusterGrid};
 use serde::Serialize;
 use std::time::Instant;
@@ -128,6 +130,9 @@ pub struct Timing {
     pub idle: Idle,
     /// When the assigner runs a split frame on the pool.
     pub parallelism: Parallelism,
+    /// How a frame called from outside any pool uses the pool (only matters when [`measure`] is
+    /// called from outside one).
+    pub outside_calls: OutsideCalls,
 }
 
 impl Timing {
@@ -137,6 +142,7 @@ impl Timing {
             runs,
             idle: Idle::None,
             parallelism: Parallelism::default(),
+            outside_calls: OutsideCalls::default(),
         }
     }
 }
@@ -160,8 +166,11 @@ pub fn measure(
         runs,
         idle,
         parallelism,
+        outside_calls,
     } = timing;
-    let mut assigner = Assigner::new().with_parallelism(parallelism);
+    let mut assigner = Assigner::new()
+        .with_parallelism(parallelism)
+        .with_outside_calls(outside_calls);
     let mut lists = LightLists::new();
     let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
     anyhow::ensure!(

@@ -5,7 +5,7 @@ use super::list_options::refuse_repeats;
 use super::oracle_check::independent_lists;
 use super::source::{SceneSource, thread_pool};
 use anyhow::Result;
-use myriad::assignment::{Method, Parallelism};
+use myriad::assignment::{Method, OutsideCalls, Parallelism};
 use myriad::core_link::{self, CoreLink, HANDOFF_BYTES};
 use myriad::evaluate::{Idle, MethodResult, Timing, measure};
 use myriad::scene::Scene;
@@ -39,9 +39,25 @@ pub struct Args {
     /// Run every frame split into tasks on the pool, never paced onto the calling thread.
     #[arg(long)]
     always_parallel: bool,
+    /// Where the timed calls come from: a pool worker, as a frame job runs (`worker`); or this
+    /// process's main thread, outside any pool, as an engine's main thread calls, working beside
+    /// helper jobs on rayon's global pool (`outside`, the assigner's default) or handing each
+    /// frame to it (`hand-off`). From outside, the global pool has one thread per core unless
+    /// the environment's RAYON_NUM_THREADS says otherwise, and --threads must be 0 or that count.
+    #[arg(long, value_enum, default_value_t = Caller::Worker)]
+    caller: Caller,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
+}
+
+/// `--caller`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+enum Caller {
+    Worker,
+    Outside,
+    HandOff,
 }
 
 #[derive(Serialize)]
@@ -53,6 +69,8 @@ struct Report {
     lights_skipped: usize,
     grid: [u32; 3],
     threads: usize,
+    /// Where the timed calls came from (`--caller`).
+    caller: Caller,
     /// The pool's thread-to-thread link just before and just after the timings (absent on one
     /// thread): a parallel timing means little without it on a shared machine.
     core_link: Option<LinkBeforeAfter>,
@@ -93,8 +111,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
         runs: args.runs as usize,
         idle,
         parallelism,
+        outside_calls: match args.caller {
+            Caller::HandOff => OutsideCalls::HandOff,
+            Caller::Worker | Caller::Outside => OutsideCalls::Join,
+        },
     };
-    let report = bench(&scene, name, &methods, args.threads, timing)?;
+    let report = bench(&scene, name, &methods, args.threads, args.caller, timing)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -108,11 +130,11 @@ fn bench(
     name: String,
     methods: &[Method],
     threads: usize,
+    caller: Caller,
     timing: Timing,
 ) -> Result<Report> {
-    let pool = thread_pool(threads)?;
     let input = myriad::light_input(&scene.lights);
-    pool.install(|| {
+    let run = || {
         // The reference shares no code with the assignment but the f64 oracle.
         let exact = independent_lists(&scene.lights, &scene.camera, &scene.grid)?;
         let before = core_link::measure();
@@ -139,10 +161,25 @@ fn bench(
             lights_skipped: scene.skipped.len(),
             grid: [d.x, d.y, d.z],
             threads: rayon::current_num_threads(),
+            caller,
             core_link,
             methods,
         })
-    })
+    };
+    if caller == Caller::Worker {
+        return thread_pool(threads)?.install(run);
+    }
+    // From this thread, outside any pool: the assigner uses rayon's global pool, built (and its
+    // threads named) when the program started.
+    let global = rayon::current_num_threads();
+    anyhow::ensure!(
+        threads == 0 || threads == global,
+        "--threads {threads} with --caller {}: calls from outside a pool use rayon's global \
+         pool, which has {global} threads here; set RAYON_NUM_THREADS={threads} instead",
+        clap::ValueEnum::to_possible_value(&caller)
+            .map_or_else(String::new, |v| v.get_name().to_string())
+    );
+    run()
 }
 
 fn print_table(report: &Report) {
@@ -152,8 +189,15 @@ fn print_table(report: &Report) {
         n => format!(" (and {n} invalid, skipped)"),
     };
     println!(
-        "{} — {} lights{skipped}, grid {x}x{y}x{z}, {} threads",
-        report.scene, report.lights, report.threads
+        "{} — {} lights{skipped}, grid {x}x{y}x{z}, {} threads{}",
+        report.scene,
+        report.lights,
+        report.threads,
+        match report.caller {
+            Caller::Worker => "",
+            Caller::Outside => ", called from outside the pool",
+            Caller::HandOff => ", called from outside the pool, each frame handed off",
+        }
     );
     if let Some(LinkBeforeAfter { before, after }) = &report.core_link {
         println!(
@@ -218,6 +262,7 @@ mod tests {
             lights_skipped: 0,
             grid: [1, 1, 1],
             threads: 1,
+            caller: Caller::Worker,
             core_link: None,
             methods: misses
                 .iter()

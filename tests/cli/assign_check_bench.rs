@@ -520,6 +520,69 @@ fn bench_json_reports_every_method_without_misses() {
     assert_mentions(&out, &["--idle-us"]);
 }
 
+/// `--caller`: timed from the main thread, outside any pool — working beside helper jobs on the
+/// global pool (`outside`) or handing each frame to it (`hand-off`) — every method lists what a
+/// worker's calls list, and the report says where the calls came from. `--threads` cannot pick
+/// the global pool's size, which is fixed when the program starts: another count is refused.
+#[test]
+fn bench_times_calls_from_outside_the_pool() {
+    let mut pairs = Vec::new();
+    for caller in ["worker", "outside", "hand-off"] {
+        let args = [
+            "bench",
+            "--preset",
+            "paper",
+            "--lights",
+            "800",
+            "--methods",
+            "binary,refined",
+            "--runs",
+            "3",
+            "--always-parallel",
+            "--json",
+            "--caller",
+            caller,
+        ];
+        let report: Value = serde_json::from_str(&stdout(&myriad_ok(&args))).unwrap();
+        assert_eq!(report["caller"], caller);
+        for m in report["methods"].as_array().unwrap() {
+            assert_eq!(u64_field(m, "misses"), 0, "{caller}: {m}");
+            assert_eq!(u64_field(m, "pooled_runs"), 3, "{caller}: {m}");
+            pairs.push(u64_field(m, "pairs"));
+        }
+    }
+    assert!(pairs[0] > 0 && pairs[1] > 0);
+    assert_eq!(pairs[..2], pairs[2..4]);
+    assert_eq!(pairs[..2], pairs[4..6]);
+    let table = stdout(&myriad_ok(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--lights",
+        "600",
+        "--methods",
+        "binary",
+        "--runs",
+        "3",
+        "--caller",
+        "hand-off",
+    ]));
+    assert_mentions(
+        &table,
+        &["called from outside the pool, each frame handed off"],
+    );
+    let out = myriad_fails(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--caller",
+        "outside",
+        "--threads",
+        "97",
+    ]);
+    assert_mentions(&out, &["--threads 97", "RAYON_NUM_THREADS=97"]);
+}
+
 /// The `exact` method, the slow oracle-backed one, is timed at most three times whatever `--runs`
 /// asks; every other method takes all the runs asked for.
 #[test]
