@@ -14,7 +14,11 @@
 //! scope's latch while the last item finishes. A helper that no worker has started by then still
 //! has to run (it finds the queue empty) before the scope can end: under [`crate::Parallelism`]'s
 //! default pacing a frame only runs in parallel when the workers are awake or the frame is big,
-//! so that wait is rare.
+//! so that wait is rare. The same holds when every worker is busy with someone else's long job:
+//! the caller does the whole region itself and then waits for a worker to pick up its helpers
+//! (which find nothing left) — where a hand-off waits for such a worker to run the whole frame.
+//! (Helpers that borrow nothing, so that the caller could return without them, would need the
+//! frame's borrowed inputs behind `unsafe` lifetime erasure; not done.)
 //!
 //! The price is one small heap allocation per helper (rayon boxes each spawned job): 2 × (threads
 //! − 1) per frame called from outside the pool. A frame job on a worker allocates nothing, and
