@@ -301,6 +301,12 @@ impl<'a> Iterator for Pieces<'_, 'a> {
         self.next = end;
         Some((start..end, piece))
     }
+
+    /// At most one piece per part left.
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.job.parts.count - self.next;
+        (left.min(1), Some(left))
+    }
 }
 
 /// The output arrays of a range of parts.

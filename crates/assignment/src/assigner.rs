@@ -88,8 +88,8 @@ pub enum OutsideCalls {
     /// The calling thread works on the frame's tasks and parts itself, alongside one helper job
     /// per other thread of the global pool, spawned as each region starts (`fan_out.rs`): the
     /// frame starts at once and the caller only waits for the helpers' last items, spinning. It
-    /// costs one small heap allocation per helper and region (rayon boxes a spawned job):
-    /// 2 × (threads − 1) per frame. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
+    /// costs one small heap allocation per helper and region (rayon boxes a spawned job): at
+    /// most 2 × (threads − 1) per frame, fewer where a region has fewer items to share. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
     /// medians of the `targets` bench, three runs: `binary` 25.1–25.8 µs against 30.9–34.2 µs
     /// handed off, `refined` 38.7–39.8 against 44.2–50.1 µs; 21–23 and 36–44 µs on a worker).
     #[default]
@@ -617,7 +617,7 @@ where
     match fan_out {
         FanOut::Pool => tasks.par_iter_mut().enumerate().with_max_len(1).for_each(f),
         FanOut::WithCaller { helpers } => {
-            fan_out::with_caller(tasks.iter_mut().enumerate(), helpers, f)
+            fan_out::with_caller(tasks.iter_mut().enumerate(), helpers, f);
         }
         FanOut::Serial => tasks.iter_mut().enumerate().for_each(f),
     }

@@ -49,15 +49,25 @@ impl FanOut {
     }
 }
 
-/// Runs `work` on every item of `items`, on this thread (which is outside any pool) and on
+/// Runs `work` on every item of `items`, on this thread (which is outside any pool) and on up to
 /// `helpers` jobs spawned on the global pool, each taking the next item from the shared queue
 /// until it is empty. Items are taken in order, but which thread runs which depends on timing:
 /// `work` must give the same result wherever an item runs (each of ours writes only its item).
-pub(crate) fn with_caller<I, F>(items: I, helpers: usize, work: F)
+///
+/// No more helpers are spawned than there can be items besides the caller's first (the upper
+/// bound of `items.size_hint()`): on a many-core pool a small frame's four tasks would otherwise
+/// wake every worker, and the caller would wait for each to pick up its empty helper. Returns
+/// the helpers spawned.
+pub(crate) fn with_caller<I, F>(items: I, helpers: usize, work: F) -> usize
 where
     I: Iterator + Send,
     F: Fn(I::Item) + Sync,
 {
+    let at_most = items
+        .size_hint()
+        .1
+        .map_or(usize::MAX, |n| n.saturating_sub(1));
+    let helpers = helpers.min(at_most);
     let queue = Queue {
         items: Mutex::new(items),
         taken: AtomicUsize::new(0),
@@ -76,6 +86,7 @@ where
         queue.drain(&work);
         queue.wait_for_taken();
     });
+    helpers
 }
 
 /// The items of one region and how many have been taken and finished.
@@ -161,6 +172,24 @@ mod tests {
                 "{helpers} helpers"
             );
         }
+    }
+
+    /// Helpers are spawned only for items the caller might not get to: none for one item or
+    /// none, one fewer than the items at most, and as many as asked where the items are more
+    /// (or their count unknown).
+    #[test]
+    fn no_more_helpers_than_items_besides_the_callers() {
+        let nothing = |_| {};
+        assert_eq!(with_caller(0..0, 7, nothing), 0);
+        assert_eq!(with_caller(0..1, 7, nothing), 0);
+        assert_eq!(with_caller(0..3, 7, nothing), 2);
+        assert_eq!(with_caller(0..8, 7, nothing), 7);
+        assert_eq!(with_caller(0..100, 7, nothing), 7);
+        assert_eq!(with_caller((0..3).filter(|_| true), 7, nothing), 2);
+        assert_eq!(
+            with_caller(std::iter::repeat_n(0, 5).skip_while(|_| false), 2, nothing),
+            2
+        );
     }
 
     /// The caller does not return before the helpers' items are done, even when they are slow.

@@ -8,7 +8,8 @@
 //! injected, whoever injects them. So calls from outside are held to that amortised bound, over
 //! many frames: with `OutsideCalls::HandOff` (one job a frame) at most one block per 63 frames;
 //! with the default `OutsideCalls::Join` exactly the helper jobs the frame spawns (rayon boxes
-//! each: one per other thread of the pool and region), plus those blocks. Both are a fixed
+//! each: one per other thread of the pool and region, capped by the region's items), plus those
+//! blocks. Both are a fixed
 //! number per frame, whatever the lights or the grid; the lists and scratch never grow.
 
 mod common;
@@ -96,9 +97,11 @@ fn steady_state_frames_do_not_allocate() {
         .num_threads(2)
         .build()
         .unwrap();
-    // A parallel frame from outside runs two regions (the tasks, the append), each spawning one
-    // helper per other thread of the global pool.
-    let helper_jobs = 2 * (rayon::current_num_threads() - 1);
+    // A parallel frame from outside runs two regions, the tasks and the append's parts (one per
+    // depth slice), each spawning one helper per other thread of the global pool, but no more
+    // than the region has items besides the caller's first.
+    let others = rayon::current_num_threads() - 1;
+    let parts = scene.grid.dims().z as usize;
     for (spots, in_pool, calls) in [
         (false, true, None),
         (true, true, None),
@@ -131,6 +134,8 @@ fn steady_state_frames_do_not_allocate() {
                 (_, Method::Linear) | (None, _) => (0, 0),
                 (Some(OutsideCalls::HandOff), _) => (0, bound(0, 1)),
                 (Some(OutsideCalls::Join), _) => {
+                    let tasks = stats.tasks as usize;
+                    let helper_jobs = others.min(tasks - 1) + others.min(parts - 1);
                     (FRAMES * helper_jobs, bound(helper_jobs, helper_jobs))
                 }
             };
