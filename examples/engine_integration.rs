@@ -77,7 +77,7 @@ fn main() {
         })
         .collect();
 
-    // Created once; reused every frame so steady-state frames allocate nothing.
+    // Created once; reused every frame so steady-state frames allocate no storage.
     let mut assigner = Assigner::new();
     let mut lists = LightLists::new();
     let mut columns = LightColumns::default();
@@ -87,7 +87,10 @@ fn main() {
         for l in &mut lights {
             l.position.y += 0.1;
         }
-        // ...and hands the assigner this frame's columns. It runs on the current rayon pool.
+        // ...and hands the assigner this frame's columns. It runs on the current rayon pool;
+        // called from this main thread, outside any pool, it works on the frame itself beside
+        // helper jobs on rayon's global pool (`OutsideCalls::Join`; `Assigner::with_outside_calls
+        // (OutsideCalls::HandOff)` hands the whole frame over instead, allocating nothing).
         columns.fill(&lights);
         let stats = assigner.assign(
             Method::Refined,
