@@ -89,8 +89,8 @@ fn main() {
         }
         // ...and hands the assigner this frame's columns. It runs on the current rayon pool;
         // called from this main thread, outside any pool, it works on the frame itself beside
-        // helper jobs on rayon's global pool (`OutsideCalls::Join`; `Assigner::with_outside_calls
-        // (OutsideCalls::HandOff)` hands the whole frame over instead, allocating nothing).
+        // helper jobs on rayon's global pool (`OutsideCalls::Join`; with `OutsideCalls::HandOff`
+        // it hands the whole frame to a worker instead, allocating nothing).
         columns.fill(&lights);
         let stats = assigner.assign(
             Method::Refined,
