@@ -117,8 +117,10 @@ pub struct AssignStats {
     pub pairs: u64,
     /// Tasks the lights were split into (1 = one serial task).
     pub tasks: u32,
-    /// Whether the tasks ran on the pool; `false`: one after another on the calling thread, as
-    /// a small frame after idle does (see [`Assigner::assign`]). The lists are the same either way.
+    /// Whether the tasks ran on the pool (called from outside any pool: on the calling thread
+    /// beside helper jobs on the pool, [`OutsideCalls`]); `false`: one after another on the
+    /// calling thread alone, as a small frame after idle does (see [`Assigner::assign`]). The
+    /// lists are the same either way.
     pub parallel: bool,
     /// Dimensions of the grid the lists were built for: the requested grid's, unless the pair
     /// budget forced a coarser one (see [`Assigner::with_pair_budget`]).
