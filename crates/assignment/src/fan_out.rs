@@ -72,16 +72,10 @@ where
         items: Mutex::new(items),
         taken: AtomicUsize::new(0),
         done: AtomicUsize::new(0),
-        helpers_started: AtomicUsize::new(0),
-        helpers_ended: AtomicUsize::new(0),
     };
     rayon::in_place_scope(|scope| {
         for _ in 0..helpers {
-            scope.spawn(|_| {
-                queue.helpers_started.fetch_add(1, Ordering::AcqRel);
-                let _ended = Done(&queue.helpers_ended);
-                queue.drain(&work);
-            });
+            scope.spawn(|_| queue.drain(&work));
         }
         queue.drain(&work);
         queue.wait_for_taken();
@@ -94,8 +88,6 @@ struct Queue<I> {
     items: Mutex<I>,
     taken: AtomicUsize,
     done: AtomicUsize,
-    helpers_started: AtomicUsize,
-    helpers_ended: AtomicUsize,
 }
 
 impl<I: Iterator> Queue<I> {
@@ -125,10 +117,7 @@ impl<I: Iterator> Queue<I> {
     fn wait_for_taken(&self) {
         let taken = self.taken.load(Ordering::Relaxed);
         let mut spins = 0u32;
-        while self.done.load(Ordering::Acquire) < taken
-            || self.helpers_ended.load(Ordering::Acquire)
-                < self.helpers_started.load(Ordering::Acquire)
-        {
+        while self.done.load(Ordering::Acquire) < taken {
             if spins < SPINS_BEFORE_YIELDING {
                 spins += 1;
                 std::hint::spin_loop();
