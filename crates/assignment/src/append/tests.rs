@@ -318,3 +318,70 @@ fn atomic_counters_sort_every_list_whatever_the_fill_order() {
         assert_eq!(out.indices, want.indices, "parallel {parallel}");
     }
 }
+
+/// The pieces a caller outside the pool and its helpers take ([`Pieces`]): runs of consecutive
+/// parts covering every part once, each ending at the first part where its work reaches the
+/// grain (the last one at the frame's end), each with exactly its parts' clusters and pairs;
+/// with a grain of 0 (a frame of fewer clusters and pairs than four a thread) one part a piece
+/// (mutation audit: `Pieces::next` went untested — lists do not change with how the parts are
+/// grouped — so a search from the piece's own first part, which at grain 0 ends every piece
+/// where it starts and never reaches the end of the frame, passed, as did a comparison that
+/// cut every piece after one part or made the whole frame one piece for the caller alone).
+#[test]
+fn pieces_are_runs_of_parts_of_a_grain_of_work_with_their_arrays() {
+    // Five parts of four clusters, the last one short (two): 18 clusters; the parts' pairs
+    // 10, 0, 3, 30 and 1. The work before part `p` (pairs before it + 4p) is
+    // 0, 14, 18, 25, 59 and 64 at the end.
+    let parts = Parts {
+        count: 5,
+        clusters: 4,
+        slice_shift: 0,
+        row_stride: 4,
+    };
+    let bases = [0u64, 10, 10, 13, 43, 44];
+    let (clusters, pairs) = (18u32, 44u32);
+    for (grain, want) in [
+        (0, vec![0..1, 1..2, 2..3, 3..4, 4..5]),
+        (14, vec![0..1, 1..4, 4..5]),
+        (15, vec![0..2, 2..4, 4..5]),
+        (59, vec![0..4, 4..5]),
+        (1000, vec![0..5]),
+    ] {
+        let job = PartJob {
+            tasks: &[],
+            parts,
+            bases: &bases,
+            parallel: false,
+            grain,
+            active: None,
+        };
+        // Each array holds its own positions, so a piece shows which slice of it it got.
+        let mut counts: Vec<u32> = (0..clusters).collect();
+        let mut offsets: Vec<u32> = (100..100 + clusters).collect();
+        let mut indices: Vec<u32> = (0..pairs).collect();
+        let pieces = Pieces {
+            job: &job,
+            next: 0,
+            rest: Some(Chunk {
+                counts: &mut counts,
+                offsets: &mut offsets,
+                indices: &mut indices,
+            }),
+        };
+        // One more than the parts: a piece past the frame's end, or an endless run of empty
+        // ones, shows up here instead of hanging the test.
+        let got: Vec<_> = pieces.take(parts.count + 1).collect();
+        let ranges: Vec<_> = got.iter().map(|(range, _)| range.clone()).collect();
+        assert_eq!(ranges, want, "grain {grain}");
+        for (range, chunk) in &got {
+            let first = (range.start * parts.clusters) as u32;
+            let last = ((range.end * parts.clusters) as u32).min(clusters);
+            let (lo, hi) = (bases[range.start] as u32, bases[range.end] as u32);
+            let what = format!("grain {grain}, parts {range:?}");
+            assert_eq!(chunk.counts.to_vec(), Vec::from_iter(first..last), "{what}");
+            let offsets = Vec::from_iter(100 + first..100 + last);
+            assert_eq!(chunk.offsets.to_vec(), offsets, "{what}");
+            assert_eq!(chunk.indices.to_vec(), Vec::from_iter(lo..hi), "{what}");
+        }
+    }
+}
