@@ -15,10 +15,13 @@
 mod common;
 
 use common::*;
-use myriad_assignment::{Assigner, LightLists, Method, OutsideCalls};
+use myriad_assignment::{
+    Assigner, LightLists, Method, OutsideCalls, PacingLimits, Parallelism, SERIAL_LIGHTS,
+};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Duration;
 
 struct Counting;
 
@@ -197,6 +200,61 @@ fn frames_on_changing_grids_do_not_allocate_once_warm() {
                 "{method} (pair budget {budget:?}): {allocations} allocations in {} pairs of frames on alternating grids",
                 frames_for(method)
             );
+        }
+    }
+}
+
+/// Frames that stay on the calling thread allocate nothing when called from outside any pool,
+/// with either [`OutsideCalls`]: a frame too small to split (one task: nothing to share, even
+/// under `Parallelism::Always`) and a split frame the pacing runs serially (as a small frame
+/// after idle). Neither spawns a helper nor injects a job into the pool: over 64 frames, more
+/// than one block of the injection queue, a single injected job a frame would allocate a block
+/// (mutation audit: a one-task frame sent down the outside-call path, and a serial frame whose
+/// append split its parts over `rayon::join`, passed every test: their lists are the same).
+#[test]
+fn frames_that_stay_on_the_calling_thread_allocate_nothing_from_outside() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let split = make_scene(&SceneParams {
+        seed: 9,
+        lights: 1_500,
+        ..SceneParams::HD
+    });
+    let one_task = make_scene(&SceneParams {
+        seed: 9,
+        lights: SERIAL_LIGHTS - 1,
+        ..SceneParams::HD
+    });
+    // After the first frame (parallel: there is no frame before it to judge by) every frame is
+    // serial: no gap is short enough to count as warm, no frame big enough to count as work.
+    let serial = Parallelism::PacedWith(PacingLimits {
+        warm_gap: Duration::ZERO,
+        cold_work: Duration::MAX,
+    });
+    // The global pool's threads allocate as they start: have them all started (and idle) first.
+    rayon::broadcast(|_| ());
+    let frames = JOBS_PER_INJECTOR_BLOCK + 1;
+    for calls in [OutsideCalls::Join, OutsideCalls::HandOff] {
+        for (scene, parallelism, tasks) in [
+            (&one_task, Parallelism::Always, "one task"),
+            (&split, serial, "serial"),
+        ] {
+            for method in [Method::Binary, Method::Refined] {
+                let what = format!("{method}, {tasks}, {calls:?}");
+                let mut assigner = Assigner::new()
+                    .with_outside_calls(calls)
+                    .with_parallelism(parallelism);
+                let mut lists = LightLists::new();
+                let input = scene.lights.input(true);
+                let (allocations, stats) = allocations_over_frames(frames, || {
+                    assigner.assign(method, &input, &scene.camera, &scene.grid, &mut lists)
+                });
+                assert!(stats.pairs > 0 && !stats.parallel, "{what}: {stats:?}");
+                assert_eq!(stats.tasks > 1, tasks == "serial", "{what}: {stats:?}");
+                assert_eq!(
+                    allocations, 0,
+                    "{what}: {allocations} allocations in {frames} frames"
+                );
+            }
         }
     }
 }
