@@ -859,10 +859,22 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
         ..Default::default()
     });
     invalid(render_into(&second_mip, true), "cannot be drawn into");
-    // Output formats the passes cannot write or blend are refused up front.
+    // Output formats the passes cannot write or blend are refused up front: not float, not a
+    // colour, a float colour that blends but is no render attachment (Rgba8Snorm), and one that
+    // is an attachment but does not blend (Rgba32Float, without FLOAT32_BLENDABLE); the last two
+    // are each refused for one missing property alone.
+    assert!(
+        !viewer
+            .ctx
+            .device
+            .features()
+            .contains(wgpu::Features::FLOAT32_BLENDABLE)
+    );
     for format in [
         wgpu::TextureFormat::Rgba8Uint,
         wgpu::TextureFormat::Depth32Float,
+        wgpu::TextureFormat::Rgba8Snorm,
+        wgpu::TextureFormat::Rgba32Float,
     ] {
         let refused = myriad::gpu::Renderer::try_new(&viewer.ctx, format).map(|_| ());
         invalid(refused, "cannot draw into");
