@@ -1,0 +1,288 @@
+//! What a frame checks and reports that the image alone does not show (found missing by a
+//! mutation audit of `crates/gpu/src/renderer/mod.rs`): the tile count at which the shader's u32
+//! tile arithmetic would overflow, kept lights and the camera they were uploaded for, the exact
+//! bytes a frame stages and the upload generation it bumps, and a frame refused for its lights
+//! leaving even the last frame's pass times as they were.
+
+use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::cluster_math::glam::UVec3;
+use myriad::gpu::layout::GpuLight;
+use myriad::gpu::{
+    FrameDesc, GpuContext, GpuError, HEADLESS_FORMAT, HeadlessTarget, Renderer, ShadingMode,
+    ShadingSettings, wgpu,
+};
+use myriad::render::{RenderScene, cluster_lists, light_columns};
+use myriad::scene::{Camera, ClusterGrid, DepthSlicing};
+
+/// A brute-force frame of `camera` on `grid` that uploads `lights` (or keeps the last upload).
+fn brute_force<'a>(
+    camera: &'a Camera,
+    grid: &'a ClusterGrid,
+    lights: Option<myriad::gpu::LightColumns<'a>>,
+) -> FrameDesc<'a> {
+    FrameDesc {
+        camera,
+        grid,
+        mode: ShadingMode::BruteForce,
+        heat_map: false,
+        lights,
+        lists: None,
+        settings: ShadingSettings::default(),
+    }
+}
+
+/// `scene`'s lists for its own camera and grid.
+fn assigned(scene: &RenderScene) -> LightLists {
+    let mut lists = LightLists::new();
+    Assigner::new().assign(
+        Method::Refined,
+        &myriad::light_input(&scene.lights),
+        &scene.camera,
+        &scene.grid,
+        &mut lists,
+    );
+    lists
+}
+
+/// The shader works out a pixel's tile as `2 · pixel · tiles` in u32: a target of the device's
+/// largest side is refused with the first tile count along that side whose `2 · side · tiles`
+/// passes `u32::MAX` (a wide target and a tall one, each overflowing along one side only), and
+/// drawn with one tile fewer.
+#[test]
+fn tiles_that_overflow_the_shaders_u32_arithmetic_are_refused_from_the_first() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let side = ctx.device.limits().max_texture_dimension_2d;
+    let first = u32::try_from(u32::MAX as u64 / (2 * side as u64) + 1).unwrap();
+    assert!(2 * side as u64 * first as u64 > u32::MAX as u64);
+    assert!(2 * side as u64 * (first as u64 - 1) <= u32::MAX as u64);
+    let scene = RenderScene::default_scene(1, 8, 8).unwrap();
+    let mut renderer = Renderer::try_new(&ctx, HEADLESS_FORMAT).unwrap();
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    for wide in [true, false] {
+        let (width, height) = if wide { (side, 1) } else { (1, side) };
+        let camera = Camera {
+            width,
+            height,
+            ..scene.camera
+        };
+        let target = HeadlessTarget::new(&ctx.device, width, height).unwrap();
+        for tiles in [first - 1, first] {
+            let dims = if wide {
+                UVec3::new(tiles, 1, 1)
+            } else {
+                UVec3::new(1, tiles, 1)
+            };
+            let grid = ClusterGrid::new(
+                dims,
+                DepthSlicing::Linear,
+                scene.grid.near(),
+                scene.grid.far(),
+            );
+            let frame = brute_force(&camera, &grid, Some(light_columns(&scene.lights)));
+            let result = renderer.render(&ctx, &geometry, &frame, &target.view);
+            let label = format!("{width}x{height} with {dims} tiles");
+            if tiles < first {
+                let lights = scene.lights.len();
+                assert_eq!(result.map(|r| r.lights).ok(), Some(lights), "{label}");
+            } else {
+                match result {
+                    Err(GpuError::InvalidInput(message)) => assert!(
+                        message.contains("overflows the shader's u32 tile arithmetic"),
+                        "{label}: {message}"
+                    ),
+                    other => panic!("{label}: want it refused, got {:?}", other.map(|_| ())),
+                }
+            }
+        }
+    }
+}
+
+/// Kept lights are camera-relative records: a frame that keeps them is refused once the camera
+/// has moved, and drawn from the camera they were uploaded for. Before anything is uploaded there
+/// is nothing to keep, so a frame without lights draws from any camera.
+#[test]
+fn kept_lights_are_drawn_only_from_the_camera_they_were_uploaded_for() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(20, 32, 16).unwrap();
+    let mut renderer = Renderer::try_new(&ctx, HEADLESS_FORMAT).unwrap();
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let mut render = |camera: &Camera, lights| {
+        renderer.render(
+            &ctx,
+            &geometry,
+            &brute_force(camera, &scene.grid, lights),
+            &target.view,
+        )
+    };
+    let report = render(&scene.camera, None).expect("no lights yet: nothing to keep");
+    assert_eq!(report.lights, 0);
+    let report = render(&scene.camera, Some(light_columns(&scene.lights))).unwrap();
+    assert_eq!(report.lights, 20);
+    let mut moved = scene.camera;
+    moved.position.x += 0.5;
+    moved.target.x += 0.5;
+    match render(&moved, None) {
+        Err(GpuError::InvalidInput(message)) => {
+            assert!(message.contains("the camera moved"), "{message}")
+        }
+        other => panic!("want the kept lights refused, got {:?}", other.map(|_| ())),
+    }
+    let report = render(&scene.camera, None).expect("the lights' own camera");
+    assert_eq!(report.lights, 20);
+    // Uploaded again from the moved camera, they are that camera's.
+    render(&moved, Some(light_columns(&scene.lights))).unwrap();
+    assert_eq!(render(&moved, None).unwrap().lights, 20);
+}
+
+/// `upload_bytes` is exactly what was staged (48 bytes a light, 4 an offset, count or index, 4 a
+/// slice edge), piece by piece: a frame with all three, the lists alone, the lights alone, and a
+/// grid's slice edges alone. Every frame that uploads lights or lists bumps the upload
+/// generation; one that uploads neither leaves it.
+#[test]
+fn the_report_counts_exactly_the_bytes_each_frame_staged() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    assert_eq!(std::mem::size_of::<GpuLight>(), 48);
+    let scene = RenderScene::default_scene(30, 32, 16).unwrap();
+    let lists = assigned(&scene);
+    assert!(!lists.indices.is_empty());
+    let mut renderer = Renderer::try_new(&ctx, HEADLESS_FORMAT).unwrap();
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let lights_bytes = 48 * scene.lights.len() as u64;
+    let lists_bytes = 4 * (lists.offsets.len() + lists.counts.len() + lists.indices.len()) as u64;
+    let edges_bytes = |grid: &ClusterGrid| 4 * (grid.dims().z as u64 + 1);
+    let tiles = ClusterGrid::new(
+        scene.grid.dims().with_z(1),
+        DepthSlicing::Linear,
+        scene.grid.near(),
+        scene.grid.far(),
+    );
+    let clustered = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        cluster_lists(&lists),
+    );
+    let frames = [
+        (
+            "lights, lists and slice edges",
+            clustered,
+            lights_bytes + lists_bytes + edges_bytes(&scene.grid),
+        ),
+        (
+            "the lists alone",
+            FrameDesc {
+                lights: None,
+                ..clustered
+            },
+            lists_bytes,
+        ),
+        (
+            "the lights alone",
+            brute_force(
+                &scene.camera,
+                &scene.grid,
+                Some(light_columns(&scene.lights)),
+            ),
+            lights_bytes,
+        ),
+        (
+            "another grid's slice edges alone",
+            brute_force(&scene.camera, &tiles, None),
+            edges_bytes(&tiles),
+        ),
+    ];
+    let mut generation = renderer.upload_generation();
+    for (what, frame, want) in frames {
+        let report = renderer
+            .render(&ctx, &geometry, &frame, &target.view)
+            .unwrap();
+        assert_eq!(report.upload_bytes, want, "{what}");
+        let uploads = frame.lights.is_some() || frame.lists.is_some();
+        let now = renderer.upload_generation();
+        if uploads {
+            assert!(now > generation, "{what}: generation {generation} -> {now}");
+        } else {
+            assert_eq!(now, generation, "{what}");
+        }
+        generation = now;
+    }
+}
+
+/// A frame with more lights than one storage binding holds is refused before it changes
+/// anything: the error names the light buffer and its bytes, the upload generation stays, and the
+/// last frame's pass times still read as that frame's (a refusal after the frame's timing had
+/// begun read back a frame of no passes).
+#[test]
+fn a_frame_refused_for_its_lights_leaves_the_last_frames_times() {
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    const LIMIT: u64 = 256 << 10;
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
+    let timestamps =
+        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+    let descriptor = wgpu::DeviceDescriptor {
+        required_features: adapter.features() & timestamps,
+        required_limits: wgpu::Limits {
+            max_storage_buffer_binding_size: LIMIT,
+            ..Renderer::required_limits()
+        },
+        ..Default::default()
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
+    let ctx = GpuContext::from_device(device, queue);
+    if ctx.describe().contains("llvmpipe") {
+        assert!(ctx.has_timestamps(), "{}", ctx.describe());
+    }
+    let too_many = (LIMIT / 48 + 1) as usize;
+    let scene = RenderScene::default_scene(100, 32, 16).unwrap();
+    let crowd = RenderScene::default_scene(too_many, 32, 16).unwrap();
+    assert_eq!(crowd.lights.len(), too_many);
+    let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let lists = assigned(&scene);
+    let frame = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        cluster_lists(&lists),
+    );
+    renderer
+        .render(&ctx, &geometry, &frame, &target.view)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    let times = renderer.last_pass_times(&ctx).unwrap();
+    if ctx.has_timestamps() {
+        let t = times.expect("an adapter with timestamps times every frame");
+        assert!(t.gbuffer_ms.is_some() && t.shading_ms.is_some(), "{t:?}");
+    }
+    let generation = renderer.upload_generation();
+    // The kept lists name only the first lights: the frame is refused for its light buffer alone.
+    let refused = FrameDesc {
+        lights: Some(light_columns(&crowd.lights)),
+        lists: None,
+        ..frame
+    };
+    match renderer.render(&ctx, &geometry, &refused, &target.view) {
+        Err(GpuError::BufferTooLarge { what, bytes, limit }) => {
+            assert_eq!(
+                (what, bytes, limit),
+                ("lights", 48 * too_many as u64, LIMIT)
+            );
+        }
+        other => panic!("want the lights refused, got {:?}", other.map(|_| ())),
+    }
+    assert_eq!(renderer.upload_generation(), generation);
+    assert_eq!(renderer.last_pass_times(&ctx).unwrap(), times);
+}
