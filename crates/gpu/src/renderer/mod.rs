@@ -646,7 +646,6 @@ impl Renderer {
             );
             self.light_count = columns.len();
             self.lights_camera = Some(camera_position);
-            self.uploads += 1;
             self.has_spots = columns.spot.is_some();
         }
         report.lights = self.light_count;
@@ -666,6 +665,9 @@ impl Renderer {
                 max_count: lists.max_count(),
                 lights_named: lists.lights_named(),
             });
+        }
+        // Once per frame, however much it uploads: the generation counts frames.
+        if frame.lights.is_some() || frame.lists.is_some() {
             self.uploads += 1;
         }
         let max_count = match (frame.mode, self.lists_uploaded) {
