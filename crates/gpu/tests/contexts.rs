@@ -6,7 +6,8 @@
 use glam::UVec3;
 use myriad_cluster_math::{ClusterGrid, DepthSlicing};
 use myriad_gpu::cluster_check::gpu_cluster_ids;
-use myriad_gpu::{GpuContext, shared_instance};
+use myriad_gpu::{GpuContext, SKIP_GPU_TESTS_VAR, shared_instance};
+use std::process::Command;
 
 const THREADS: usize = 8;
 const ROUNDS: usize = 3;
@@ -82,4 +83,140 @@ fn every_thread_gets_the_one_shared_instance() {
         elsewhere.iter().all(|&p| p == here as usize),
         "{elsewhere:?}"
     );
+}
+
+/// A headless device asks for the timestamp features its adapter has and for nothing else: an
+/// adapter without timestamps still gives a device, and no other feature is switched on behind
+/// an engine's back (mutation audit: requesting every adapter feature passed every test).
+#[test]
+fn headless_devices_enable_only_the_timestamp_features_the_adapter_has() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    // The adapter `headless` picks: the same instance and options.
+    let adapter = pollster::block_on(shared_instance().request_adapter(
+        &wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        },
+    ))
+    .unwrap();
+    assert_eq!(adapter.get_info(), ctx.adapter_info);
+    let timestamps =
+        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+    assert_eq!(ctx.device.features(), adapter.features() & timestamps);
+    // The test adapter (llvmpipe on CI) has other features, so asking for all would show.
+    assert_ne!(adapter.features(), adapter.features() & timestamps);
+}
+
+/// Mesa's llvmpipe is recognised by its adapter name or by its driver name alone (each backend
+/// fills in one or both), and no other adapter gets a loop limit; the budget per pixel follows
+/// (`loop_budget.rs`). The adapter info is written over on a clone of the test context, so
+/// this holds on any adapter.
+#[test]
+fn llvmpipe_is_recognised_by_its_name_or_its_driver() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    for (name, driver, limited) in [
+        ("llvmpipe (LLVM 19.1.7, 256 bits)", "llvmpipe", true),
+        ("llvmpipe (LLVM 19.1.7, 256 bits)", "", true),
+        ("Software rasterizer", "llvmpipe", true),
+        ("NVIDIA H100", "NVIDIA", false),
+    ] {
+        let mut info = ctx.clone();
+        info.adapter_info.name = name.to_string();
+        info.adapter_info.driver = driver.to_string();
+        let limit = limited.then_some(65_535);
+        assert_eq!(
+            info.shader_loop_limit(),
+            limit,
+            "{name:?}, driver {driver:?}"
+        );
+        assert_eq!(
+            info.max_lights_per_pixel(myriad_gpu::ShadingMode::BruteForce, 16),
+            limited.then_some(65_534),
+            "{name:?}, driver {driver:?}"
+        );
+    }
+}
+
+/// The one-line description names the adapter, its backend and kind, and its driver, as the
+/// loop-limit error and the reports show it.
+#[test]
+fn describe_names_the_adapter_backend_kind_and_driver() {
+    let Some(mut ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    ctx.adapter_info.name = "Adapter X".to_string();
+    ctx.adapter_info.backend = wgpu::Backend::Vulkan;
+    ctx.adapter_info.device_type = wgpu::DeviceType::Cpu;
+    ctx.adapter_info.driver = "drv".to_string();
+    ctx.adapter_info.driver_info = "1.2".to_string();
+    assert_eq!(ctx.describe(), "Adapter X (Vulkan, Cpu, driver drv 1.2)");
+}
+
+/// Set in the environment of this binary's reruns by
+/// [`without_an_adapter_gpu_tests_fail_unless_told_to_skip`], which then only says what
+/// `headless_for_tests` gave.
+const SKIP_POLICY_CHILD: &str = "MYRIAD_TEST_SKIP_POLICY_CHILD";
+
+/// The GPU-test policy: a GPU test gets a context wherever an adapter exists, and without one
+/// it fails with advice unless `MYRIAD_SKIP_GPU_TESTS=1` asks to skip (any other value does
+/// not). Without an adapter is this binary rerun with `WGPU_BACKEND` naming only a backend
+/// this platform lacks (mutation audit: a `None` for every test, which turns each GPU test into
+/// an early return, passed every test; so did skipping without being asked, or never).
+#[test]
+fn without_an_adapter_gpu_tests_fail_unless_told_to_skip() {
+    if std::env::var_os(SKIP_POLICY_CHILD).is_some() {
+        // The rerun: a panic says itself.
+        match GpuContext::headless_for_tests() {
+            Some(_) => println!("child: a context"),
+            None => println!("child: no context"),
+        }
+        return;
+    }
+    let skipping = std::env::var(SKIP_GPU_TESTS_VAR).as_deref() == Ok("1");
+    let here = GpuContext::headless_for_tests();
+    assert!(
+        here.is_some() || skipping,
+        "None without {SKIP_GPU_TESTS_VAR}=1"
+    );
+    let absent = if cfg!(target_os = "macos") {
+        "dx12"
+    } else {
+        "metal"
+    };
+    for skip in [None, Some("1"), Some("0")] {
+        let mut child = Command::new(std::env::current_exe().unwrap());
+        child
+            .args([
+                "--exact",
+                "without_an_adapter_gpu_tests_fail_unless_told_to_skip",
+                "--nocapture",
+            ])
+            .env(SKIP_POLICY_CHILD, "1")
+            .env("WGPU_BACKEND", absent);
+        match skip {
+            Some(value) => child.env(SKIP_GPU_TESTS_VAR, value),
+            None => child.env_remove(SKIP_GPU_TESTS_VAR),
+        };
+        let out = child.output().unwrap();
+        let all = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let what = format!("{SKIP_GPU_TESTS_VAR}={skip:?}: {all}");
+        if skip == Some("1") {
+            assert!(out.status.success(), "{what}");
+            assert!(all.contains("child: no context"), "{what}");
+            assert!(all.contains("skipping GPU test"), "{what}");
+        } else {
+            assert!(!out.status.success(), "{what}");
+            assert!(!all.contains("child: "), "{what}");
+            assert!(all.contains("GPU tests need an adapter"), "{what}");
+            assert!(all.contains(SKIP_GPU_TESTS_VAR), "{what}");
+        }
+    }
 }
