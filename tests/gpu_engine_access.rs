@@ -424,3 +424,49 @@ fn a_context_or_scene_of_another_device_is_refused() {
         .unwrap();
     assert!(mine.renderer.read_depth(&ctx_a).unwrap().is_some());
 }
+
+/// An engine's device with timestamp queries but not between commands (`TIMESTAMP_QUERY`
+/// alone, as many adapters offer it) times the passes and not the upload's copies: a timestamp
+/// written into an encoder is a validation error there. A device with neither times nothing.
+/// (Mutation audit: CI's headless device has both features, so a renderer that took encoder
+/// timestamps for granted passed every test.)
+#[test]
+fn pass_times_follow_the_timestamp_features_of_an_engines_device() {
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
+    if !adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+        // llvmpipe (CI's adapter) has timestamps: the checks below must run there.
+        assert!(!adapter.get_info().name.contains("llvmpipe"));
+        return;
+    }
+    let scene = RenderScene::default_scene(50, 48, 24).unwrap();
+    for features in [wgpu::Features::TIMESTAMP_QUERY, wgpu::Features::empty()] {
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            required_features: features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .unwrap();
+        let ctx = GpuContext::from_device(device, queue);
+        let timed = !features.is_empty();
+        assert_eq!(ctx.has_timestamps(), timed, "{features:?}");
+        assert!(!ctx.has_encoder_timestamps(), "{features:?}");
+        let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+        viewer
+            .frame(&scene, Shading::Clustered, Method::Refined, false)
+            .unwrap();
+        ctx.wait_idle().unwrap();
+        let times = viewer.renderer.last_pass_times(&ctx).unwrap();
+        match times {
+            Some(t) if timed => {
+                assert!(t.gbuffer_ms.is_some() && t.shading_ms.is_some(), "{t:?}");
+                assert_eq!(t.upload_ms, None, "{t:?}");
+            }
+            other => assert!(!timed && other.is_none(), "{features:?}: {other:?}"),
+        }
+    }
+}
