@@ -20,8 +20,8 @@
 //! (Helpers that borrow nothing, so that the caller could return without them, would need the
 //! frame's borrowed inputs behind `unsafe` lifetime erasure; not done.)
 //!
-//! The price is one small heap allocation per helper (rayon boxes each spawned job): 2 × (threads
-//! − 1) per frame called from outside the pool. A frame job on a worker allocates nothing, and
+//! The price is one small heap allocation per helper (rayon boxes each spawned job): at most
+//! 2 × (threads − 1) per frame called from outside the pool. A frame job on a worker allocates nothing, and
 //! [`crate::OutsideCalls::HandOff`] keeps outside calls allocation-free too, at the hand-off's
 //! cost. Measured on the 2-vCPU CI machine in the `targets` bench (`paper/*-from-outside`):
 //! see [`crate::OutsideCalls`].
