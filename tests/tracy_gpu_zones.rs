@@ -1,8 +1,8 @@
 //! With the `tracy` feature, a frame's timed GPU pieces (G-buffer, shading and forward passes, the
 //! upload's copies) become Tracy GPU zones when the frame's times are read while a client runs:
 //! one zone each, however often the times are read, none before the client starts, and a
-//! G-buffer kept from a depth prepass counts once. (What a profiler then draws is Tracy's; this
-//! checks what the renderer hands it.)
+//! G-buffer kept from a depth prepass counts once; the GPU clock is tied to the CPU's again a
+//! second later. (What a profiler then draws is Tracy's; this checks what the renderer hands it.)
 
 use myriad::assignment::Method;
 use myriad::gpu::{GpuContext, PassTimes};
@@ -85,5 +85,17 @@ fn each_timed_pass_of_a_read_frame_is_one_gpu_zone_once_the_client_runs() {
         .unwrap();
     zones += timed(&read(&viewer));
     assert_eq!(viewer.renderer.gpu_zones_emitted(), zones);
+
+    // The GPU clock was tied to the CPU's when the first zones were emitted, and is tied again
+    // before the first zones emitted a second or more after that (once per read at most).
+    let ties = viewer.renderer.gpu_clock_ties();
+    assert!(ties >= 1, "tied when the context was made");
+    std::thread::sleep(std::time::Duration::from_millis(1100));
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    zones += timed(&read(&viewer));
+    assert_eq!(viewer.renderer.gpu_zones_emitted(), zones);
+    assert_eq!(viewer.renderer.gpu_clock_ties(), ties + 1);
     drop(session);
 }

@@ -193,6 +193,12 @@ impl PassTimer {
         self.zones.lock().expect("zone state").zones.emitted()
     }
 
+    /// How often the Tracy GPU context's clock was tied to the CPU's (`tracy` feature).
+    #[cfg(feature = "tracy")]
+    pub fn clock_ties(&self) -> u64 {
+        self.zones.lock().expect("zone state").zones.clock_ties()
+    }
+
     /// Marks a new frame: no pass has run and nothing was uploaded yet, except the G-buffer
     /// pass when `keep_gbuffer` (a frame shading the G-buffer a prepass drew and timed).
     pub fn begin_frame(&mut self, keep_gbuffer: bool) {

@@ -9,22 +9,36 @@
 //! zone is emitted once, however often its times are read. The cost is the zones' CPU-side
 //! times (the read, not the encoding): Tracy's GPU track draws the GPU's own timestamps.
 //!
-//! The GPU clock is tied to the CPU's once per renderer, when its first zones are emitted: a
-//! timestamp written by an empty compute pass, waited for, then handed to
-//! `Client::new_gpu_context` — off by the wait's latency at most. It is not tied again later:
-//! a GPU that resets its clock in a low-power state (Tracy's docs name AMD's) would drift off the
-//! CPU's timeline in a long capture, where a periodic `sync_gpu_time` would be the fix.
+//! The GPU clock is tied to the CPU's when a renderer's first zones are emitted (a timestamp
+//! written by an empty compute pass, waited for, then handed to `Client::new_gpu_context` — off by
+//! the wait's latency at most), and tied again (`GpuContext::sync_gpu_time`) before emitting
+//! zones once [`TIE_INTERVAL`] has passed since the last tie, or at once when a zone starts
+//! before the last one emitted ended: the GPU clock went back, as GPUs that reset it in a
+//! low-power state do (Tracy's docs name AMD's). Without it a long capture's GPU track drifts off
+//! the CPU's timeline, or jumps, after such a reset. Why once a second and not every frame: each
+//! tie is a submission the CPU waits for; zones are emitted where a frame's times were just
+//! waited for (the GPU is idle then), so a tie a second costs the frame loop one short wait a
+//! second, and a drift of a few parts per million stays under a microsecond between ties.
 
 use crate::readback::map_and_read;
 use crate::timing::{TimedPass, TimedZone};
 use crate::{GpuContext, GpuError};
+use std::time::{Duration, Instant};
 use tracy_client::{Client, GpuContextType, span_location};
+
+/// How long the GPU clock goes without being tied to the CPU's again, while zones are emitted.
+pub(crate) const TIE_INTERVAL: Duration = Duration::from_secs(1);
 
 /// The renderer's Tracy GPU context, once a client runs and a frame's times are read.
 #[derive(Default)]
 pub(crate) struct GpuZones {
     context: Option<tracy_client::GpuContext>,
     emitted: u64,
+    /// When the GPU clock was last tied to the CPU's, and how often it was.
+    tied_at: Option<Instant>,
+    ties: u64,
+    /// The end tick of the last zone emitted.
+    last_end: u64,
 }
 
 impl std::fmt::Debug for GpuZones {
@@ -32,6 +46,7 @@ impl std::fmt::Debug for GpuZones {
         f.debug_struct("GpuZones")
             .field("context", &self.context.is_some())
             .field("emitted", &self.emitted)
+            .field("ties", &self.ties)
             .finish()
     }
 }
@@ -40,6 +55,11 @@ impl GpuZones {
     /// Zones emitted so far.
     pub fn emitted(&self) -> u64 {
         self.emitted
+    }
+
+    /// How often the GPU clock was tied to the CPU's: when the context was made, then again.
+    pub fn clock_ties(&self) -> u64 {
+        self.ties
     }
 
     /// Emits `zones` (the upload's copies when `pass` is `None`) in order of their start, once a
@@ -51,6 +71,8 @@ impl GpuZones {
         if zones.is_empty() {
             return Ok(());
         }
+        // Tracy wants the timestamps in increasing order.
+        zones.sort_unstable_by_key(|z| z.start);
         if self.context.is_none() {
             let now = gpu_timestamp_now(ctx)?;
             let period = ctx.queue.get_timestamp_period();
@@ -65,12 +87,17 @@ impl GpuZones {
                 Ok(context) => self.context = Some(context),
                 Err(_) => return Ok(()),
             }
+            self.tied(Instant::now());
+        } else if let Some(context) = &self.context {
+            let since = self.tied_at.map(|at| at.elapsed());
+            if tie_due(since, self.last_end, zones[0].start) {
+                context.sync_gpu_time(gpu_timestamp_now(ctx)? as i64);
+                self.tied(Instant::now());
+            }
         }
         let Some(context) = &self.context else {
             return Ok(());
         };
-        // Tracy wants the timestamps in increasing order.
-        zones.sort_unstable_by_key(|z| z.start);
         for &mut zone in zones {
             let location = match zone.pass {
                 None => span_location!("GPU: upload copies"),
@@ -86,9 +113,24 @@ impl GpuZones {
             span.upload_timestamp_start(zone.start as i64);
             span.upload_timestamp_end(zone.end.max(zone.start) as i64);
             self.emitted += 1;
+            self.last_end = self.last_end.max(zone.end);
         }
         Ok(())
     }
+
+    fn tied(&mut self, at: Instant) {
+        self.tied_at = Some(at);
+        self.ties += 1;
+        // A tie starts a new timeline: the zones before it no longer bound the next ones.
+        self.last_end = 0;
+    }
+}
+
+/// Whether the GPU clock is tied again before emitting zones from `first_start` on: when
+/// [`TIE_INTERVAL`] has passed since the last tie (`since`, `None`: never tied), or the clock went
+/// back (the first zone starts before the last emitted ended at `last_end`).
+fn tie_due(since: Option<Duration>, last_end: u64, first_start: u64) -> bool {
+    since.is_none_or(|since| since >= TIE_INTERVAL) || first_start < last_end
 }
 
 /// The GPU clock now: a timestamp written at the start of an empty compute pass, waited for.
@@ -125,4 +167,25 @@ fn gpu_timestamp_now(ctx: &GpuContext) -> Result<u64, GpuError> {
     ctx.queue.submit([encoder.finish()]);
     let bytes = map_and_read(ctx, &readback)?;
     Ok(u64::from_le_bytes(bytes[..8].try_into().expect("8 bytes")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_clock_is_tied_again_after_the_interval_or_when_it_went_back() {
+        let just = Some(Duration::from_millis(5));
+        // Never tied, or the interval passed: tie.
+        assert!(tie_due(None, 0, 10));
+        assert!(tie_due(Some(TIE_INTERVAL), 100, 200));
+        assert!(tie_due(Some(TIE_INTERVAL * 3), 100, 200));
+        // Within the interval and the clock moving on (a zone may start where the last ended).
+        assert!(!tie_due(just, 100, 200));
+        assert!(!tie_due(just, 100, 100));
+        assert!(!tie_due(Some(TIE_INTERVAL - Duration::from_nanos(1)), 0, 0));
+        // The clock went back: tie now.
+        assert!(tie_due(just, 100, 99));
+        assert!(tie_due(just, u64::MAX, 0));
+    }
 }

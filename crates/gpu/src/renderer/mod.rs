@@ -383,6 +383,16 @@ impl Renderer {
         self.timer.zones_emitted()
     }
 
+    /// How often this renderer tied the GPU clock of its Tracy zones to the CPU's (the `tracy`
+    /// feature): once when its first zones are emitted, then again before emitting zones a
+    /// second or more after the last tie, or at once when the GPU clock went back (a GPU that
+    /// resets it in a low-power state), so a long capture's GPU track stays on the CPU's
+    /// timeline. 0 before the client starts.
+    #[cfg(feature = "tracy")]
+    pub fn gpu_clock_ties(&self) -> u64 {
+        self.timer.clock_ties()
+    }
+
     /// Records, encodes and submits one frame into `target` (a single-sample view of mip 0 of a
     /// texture of the camera's size, in exactly the renderer's output format). Returns without
     /// waiting for the GPU. A target wgpu would reject (another sRGB-ness in the view, a mip of
