@@ -462,6 +462,79 @@ fn matrices_no_camera_describes_are_refused_with_the_reason() {
     assert!(message.contains("unjittered"), "{message}");
 }
 
+#[test]
+fn a_depth_range_too_thin_to_tell_near_from_far_is_refused() {
+    // Reversed depth, NDC depth = A + B/d with A = 1e20 and B = 1e19: near B/(1 + A) and far B/A
+    // are one number in f64. That is no depth range, not a camera whose near and far coincide.
+    let mut projection =
+        Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 640, 480, 0.1, 50.0).clip_from_view();
+    projection.z_axis.z = 1e20;
+    projection.w_axis.z = 1e19;
+    match Camera::from_matrices(
+        Mat4::IDENTITY,
+        projection,
+        ClipSpace::ZeroToOneYUp,
+        640,
+        480,
+    ) {
+        Err(CameraMatrixError::DepthRange { near, far }) => {
+            assert!(
+                (near / 0.1 - 1.0).abs() < 1e-6 && near == far,
+                "[{near}, {far}]"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// PRODUCT BUG (mutation audit): the depth range is checked on the f64 reading and the field of
+/// view not at all, and the camera returned is their f32 rounding: matrices it rounds into a
+/// camera with no depth range, or a field of view `view_problem` refuses (the assignment panics
+/// on it), are accepted.
+#[test]
+#[ignore = "product bug: from_matrices returns cameras whose f32 rounding fails its own checks"]
+fn an_accepted_camera_keeps_the_range_and_view_that_were_checked() {
+    let projection =
+        Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 640, 480, 0.1, 50.0).clip_from_view();
+    // Near and far 1e-10 apart at 0.1 (f32 resolution there: 7e-9): one f32 plane.
+    let mut thin = projection;
+    thin.z_axis.z = 1e9;
+    thin.w_axis.z = 1e8;
+    // A near plane of 1e-50 (an infinite reversed projection scaled by 1e30): 0 in f32.
+    let mut tiny_near =
+        rh::proj::directx::perspective_infinite_reverse(1.0, 640.0 / 480.0, 0.1) * 1e30;
+    tiny_near.w_axis.z = 1e-20;
+    // A field of view 2e-9 short of π: π in f32, outside (0, π).
+    let mut wide = projection;
+    wide.x_axis.x = 0.75e-9;
+    wide.y_axis.y = 1e-9;
+    // One of 2e-48 (scales of 1e48 once w' is ±z): 0 in f32.
+    let mut narrow = projection * 1e-10;
+    narrow.x_axis.x = 0.75e38;
+    narrow.y_axis.y = 1e38;
+    let accepted_broken: Vec<String> = [
+        ("thin", thin),
+        ("tiny near", tiny_near),
+        ("wide", wide),
+        ("narrow", narrow),
+    ]
+    .into_iter()
+    .filter_map(|(what, projection)| {
+        let camera = Camera::from_matrices(
+            Mat4::IDENTITY,
+            projection,
+            ClipSpace::ZeroToOneYUp,
+            640,
+            480,
+        )
+        .ok()?;
+        let depth_ok = camera.near > 0.0 && camera.near.is_finite() && camera.near < camera.far;
+        (!depth_ok || camera.view_problem().is_some()).then(|| format!("{what}: {camera:?}"))
+    })
+    .collect();
+    assert!(accepted_broken.is_empty(), "{accepted_broken:#?}");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
     #[test]
