@@ -17,10 +17,13 @@
 //!   too), and an aspect ratio other than the target's `width / height`.
 //!
 //! The clip depth's direction is read off the matrix (reversed or not; an infinite far plane, or
-//! one the depth never reaches, gives `far = f32::INFINITY`, which the assignment accepts with a finite grid but
-//! [`Camera::problem`] refuses for rendering); its range, 0..1 or −1..1, and whether NDC y points
-//! up or down on screen cannot be, so the caller names them ([`ClipSpace`]). Everything is computed in f64; the result's own matrices equal the inputs to f32
-//! rounding (tested).
+//! one the depth never reaches, gives `far = f32::INFINITY`, which the assignment accepts with a
+//! finite grid and the renderer draws with the infinite reversed-Z projection); its range, 0..1 or
+//! −1..1, and whether NDC y points up or down on screen cannot be, so the caller names them
+//! ([`ClipSpace`]). Everything is computed in f64; the result's own matrices equal the inputs to
+//! f32 rounding (tested), and the depth range and field of view are checked as the f32 camera
+//! keeps them (a near plane of 1e-50 or a field of view 1e-9 short of π is refused, not rounded
+//! to 0 or π).
 
 use glam::{DMat4, DVec3, DVec4, Mat4};
 
@@ -46,14 +49,16 @@ pub enum CameraMatrixError {
     /// An entry is NaN or infinite.
     NonFinite,
     /// The projection is not a perspective of the form `x' = sx·x, y' = sy·y, z' = A·z + B,
-    /// w' = ±z` (orthographic, sheared, or zero scales); the entry named differs.
+    /// w' = ±z` (orthographic, sheared, or zero scales; or scales so large or small that the
+    /// field of view is 0 or π in f32); the entry named differs.
     NotPerspective(&'static str),
     /// The projection's centre is shifted (a jitter or an asymmetric frustum), by this much in NDC.
     OffCenter {
         /// NDC shift, x and y.
         shift: [f64; 2],
     },
-    /// The projection's depth does not map a positive depth range onto the clip range.
+    /// The projection's depth does not map a positive depth range onto the clip range (one that
+    /// stays positive and non-empty in f32).
     DepthRange {
         /// Near plane the matrix implies.
         near: f64,
@@ -206,22 +211,24 @@ impl Camera {
             position,
             target,
             up: up.as_vec3(),
-            fov_y: (2.0 * (1.0 / projection.sy.abs()).atan()) as f32,
+            fov_y: projection.fov_y,
             width,
             height,
-            near: projection.near as f32,
-            far: projection.far as f32,
+            near: projection.near,
+            far: projection.far,
         })
     }
 }
 
-/// What a symmetric perspective projection says, normalised so `w' = w_sign · z`.
+/// What a symmetric perspective projection says, normalised so `w' = w_sign · z`; the camera's
+/// own numbers in f32.
 struct Projection {
     sx: f64,
     sy: f64,
     w_sign: f64,
-    near: f64,
-    far: f64,
+    fov_y: f32,
+    near: f32,
+    far: f32,
 }
 
 fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, CameraMatrixError> {
@@ -274,15 +281,25 @@ fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, Camera
     // The near plane must be reached, or no depth at all is visible.
     let (near, far) = (b / (ndc_near - a), b / (ndc_far - a));
     let far = if far > 0.0 { far } else { f64::INFINITY };
-    if !(near > 0.0 && near.is_finite() && far > near) {
+    // Checked as the camera keeps them, in f32: a near plane under 1e-45 rounds to 0 there, near
+    // and far closer than its resolution to one plane, and a field of view within 1e-7 of π to π.
+    let (near_f32, far_f32) = (near as f32, far as f32);
+    if !(near_f32 > 0.0 && near_f32.is_finite() && far_f32 > near_f32) {
         return Err(CameraMatrixError::DepthRange { near, far });
+    }
+    let fov_y = (2.0 * (1.0 / sy.abs()).atan()) as f32;
+    if !(fov_y > 0.0 && fov_y < std::f32::consts::PI) {
+        return Err(NotPerspective(
+            "a field of view of 0 or π in f32 (x and y scales too large or too small)",
+        ));
     }
     Ok(Projection {
         sx,
         sy,
         w_sign,
-        near,
-        far,
+        fov_y,
+        near: near_f32,
+        far: far_f32,
     })
 }
 

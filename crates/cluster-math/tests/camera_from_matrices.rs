@@ -487,12 +487,10 @@ fn a_depth_range_too_thin_to_tell_near_from_far_is_refused() {
     }
 }
 
-/// PRODUCT BUG (mutation audit): the depth range is checked on the f64 reading and the field of
-/// view not at all, and the camera returned is their f32 rounding: matrices it rounds into a
-/// camera with no depth range, or a field of view `view_problem` refuses (the assignment panics
-/// on it), are accepted.
+/// The checks hold for the f32 camera returned, not only for the f64 reading of the matrices
+/// (mutation audit: matrices it rounded into a camera with no depth range, or a field of view
+/// `view_problem` refuses, which the assignment panics on, were accepted).
 #[test]
-#[ignore = "product bug: from_matrices returns cameras whose f32 rounding fails its own checks"]
 fn an_accepted_camera_keeps_the_range_and_view_that_were_checked() {
     let projection =
         Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 640, 480, 0.1, 50.0).clip_from_view();
