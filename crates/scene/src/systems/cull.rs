@@ -575,4 +575,42 @@ mod tests {
         cull_lights(&camera, spheres, &mut vis);
         assert!(vis.mask[4]);
     }
+
+    #[test]
+    fn spots_pointing_out_through_one_or_two_faces_are_culled() {
+        // Each range sphere reaches into the frustum; each cone lies entirely outside the faces
+        // named, and only those, so every single plane's verdict decides its light.
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 90.0, 100, 100, 1.0, 10.0);
+        let spot = |p: [f32; 3], r: f32, axis: [f32; 3], angle: f32| {
+            LightRecord::point(Vec3::from(p), r).with_spot(Vec3::from(axis), angle)
+        };
+        let lights: Lights = [
+            // Near only: the apex half a metre in front of the eye, pointing backwards.
+            spot([0.0, 0.0, -0.5], 5.0, [0.0, 0.0, 1.0], 0.3),
+            // Far only: the apex half a metre beyond it, pointing further away.
+            spot([0.0, 0.0, -10.5], 4.0, [0.0, 0.0, -1.0], 0.3),
+            // Right only, wide: its edge reaches 0.83 of the apex's 2.12 back towards the plane.
+            spot([8.0, 0.0, -5.0], 4.0, [1.0, 0.0, 0.0], 1.0),
+            // The same, tilted up: an axis that is not along a coordinate axis; reach 1.83.
+            spot([8.0, 0.0, -5.0], 4.0, [1.0, 1.0, 0.0], 1.0),
+            // Left, top and bottom only.
+            spot([-8.0, 0.0, -5.0], 4.0, [-1.0, 0.0, 0.0], 0.5),
+            spot([0.0, 8.0, -5.0], 4.0, [0.0, 1.0, 0.0], 0.5),
+            spot([0.0, -8.0, -5.0], 4.0, [0.0, -1.0, 0.0], 0.5),
+            // Two faces at once: far and right, left and top.
+            spot([14.0, 0.0, -12.0], 5.0, [0.924, 0.0, -0.383], 0.3),
+            spot([-8.0, 8.0, -5.0], 4.0, [-1.0, 1.0, 0.0], 0.3),
+        ]
+        .into_iter()
+        .collect();
+        let mut vis = Visibility::new();
+        cull_lights(&camera, lights.slices(), &mut vis);
+        assert_eq!(vis.mask, [false; 9]);
+        let spheres = LightSlices {
+            spot: None,
+            ..lights.slices()
+        };
+        cull_lights(&camera, spheres, &mut vis);
+        assert_eq!(vis.mask, [true; 9]);
+    }
 }
