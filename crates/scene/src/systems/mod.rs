@@ -158,6 +158,9 @@ impl Lights {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lights::LightRecord;
+    use glam::Vec3;
+    use myriad_cluster_math::Camera;
 
     #[test]
     fn fast_sin_cos_is_accurate() {
@@ -178,5 +181,44 @@ mod tests {
                 "{x}"
             );
         }
+    }
+
+    #[test]
+    fn fast_sin_cos_is_within_1e_7_over_a_period() {
+        // The polynomials' truncation error is below 2e-9: what remains is f32 rounding.
+        let mut worst = 0.0f64;
+        let mut x = -4.0f32;
+        while x < 4.0 {
+            let (s, c) = fast_sin_cos(x);
+            let (es, ec) = (x as f64).sin_cos();
+            worst = worst.max((s as f64 - es).abs()).max((c as f64 - ec).abs());
+            x += 1e-4;
+        }
+        assert!(worst < 1e-7, "{worst}");
+    }
+
+    #[test]
+    fn slices_know_their_length() {
+        let lights: Lights = [LightRecord::point(Vec3::ZERO, 1.0)].into_iter().collect();
+        assert_eq!(
+            (lights.slices().len(), lights.slices().is_empty()),
+            (1, false)
+        );
+        assert!(Lights::new().slices().is_empty());
+    }
+
+    #[test]
+    #[should_panic]
+    fn columns_of_different_lengths_are_refused() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64, 0.1, 10.0);
+        let lights: Lights = [LightRecord::point(Vec3::new(0.0, 0.0, -2.0), 1.0)]
+            .into_iter()
+            .collect();
+        let y = [0.0; 2];
+        let slices = LightSlices {
+            y: &y,
+            ..lights.slices()
+        };
+        cull_lights(&camera, slices, &mut Visibility::new());
     }
 }

@@ -245,4 +245,26 @@ mod tests {
         assert_eq!(out.len(), 10);
         assert!(out.spot_angle.is_empty() && out.spot_dir_x.is_empty());
     }
+
+    #[test]
+    fn rows_are_counted() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 50.0, 800, 600, 0.5, 30.0);
+        let mut out = ViewLights::new();
+        assert!(out.is_empty());
+        lights_to_view(&camera, lights(3).slices(), None, &mut out);
+        assert_eq!((out.len(), out.is_empty()), (3, false));
+    }
+
+    #[test]
+    #[should_panic]
+    fn columns_of_different_lengths_are_refused() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 50.0, 800, 600, 0.5, 30.0);
+        let world = lights(3);
+        let radius = [1.0; 4];
+        let slices = LightSlices {
+            radius: &radius,
+            ..world.slices()
+        };
+        lights_to_view(&camera, slices, None, &mut ViewLights::new());
+    }
 }
