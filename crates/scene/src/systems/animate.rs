@@ -336,6 +336,7 @@ pub fn animate_wander(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::HashSet;
 
     #[test]
     fn orbits_start_in_place_and_keep_their_radius() {
@@ -490,5 +491,103 @@ mod tests {
         }
         assert!((sum / 10_000.0).abs().max_element() < 0.03, "{sum}");
         assert!(lo.max_element() < -0.99 && hi.min_element() > 0.99);
+    }
+
+    #[test]
+    fn orbit_speeds_are_drawn_from_the_range_or_fixed_when_it_is_empty() {
+        let x: Vec<f32> = (0..1000).map(|i| i as f32 * 0.01).collect();
+        let z = vec![1.0; 1000];
+        let drawn = Orbits::around(Vec3::ZERO, &x, &z, [0.5, 1.5], 4);
+        let speeds: Vec<f32> = drawn.angular_speed.iter().map(|s| s.abs()).collect();
+        assert!(speeds.iter().any(|&s| s < 0.6) && speeds.iter().any(|&s| s > 1.4));
+        let fixed = Orbits::around(Vec3::ZERO, &x, &z, [2.0, 2.0], 4);
+        assert!(fixed.angular_speed.iter().all(|&s| s.abs() == 2.0));
+        assert!(fixed.angular_speed.iter().any(|&s| s < 0.0));
+        assert_eq!((fixed.len(), fixed.is_empty()), (1000, false));
+        assert!(Orbits::default().is_empty());
+    }
+
+    #[test]
+    fn a_wanderer_moves_by_its_velocity_and_bounces_off_each_wall() {
+        let w = Wander::new(2, Aabb::new(Vec3::ZERO, Vec3::splat(10.0)), 5.0, 0.0, 1);
+        assert_eq!((w.len(), w.is_empty()), (2, false));
+        assert!(Wander::new(0, w.bounds, 5.0, 0.0, 1).is_empty());
+        let step = |p: Vec3, v: Vec3| wander_step(w.params(), 0, 0.1, 0, p, v);
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-5;
+        // In the middle: a straight step, the velocity unchanged.
+        let (p, v) = step(Vec3::new(5.0, 5.0, 5.0), Vec3::new(1.0, -2.0, 0.5));
+        assert!(close(p, Vec3::new(5.1, 4.8, 5.05)), "{p}");
+        assert_eq!(v, Vec3::new(1.0, -2.0, 0.5));
+        // 0.05 from the low walls, moving out at 1 m/s: reflected to 0.05 inside, moving in.
+        let (p, v) = step(Vec3::splat(0.05), Vec3::splat(-1.0));
+        assert!(close(p, Vec3::splat(0.05)), "{p}");
+        assert_eq!(v, Vec3::splat(1.0));
+        // The same at the high walls.
+        let (p, v) = step(Vec3::splat(9.95), Vec3::splat(1.0));
+        assert!(close(p, Vec3::splat(9.95)), "{p}");
+        assert_eq!(v, Vec3::splat(-1.0));
+    }
+
+    #[test]
+    fn random_accelerations_are_the_hashed_steps_times_acceleration_and_dt() {
+        let bounds = Aabb::new(Vec3::splat(-100.0), Vec3::splat(100.0));
+        let w = Wander::new(1000, bounds, 50.0, 8.0, 3);
+        let key = frame_key(w.seed, 7);
+        let mut largest = 0.0f32;
+        for i in 0..1000 {
+            let (p, v) = wander_step(w.params(), key, 0.1, i, Vec3::ZERO, Vec3::ZERO);
+            assert!((v - random_unit_cube(key, i) * 0.8).abs().max_element() < 1e-6);
+            assert!((p - v * 0.1).abs().max_element() < 1e-6);
+            largest = largest.max(v.abs().max_element());
+        }
+        // Up to 8 m/s² · 0.1 s per axis, and close to it.
+        assert!(largest <= 0.8 + 1e-6 && largest > 0.75, "{largest}");
+    }
+
+    #[test]
+    fn frame_keys_differ_between_frames_and_between_seeds() {
+        let high = (1..8u64).flat_map(|k| (0..8).map(move |j| (k << 32) | j));
+        let values: Vec<u64> = (0..16).chain(high).chain([u64::MAX]).collect();
+        for &a in &values {
+            let frames: HashSet<u32> = values.iter().map(|&f| frame_key(a, f)).collect();
+            let seeds: HashSet<u32> = values.iter().map(|&s| frame_key(s, a)).collect();
+            assert_eq!(
+                (frames.len(), seeds.len()),
+                (values.len(), values.len()),
+                "{a}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_hash_is_a_bijection_on_the_first_million_inputs() {
+        let mut hashes: Vec<u32> = (0..1u32 << 20).map(hash32).collect();
+        hashes.sort_unstable();
+        hashes.dedup();
+        assert_eq!(hashes.len(), 1 << 20);
+    }
+
+    #[test]
+    fn the_hash_flips_each_output_bit_for_about_half_the_inputs_when_one_bit_flips() {
+        // Strict avalanche: for every input bit and output bit, over 4096 inputs.
+        let mut flips = [[0u32; 32]; 32];
+        for k in 0..4096u32 {
+            let x = k.wrapping_mul(0x9e37_79b9);
+            let h = hash32(x);
+            for (i, row) in flips.iter_mut().enumerate() {
+                let d = h ^ hash32(x ^ (1 << i));
+                for (o, count) in row.iter_mut().enumerate() {
+                    *count += (d >> o) & 1;
+                }
+            }
+        }
+        for (i, row) in flips.iter().enumerate() {
+            for (o, &count) in row.iter().enumerate() {
+                assert!(
+                    (1700..2400).contains(&count),
+                    "bit {i} -> {o}: {count} of 4096"
+                );
+            }
+        }
     }
 }
