@@ -618,6 +618,14 @@ mod tests {
             }
         }
         assert!(centres.len() <= 4, "{} groups", centres.len());
+        // Spread through their balls, not piled on the centres.
+        let mut distinct: Vec<[u32; 3]> = lights
+            .iter()
+            .map(|l| l.position.to_array().map(f32::to_bits))
+            .collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), 1000);
     }
 
     #[test]
@@ -730,11 +738,176 @@ mod tests {
     }
 
     #[test]
+    fn hues_go_round_the_wheel() {
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-5;
+        assert_eq!(hue_to_rgb(0.0), Vec3::X);
+        assert!(close(hue_to_rgb(1.0 / 3.0), Vec3::Y));
+        assert!(close(hue_to_rgb(2.0 / 3.0), Vec3::Z));
+        assert!(close(hue_to_rgb(0.5), Vec3::new(0.0, 1.0, 1.0)));
+    }
+
+    #[test]
     fn hues_are_saturated() {
         for k in 0..60 {
             let c = hue_to_rgb(k as f32 / 60.0);
             assert_eq!(c.max_element(), 1.0, "{c}");
             assert_eq!(c.min_element(), 0.0, "{c}");
         }
+    }
+
+    #[test]
+    fn each_bad_parameter_is_named() {
+        let b = LightField::new(Placement::Box(unit_box()));
+        let lit = |color: Vec3, intensity: [f32; 2], cutoff: f32| {
+            b.clone()
+                .with_color(ColorRule::Fixed(color))
+                .with_intensity(intensity[0], intensity[1])
+                .with_radius(RadiusRule::FromIntensity { cutoff })
+        };
+        let surfaces = |offset: f32| Placement::Surfaces {
+            surfaces: SurfaceSampler::from_triangles([[Vec3::ZERO, Vec3::X, Vec3::Y]]),
+            offset,
+        };
+        let clumps = |clumps: usize, spread: f32, within: Aabb| Placement::Clumps {
+            within,
+            clumps,
+            spread,
+        };
+        let sphere = |center: Vec3, radius: f32| Placement::Sphere { center, radius };
+        let inf = f32::INFINITY;
+        let cases = [
+            (
+                Placement::Box(Aabb::new(Vec3::NEG_INFINITY, Vec3::ONE)),
+                "box",
+            ),
+            (Placement::Box(Aabb::new(Vec3::ONE, Vec3::ZERO)), "box"),
+            (surfaces(-1.0), "surface offset"),
+            (surfaces(inf), "surface offset"),
+            (clumps(0, 1.0, unit_box()), "clumps need"),
+            (clumps(2, -1.0, unit_box()), "clumps need"),
+            (clumps(2, inf, unit_box()), "clumps need"),
+            (
+                clumps(2, 1.0, Aabb::new(Vec3::ONE, Vec3::ZERO)),
+                "clumps need",
+            ),
+            (sphere(Vec3::splat(inf), 1.0), "sphere"),
+            (sphere(Vec3::ZERO, -1.0), "sphere"),
+            (sphere(Vec3::ZERO, inf), "sphere"),
+        ];
+        for (placement, named) in cases {
+            let problem = LightField::new(placement).problem().expect("a problem");
+            assert!(problem.contains(named), "{problem}");
+        }
+        let cut_off = "cut-off must be finite and > 0";
+        let dark = "need intensities and colours > 0";
+        let cases = [
+            (
+                b.clone()
+                    .with_color(ColorRule::Fixed(Vec3::new(-1.0, 1.0, 1.0))),
+                "colour",
+            ),
+            (
+                b.clone()
+                    .with_color(ColorRule::Fixed(Vec3::new(inf, 1.0, 1.0))),
+                "colour",
+            ),
+            (lit(Vec3::ONE, [1.0, 1.0], 0.0), cut_off),
+            (lit(Vec3::ONE, [1.0, 1.0], -1.0), cut_off),
+            (lit(Vec3::ONE, [1.0, 1.0], inf), cut_off),
+            (lit(Vec3::ONE, [0.0, 1.0], 1.0), dark),
+            (lit(Vec3::ZERO, [1.0, 1.0], 1.0), dark),
+            // The brightest channel times the intensity: 1e30 · 1e10 overflows.
+            (
+                lit(Vec3::new(1e10, 0.0, 0.0), [1.0, 1e30], 1.0),
+                "brightest channel",
+            ),
+            // 1e10 · 1e10 / 1e-20 overflows the radius (1e10 + 1e10 would not).
+            (
+                lit(Vec3::new(1e10, 0.0, 0.0), [1e10, 1e10], 1e-20),
+                "too small",
+            ),
+            // 1e-20 · 1e-20 / 1e10 rounds the radius to 0 (1e-20 / 1e-20 would not).
+            (
+                lit(Vec3::new(1e-20, 0.0, 0.0), [1e-20, 1e-20], 1e10),
+                "too large",
+            ),
+        ];
+        for (field, named) in cases {
+            let problem = field.problem().expect("a problem");
+            assert!(problem.contains(named), "{problem}");
+        }
+    }
+
+    #[test]
+    fn radii_from_intensity_use_the_brightest_channel() {
+        let field = LightField::new(Placement::Box(unit_box()))
+            .with_radius(RadiusRule::FromIntensity { cutoff: 0.5 })
+            .with_color(ColorRule::Fixed(Vec3::new(0.5, 4.0, 1.0)))
+            .with_intensity(2.0, 2.0);
+        for l in field.generate(10, 1).iter() {
+            assert_eq!(l.radius, 4.0);
+        }
+    }
+
+    #[test]
+    fn the_first_light_follows_the_documented_stream() {
+        // A sphere: the position, then the radius and the hue.
+        let center = Vec3::new(1.0, 2.0, 3.0);
+        let sphere = LightField::new(Placement::Sphere {
+            center,
+            radius: 4.0,
+        });
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(8);
+        let position = center + unit_vector(&mut rng) * 4.0;
+        let radius = rng.random_range(0.5f32..3.0);
+        let color = hue_to_rgb(rng.random_range(0.0f32..1.0));
+        let l = sphere.generate(1, 8).get(0);
+        assert_eq!((l.position, l.radius, l.color), (position, radius, color));
+        // Clumps: the centres first, then a clump and a point in its ball.
+        let within = Aabb::new(Vec3::splat(-5.0), Vec3::splat(5.0));
+        let clumps = LightField::new(Placement::Clumps {
+            within,
+            clumps: 2,
+            spread: 0.5,
+        });
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(8);
+        let centres = [
+            uniform_in_box(&within, &mut rng),
+            uniform_in_box(&within, &mut rng),
+        ];
+        let c = centres[rng.random_range(0..centres.len())];
+        let position = c + in_unit_ball(&mut rng) * 0.5;
+        assert_eq!(clumps.generate(1, 8).get(0).position, position);
+    }
+
+    #[test]
+    fn frustum_fields_fill_the_frustum_to_its_edges() {
+        // A thick near plane: the depths stay between 5 and 6 m.
+        let camera = Camera::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.0, 1.5, -2.0),
+            Vec3::Y,
+            60.0,
+            800,
+            600,
+            5.0,
+            6.0,
+        );
+        let t = camera.tan_half_fov();
+        let lights = LightField::new(Placement::Frustum(camera)).generate(2000, 4);
+        let (mut x, mut y) = (0.0f32, 0.0f32);
+        let (mut nearest, mut farthest) = (f32::MAX, 0.0f32);
+        for l in lights.iter() {
+            let v = camera.view_from_world_point(l.position);
+            let d = -v.z;
+            nearest = nearest.min(d);
+            farthest = farthest.max(d);
+            x = x.max(v.x.abs() / (t.x * d));
+            y = y.max(v.y.abs() / (t.y * d));
+        }
+        assert!((5.0 - 1e-4..5.01).contains(&nearest), "{nearest}");
+        assert!(farthest > 5.99 && farthest <= 6.0 + 1e-4, "{farthest}");
+        assert!(x > 0.99 && x <= 1.0001, "{x}");
+        assert!(y > 0.99 && y <= 1.0001, "{y}");
     }
 }
