@@ -166,6 +166,11 @@ mod tests {
             assert!(paper.lights.x[i].abs() <= 15.0 && (0.0..=13.0).contains(&paper.lights.y[i]));
             assert!((0.5..=3.0).contains(&paper.lights.radius[i]));
         }
+        // The whole courtyard, both sides of its centre line.
+        let (x, z) = (&paper.lights.x, &paper.lights.z);
+        assert!(x.iter().any(|&x| x < -14.0) && x.iter().any(|&x| x > 14.0));
+        assert!(z.iter().any(|&z| z < -7.0) && z.iter().any(|&z| z > 7.0));
+        assert!(z.iter().all(|z| z.abs() <= 7.5));
         let uniform = Preset::Uniform.generate(2000, 3);
         let t = uniform.camera.tan_half_fov();
         let mut far_half = 0;
