@@ -798,9 +798,96 @@ mod tests {
             e.starts_with("quad: cannot write GLB: materials[0] uses a texture"),
             "{e}"
         );
+        // An index one past the last vertex, a material one past the last.
         let mut model = quad_model();
-        model.meshes[0].primitives[0].indices[0] = 9;
+        model.meshes[0].primitives[0].indices[0] = 4;
         let e = model.to_glb().unwrap_err().to_string();
         assert!(e.contains("meshes[0] primitives[0]"), "{e}");
+        let mut model = quad_model();
+        model.meshes[0].primitives[0].material = Some(1);
+        let e = model.to_glb().unwrap_err().to_string();
+        assert!(e.contains("meshes[0] primitives[0]"), "{e}");
+    }
+
+    /// The JSON chunk of a GLB.
+    fn json_chunk(glb: &[u8]) -> serde_json::Value {
+        let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        assert_eq!(&glb[16..20], b"JSON");
+        serde_json::from_slice(&glb[20..20 + len]).unwrap()
+    }
+
+    #[test]
+    fn nodes_are_named_and_buffer_views_are_four_byte_aligned() {
+        let json = json_chunk(&quad_model().to_glb().unwrap());
+        let names: Vec<&str> = json["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["quad0", "quad1", "Eye", "lamp", "spot", "sun"]);
+        let views = json["bufferViews"].as_array().unwrap();
+        assert!(views.len() >= 5);
+        for view in views {
+            assert_eq!(view["byteOffset"].as_u64().unwrap() % 4, 0, "{view}");
+        }
+    }
+
+    #[test]
+    fn indices_are_16_bit_up_to_65536_vertices_and_32_bit_above() {
+        for (n, component_type) in [
+            (4, UNSIGNED_SHORT),
+            (65_536, UNSIGNED_SHORT),
+            (65_537, UNSIGNED_INT),
+        ] {
+            let positions: Vec<Vec3> = (0..n)
+                .map(|i| Vec3::new(i as f32, (i % 2) as f32, 0.0))
+                .collect();
+            let mut model = Model::new("strip");
+            model.meshes.push(Mesh {
+                name: None,
+                primitives: vec![Primitive {
+                    bounds: Aabb::from_points(positions.iter().copied()),
+                    normals: vec![Vec3::Z; n],
+                    tex_coords: Vec::new(),
+                    tangents: Vec::new(),
+                    tangent_source: TangentSource::None,
+                    positions,
+                    indices: vec![0, 1, n as u32 - 1],
+                    material: None,
+                }],
+            });
+            let glb = model.to_glb().unwrap();
+            let json = json_chunk(&glb);
+            let indices = json["meshes"][0]["primitives"][0]["indices"]
+                .as_u64()
+                .unwrap() as usize;
+            assert_eq!(
+                json["accessors"][indices]["componentType"], component_type,
+                "{n}"
+            );
+            let back =
+                Model::from_gltf_slice(&glb, "strip.glb", None, &LoadOptions::default()).unwrap();
+            assert_eq!(back.meshes[0].primitives[0].indices, [0, 1, n as u32 - 1]);
+        }
+    }
+
+    #[test]
+    fn emissive_factors_are_written() {
+        let mut model = quad_model();
+        model.materials[0].emissive_factor = Vec3::new(1.0, 0.5, 0.0);
+        let bytes = model.to_glb().unwrap();
+        let back =
+            Model::from_gltf_slice(&bytes, "quad.glb", None, &LoadOptions::default()).unwrap();
+        assert_eq!(back.materials, model.materials);
+    }
+
+    #[test]
+    fn save_glb_writes_the_bytes_of_to_glb() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("quad.glb");
+        let model = quad_model();
+        model.save_glb(&path).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), model.to_glb().unwrap());
     }
 }
