@@ -167,4 +167,60 @@ mod tests {
             assert_eq!(t.w, 1.0);
         }
     }
+
+    /// Positions `origin + u·U + v·V` over a fan of triangles with varied UVs, normals `+Z`:
+    /// every tangent should be `U` made unit, with `w = sign((Z × U) · V)`.
+    fn affine_fan(u_axis: Vec3, v_axis: Vec3) -> Vec<Vec4> {
+        let origin = Vec3::new(1.0, 2.0, 3.0);
+        let uvs = [
+            Vec2::new(0.2, 0.3),
+            Vec2::new(1.1, 0.4),
+            Vec2::new(0.9, 1.3),
+            Vec2::new(0.1, 1.0),
+            Vec2::new(0.3, 0.35),
+            Vec2::new(-0.5, 0.6),
+            // A triangle of its own, clockwise in UV space.
+            Vec2::new(2.0, 2.0),
+            Vec2::new(2.1, 3.0),
+            Vec2::new(3.0, 2.1),
+        ];
+        let positions = uvs.map(|t| origin + u_axis * t.x + v_axis * t.y);
+        let indices = [0, 1, 2, 0, 2, 3, 1, 4, 3, 5, 0, 3, 6, 7, 8];
+        let tangents = generate_tangents(&positions, &[Vec3::Z; 9], &uvs, &indices);
+        assert_eq!(tangents.len(), 9);
+        tangents
+    }
+
+    #[test]
+    fn tangents_follow_u_under_any_affine_mapping() {
+        let (u, v) = (Vec3::new(2.0, 0.5, 0.0), Vec3::new(0.5, 1.5, 0.0));
+        for t in affine_fan(u, v) {
+            assert!((t - u.normalize().extend(1.0)).length() < 1e-5, "{t}");
+        }
+        // v reversed against the same normal: the same tangent, left-handed.
+        for t in affine_fan(u, -v) {
+            assert!((t - u.normalize().extend(-1.0)).length() < 1e-5, "{t}");
+        }
+    }
+
+    #[test]
+    fn triangles_with_collinear_uvs_add_nothing() {
+        // Triangle 0-1-2 maps u to +X; triangle 0-2-3 has all its UVs on one line (u = 0).
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let uvs = [
+            Vec2::ZERO,
+            Vec2::X,
+            Vec2::new(0.0, 1.0),
+            Vec2::new(0.0, 2.0),
+        ];
+        let tangents = generate_tangents(&positions, &[Vec3::Z; 4], &uvs, &[0, 1, 2, 0, 2, 3]);
+        assert_eq!(tangents.len(), 4);
+        for i in [0, 1, 2] {
+            assert!(
+                tangents[i].truncate().dot(Vec3::X) > 0.99,
+                "{}",
+                tangents[i]
+            );
+        }
+    }
 }
