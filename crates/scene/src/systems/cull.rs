@@ -509,6 +509,32 @@ mod tests {
     }
 
     #[test]
+    fn cones_pointing_straight_out_from_a_face_are_kept() {
+        // Apex on a face (f64), axis its outward normal: the cone reaches nothing past the apex
+        // against that face, so only the pad keeps the f32 test from dropping it.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(31);
+        let (mut touching, mut dropped) = (0, 0);
+        for _ in 0..40 {
+            let camera = random_camera(&mut rng);
+            let world_from_view = camera.view_rotation_f64().transpose();
+            let mut lights = Lights::new();
+            for i in 0..300 {
+                let (p, normal) = face_point(&mut rng, &camera, i);
+                let r = rng.random_range(0.05..50.0f64);
+                let world = camera.position.as_dvec3() + world_from_view * p;
+                lights.push(
+                    LightRecord::point(world.as_vec3(), r as f32)
+                        .with_spot((world_from_view * normal).as_vec3(), 0.3),
+                );
+            }
+            let (t, d) = touching_and_dropped(&camera, &lights);
+            (touching, dropped) = (touching + t, dropped + d);
+        }
+        assert!(touching > 1000, "only {touching} cones touch");
+        assert_eq!(dropped, 0, "{dropped} of {touching} touching cones culled");
+    }
+
+    #[test]
     fn parallel_equals_serial_kernel_and_compaction_is_ordered() {
         let camera = camera();
         let lights = random_lights(5 * BLOCK + 123, 8, true);
