@@ -162,7 +162,7 @@ impl Frustum {
 #[inline]
 fn is_cone(axis: Vec3, angle: f32) -> bool {
     let largest = axis.abs().max_element();
-    (angle > 0.0) & (angle < std::f32::consts::FRAC_PI_2) & (largest > 0.0) & largest.is_finite()
+    (angle > 0.0) & (angle < std::f32::consts::FRAC_PI_2) & (largest > 0.0) & axis.is_finite()
 }
 
 /// `axis` at unit length, for any finite non-zero length: divided by its largest component
@@ -638,5 +638,24 @@ mod tests {
         };
         cull_lights(&camera, spheres, &mut vis);
         assert_eq!(vis.mask, [true; 9]);
+    }
+
+    #[test]
+    fn a_spot_whose_axis_has_a_nan_component_is_its_ball() {
+        // A non-finite axis bounds nothing: the oracle and the assignment normalise it to zero
+        // and take the range's ball, which here reaches across the near plane.
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 90.0, 100, 100, 1.0, 10.0);
+        let nan = f32::NAN;
+        let lights: Lights = [
+            Vec3::new(nan, 0.0, 1.0),
+            Vec3::new(0.0, nan, 1.0),
+            Vec3::new(nan, nan, 1.0),
+            Vec3::new(0.0, 1.0, nan),
+        ]
+        .into_iter()
+        .map(|axis| LightRecord::point(Vec3::new(0.0, 0.0, -0.5), 5.0).with_spot(axis, 0.3))
+        .collect();
+        let (touching, dropped) = touching_and_dropped(&camera, &lights);
+        assert_eq!((touching, dropped), (4, 0));
     }
 }
