@@ -92,7 +92,7 @@ pub(crate) fn generate_tangents(
         .map(|i| {
             let n = normals[i];
             let t = tangent[i] - n * n.dot(tangent[i]);
-            let t = if t.length_squared() > 1e-20 * tangent[i].length_squared().max(1e-30) {
+            let t = if t.length_squared() > 1e-10 * tangent[i].length_squared().max(1e-30) {
                 t.normalize_or(n.any_orthonormal_vector())
             } else {
                 n.any_orthonormal_vector()
@@ -221,6 +221,27 @@ mod tests {
                 "{}",
                 tangents[i]
             );
+        }
+    }
+
+    #[test]
+    fn a_tangent_along_the_normal_falls_back_to_a_perpendicular_one() {
+        // The triangle's u direction is the vertex normal itself (not axis-aligned, so the
+        // Gram–Schmidt residual is f32 rounding, not zero): step 4 of the module docs.
+        for k in 0..50 {
+            let a = k as f32 * 0.13;
+            let n = Vec3::new(a.cos() * 0.6, a.sin() * 0.6, 0.8).normalize();
+            let origin = Vec3::new(1.0, 2.0, 3.0);
+            let positions = [
+                origin,
+                origin + n * 1.7,
+                origin + n.any_orthonormal_vector(),
+            ];
+            let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
+            for t in generate_tangents(&positions, &[n; 3], &uvs, &[0, 1, 2]) {
+                assert!(t.truncate().dot(n).abs() < 1e-3, "normal {n}, tangent {t}");
+                assert!((t.truncate().length() - 1.0).abs() < 1e-5);
+            }
         }
     }
 }
