@@ -437,23 +437,53 @@ mod tests {
         (touching, dropped)
     }
 
-    #[test]
-    fn lights_grazing_the_frustum_are_kept_when_the_oracle_sees_them_touch() {
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(17);
+    /// Over `cameras` random cameras, `per_camera` lights each made by `light` from a random point
+    /// on face `i % 6` and that face's outward normal (view space, f64; `light` also gets the
+    /// rng, the camera, its world-from-view rotation and `i`): how many the f64 oracle sees
+    /// touching each camera's frustum, and how many of those the cull dropped.
+    fn face_lights_touching_and_dropped(
+        seed: u64,
+        cameras: usize,
+        per_camera: usize,
+        mut light: impl FnMut(
+            &mut rand_pcg::Pcg64,
+            &Camera,
+            glam::DMat3,
+            usize,
+            glam::DVec3,
+            glam::DVec3,
+        ) -> LightRecord,
+    ) -> (usize, usize) {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
         let (mut touching, mut dropped) = (0, 0);
-        for _ in 0..60 {
+        for _ in 0..cameras {
             let camera = random_camera(&mut rng);
-            let eye = camera.position;
             let world_from_view = camera.view_rotation_f64().transpose();
             let mut lights = Lights::new();
-            for i in 0..400 {
+            for i in 0..per_camera {
+                let (p, normal) = face_point(&mut rng, &camera, i);
+                lights.push(light(&mut rng, &camera, world_from_view, i, p, normal));
+            }
+            let (t, d) = touching_and_dropped(&camera, &lights);
+            (touching, dropped) = (touching + t, dropped + d);
+        }
+        (touching, dropped)
+    }
+
+    #[test]
+    fn lights_grazing_the_frustum_are_kept_when_the_oracle_sees_them_touch() {
+        let (touching, dropped) = face_lights_touching_and_dropped(
+            17,
+            60,
+            400,
+            |rng, camera, world_from_view, i, p, normal| {
                 // A point on one of the six faces, then out along its normal by r·(1 − ε).
-                let (mut p, normal) = face_point(&mut rng, &camera, i);
+                let eye = camera.position;
                 let r = rng.random_range(0.01..5.0f64);
-                p += normal * r * (1.0 - rng.random_range(0.0..1e-4));
+                let p = p + normal * r * (1.0 - rng.random_range(0.0..1e-4));
                 let world = (eye.as_dvec3() + world_from_view * p).as_vec3();
                 let light = LightRecord::point(world, r as f32);
-                lights.push(match i % 7 {
+                match i % 7 {
                     // Spots that bound nothing: zero axis, NaN or non-positive angle.
                     0 => light.with_spot(Vec3::ZERO, 0.3),
                     1 => light.with_spot(Vec3::X, f32::NAN),
@@ -461,11 +491,9 @@ mod tests {
                     // A tiny axis pointing back at the frustum is a real cone.
                     3 => light.with_spot(-(world - eye) * 1e-30, 0.4),
                     _ => light,
-                });
-            }
-            let (t, d) = touching_and_dropped(&camera, &lights);
-            (touching, dropped) = (touching + t, dropped + d);
-        }
+                }
+            },
+        );
         assert!(touching > 5000, "only {touching} grazing lights touch");
         assert_eq!(dropped, 0, "{dropped} of {touching} touching lights culled");
     }
@@ -476,14 +504,11 @@ mod tests {
         // tilted so that the cone's edge reaches in by r·sin ε, was culled (√(1 − cos²α) was 0
         // in f32, and the pad was scaled by the cone's reach, 0 for a cone pointing out).
         use std::f64::consts::FRAC_PI_2;
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(29);
-        let (mut touching, mut dropped) = (0, 0);
-        for _ in 0..40 {
-            let camera = random_camera(&mut rng);
-            let world_from_view = camera.view_rotation_f64().transpose();
-            let mut lights = Lights::new();
-            for i in 0..300 {
-                let (p, normal) = face_point(&mut rng, &camera, i);
+        let (touching, dropped) = face_lights_touching_and_dropped(
+            29,
+            40,
+            300,
+            |rng, camera, world_from_view, _, p, normal| {
                 let r = rng.random_range(0.05..50.0f64);
                 let half_angle = rng.random_range(0.01..FRAC_PI_2 - 1e-6);
                 let tilt = 10f64.powf(rng.random_range(-6.0..-2.0));
@@ -496,14 +521,10 @@ mod tests {
                 let axis = -normal * alpha.cos() + tangent * alpha.sin();
                 let apex = p + normal * rng.random_range(-0.5..2.0) * r * tilt.sin();
                 let world = camera.position.as_dvec3() + world_from_view * apex;
-                lights.push(
-                    LightRecord::point(world.as_vec3(), r as f32)
-                        .with_spot((world_from_view * axis).as_vec3(), half_angle as f32),
-                );
-            }
-            let (t, d) = touching_and_dropped(&camera, &lights);
-            (touching, dropped) = (touching + t, dropped + d);
-        }
+                LightRecord::point(world.as_vec3(), r as f32)
+                    .with_spot((world_from_view * axis).as_vec3(), half_angle as f32)
+            },
+        );
         assert!(touching > 1000, "only {touching} grazing cones touch");
         assert_eq!(dropped, 0, "{dropped} of {touching} touching cones culled");
     }
@@ -512,24 +533,17 @@ mod tests {
     fn cones_pointing_straight_out_from_a_face_are_kept() {
         // Apex on a face (f64), axis its outward normal: the cone reaches nothing past the apex
         // against that face, so only the pad keeps the f32 test from dropping it.
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(31);
-        let (mut touching, mut dropped) = (0, 0);
-        for _ in 0..40 {
-            let camera = random_camera(&mut rng);
-            let world_from_view = camera.view_rotation_f64().transpose();
-            let mut lights = Lights::new();
-            for i in 0..300 {
-                let (p, normal) = face_point(&mut rng, &camera, i);
+        let (touching, dropped) = face_lights_touching_and_dropped(
+            31,
+            40,
+            300,
+            |rng, camera, world_from_view, _, p, normal| {
                 let r = rng.random_range(0.05..50.0f64);
                 let world = camera.position.as_dvec3() + world_from_view * p;
-                lights.push(
-                    LightRecord::point(world.as_vec3(), r as f32)
-                        .with_spot((world_from_view * normal).as_vec3(), 0.3),
-                );
-            }
-            let (t, d) = touching_and_dropped(&camera, &lights);
-            (touching, dropped) = (touching + t, dropped + d);
-        }
+                LightRecord::point(world.as_vec3(), r as f32)
+                    .with_spot((world_from_view * normal).as_vec3(), 0.3)
+            },
+        );
         assert!(touching > 1000, "only {touching} cones touch");
         assert_eq!(dropped, 0, "{dropped} of {touching} touching cones culled");
     }
