@@ -2,7 +2,7 @@
 //! exits 0 on good files and 2 (a run that could not finish) with a message naming the file on
 //! bad ones.
 
-use myriad::scene::{LoadOptions, Model};
+use myriad::scene::{LoadOptions, Model, Projection};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -63,6 +63,21 @@ fn info_reports_what_the_loader_sees() {
         .map(|c| c["name"].as_str().unwrap())
         .collect();
     assert_eq!(names, s.cameras);
+    // Each perspective camera's field of view in degrees, to 4 decimals.
+    let mut perspective = 0;
+    for (camera, shown) in model.cameras.iter().zip(v["cameras"].as_array().unwrap()) {
+        if let Projection::Perspective { yfov, .. } = camera.projection {
+            let deg = shown["yfov_deg"].as_f64().unwrap();
+            let want = f64::from(yfov).to_degrees();
+            assert!(
+                (deg - want).abs() <= 5e-5,
+                "{}: {deg} vs {want}",
+                camera.name
+            );
+            perspective += 1;
+        }
+    }
+    assert!(perspective > 0, "the atrium has perspective cameras");
     for (k, bound) in [("min", s.bounds.min), ("max", s.bounds.max)] {
         // Written as the f32's shortest decimal: it reads back to the same f32.
         let shown: Vec<f32> = v["bounds"][k]

@@ -209,7 +209,7 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
         let dump = read_json(&bad_dump);
         assert_eq!(dump_lights(&dump), [0, 1, 3], "{method}");
         let culled_dump = dir.join(format!("with_culled.{method}.json"));
-        myriad_ok(&[
+        let out = myriad_ok(&[
             "assign".as_ref(),
             "--scene".as_ref(),
             with_culled.as_os_str(),
@@ -218,6 +218,9 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
             "--out".as_ref(),
             culled_dump.as_os_str(),
         ]);
+        // No pair budget, so no coarser grid, and no warning that says there was one.
+        let warned = stderr(&out);
+        assert!(!warned.contains("budget"), "{method}: {warned}");
         assert_eq!(dump, read_json(&culled_dump), "{method}");
 
         // check compares in file indices too, with either scene.
