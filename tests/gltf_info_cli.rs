@@ -104,6 +104,9 @@ fn info_reports_what_the_loader_sees() {
         text.contains("[-15.000, -0.200, -7.500] .. [15.000, 13.000, 7.500]"),
         "{text}"
     );
+    // The atrium loads without warnings, and the table has no warnings line then.
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+    assert!(!text.contains("warnings"), "{text}");
 }
 
 #[test]

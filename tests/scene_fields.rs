@@ -84,6 +84,14 @@ fn every_field_writes_a_reproducible_valid_scene() {
                 assert!(grown.contains(l.position), "{field}: {}", l.position);
             }
         }
+        if field == "sphere" {
+            // On the sphere around the model's bounds: its centre, half their diagonal.
+            let radius = 0.5 * bounds.size().length();
+            for l in scene.lights.iter() {
+                let off = (l.position - bounds.center()).length() - radius;
+                assert!(off.abs() <= 1e-4 * radius, "{}: {off}", l.position);
+            }
+        }
     }
 }
 
@@ -245,4 +253,33 @@ fn model_lights_are_written_first_when_asked_for() {
     let field: Vec<Vec3> = with.lights.iter().skip(own).map(|l| l.position).collect();
     let alone: Vec<Vec3> = without.lights.iter().map(|l| l.position).collect();
     assert_eq!(field, alone);
+}
+
+#[test]
+fn a_light_count_past_memory_is_refused_before_generating() {
+    // Checked on the count to be written (the model's own lights plus the field's) before the
+    // field is generated: generating 2³² − 1 lights would itself abort the process.
+    let dir = work_dir("past_memory");
+    let out_file = dir.join("s.json");
+    let atrium = atrium_path();
+    for extra in [&[][..], &["--model-lights"][..]] {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "scene".as_ref(),
+            "--gltf".as_ref(),
+            atrium.as_os_str(),
+            "--lights".as_ref(),
+            "4294967295".as_ref(),
+            "--out".as_ref(),
+            out_file.as_os_str(),
+        ];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        let o = myriad(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains("GiB") && err.contains("memory"),
+            "{extra:?}: {err}"
+        );
+        assert!(!out_file.exists());
+    }
 }
