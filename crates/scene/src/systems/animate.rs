@@ -186,10 +186,25 @@ fn hash32(mut x: u32) -> u32 {
     x ^ (x >> 16)
 }
 
+/// A well-mixed 64-bit hash (the SplitMix64 finaliser's constants); a bijection on `u64`.
+#[inline]
+fn hash64(mut x: u64) -> u64 {
+    x ^= x >> 30;
+    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x ^= x >> 27;
+    x = x.wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
 /// The per-frame key of the random steps: a hash of the seed and the frame number.
+///
+/// The seed is hashed in all its 64 bits before the frame is added, and the sum hashed again:
+/// two (seed, frame) pairs share a key only where their 64-bit mixes happen to meet, never by
+/// construction (folding each number to 32 bits first made seed `k << 32` at frame 0 replay
+/// seed 0's frame `k`).
 fn frame_key(seed: u64, frame: u64) -> u32 {
-    let fold = |v: u64| (v as u32) ^ hash32((v >> 32) as u32);
-    hash32(fold(seed) ^ hash32(fold(frame)))
+    let h = hash64(hash64(seed).wrapping_add(frame));
+    (h ^ (h >> 32)) as u32
 }
 
 /// A point in `[−1, 1)³` determined by the frame key and the light: one hash per axis, its top
@@ -557,6 +572,21 @@ mod tests {
                 "{a}"
             );
         }
+    }
+
+    #[test]
+    fn a_seed_high_bits_do_not_replay_another_seed_at_another_frame() {
+        // Seed `k << 32` at frame `j` against seed `j'` at frame `k`, and every other mix of
+        // small and high-bit numbers: all (seed, frame) pairs have keys of their own.
+        let high = (1..8u64).flat_map(|k| (0..8).map(move |j| (k << 32) | j));
+        let values: Vec<u64> = (0..16).chain(high).chain([u64::MAX]).collect();
+        let mut keys: Vec<u32> = values
+            .iter()
+            .flat_map(|&s| values.iter().map(move |&f| frame_key(s, f)))
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        assert_eq!(keys.len(), values.len() * values.len());
     }
 
     #[test]
