@@ -10,8 +10,8 @@
 //! times (the read, not the encoding): Tracy's GPU track draws the GPU's own timestamps.
 //!
 //! The GPU clock is tied to the CPU's when a renderer's first zones are emitted (a timestamp
-//! written by an empty compute pass, waited for, then handed to `Client::new_gpu_context` — off by
-//! the wait's latency at most), and tied again (`GpuContext::sync_gpu_time`) before emitting
+//! written by an empty compute pass, waited for, then handed to `Client::new_gpu_context`), and
+//! tied again (`GpuContext::sync_gpu_time`) before emitting
 //! zones once [`TIE_INTERVAL`] has passed since the last tie, or at once when a zone starts
 //! before the last one emitted ended: the GPU clock went back, as GPUs that reset it in a
 //! low-power state do (Tracy's docs name AMD's). Without it a long capture's GPU track drifts off
@@ -19,6 +19,14 @@
 //! tie is a submission the CPU waits for; zones are emitted where a frame's times were just
 //! waited for (the GPU is idle then), so a tie a second costs the frame loop one short wait a
 //! second, and a drift of a few parts per million stays under a microsecond between ties.
+//!
+//! Where a tie puts the two clocks: Tracy pairs the GPU time it is given with its CPU clock at
+//! the call, which comes after the timestamp's read-back. Handing it the raw timestamp (what
+//! Tracy's own Vulkan context does without calibrated timestamps) puts the GPU track late by the
+//! whole wait — submission, the GPU's write, the copy and the mapping. The GPU wrote the
+//! timestamp somewhere within that wait, so the tie takes the middle of it as the write's CPU
+//! time and hands Tracy the timestamp moved on from there to the call ([`ClockReading`]): off by
+//! half the wait at most, and by nothing on average.
 
 use crate::readback::map_and_read;
 use crate::timing::{TimedPass, TimedZone};
@@ -73,9 +81,9 @@ impl GpuZones {
         }
         // Tracy wants the timestamps in increasing order.
         zones.sort_unstable_by_key(|z| z.start);
+        let period = ctx.queue.get_timestamp_period();
         if self.context.is_none() {
-            let now = gpu_timestamp_now(ctx)?;
-            let period = ctx.queue.get_timestamp_period();
+            let now = gpu_timestamp_now(ctx)?.ticks_at(Instant::now(), period);
             let kind = match ctx.adapter_info.backend {
                 wgpu::Backend::Vulkan => GpuContextType::Vulkan,
                 wgpu::Backend::Dx12 => GpuContextType::Direct3D12,
@@ -83,7 +91,7 @@ impl GpuZones {
                 _ => GpuContextType::Invalid,
             };
             // Tracy allows 255 contexts a process; past them the frame goes without zones.
-            match client.new_gpu_context(Some("myriad renderer"), kind, now as i64, period) {
+            match client.new_gpu_context(Some("myriad renderer"), kind, now, period) {
                 Ok(context) => self.context = Some(context),
                 Err(_) => return Ok(()),
             }
@@ -91,7 +99,8 @@ impl GpuZones {
         } else if let Some(context) = &self.context {
             let since = self.tied_at.map(|at| at.elapsed());
             if tie_due(since, self.last_end, zones[0].start) {
-                context.sync_gpu_time(gpu_timestamp_now(ctx)? as i64);
+                let reading = gpu_timestamp_now(ctx)?;
+                context.sync_gpu_time(reading.ticks_at(Instant::now(), period));
                 self.tied(Instant::now());
             }
         }
@@ -133,8 +142,28 @@ fn tie_due(since: Option<Duration>, last_end: u64, first_start: u64) -> bool {
     since.is_none_or(|since| since >= TIE_INTERVAL) || first_start < last_end
 }
 
+/// A GPU timestamp read back, and the CPU instants that bound when the GPU wrote it.
+#[derive(Clone, Copy, Debug)]
+struct ClockReading {
+    ticks: u64,
+    submitted: Instant,
+    read: Instant,
+}
+
+impl ClockReading {
+    /// The GPU clock's reading at `at` (not before [`Self::read`]), in ticks of `period`
+    /// nanoseconds: the timestamp moved on from the middle of its submission and read-back to
+    /// `at`. Saturates at `i64::MAX` (Tracy takes signed ticks).
+    fn ticks_at(&self, at: Instant, period: f32) -> i64 {
+        let written = self.submitted + self.read.saturating_duration_since(self.submitted) / 2;
+        let since_ns = at.saturating_duration_since(written).as_nanos() as f64;
+        let on = (since_ns / f64::from(period.max(f32::MIN_POSITIVE))).round() as u64;
+        self.ticks.saturating_add(on).min(i64::MAX as u64) as i64
+    }
+}
+
 /// The GPU clock now: a timestamp written at the start of an empty compute pass, waited for.
-fn gpu_timestamp_now(ctx: &GpuContext) -> Result<u64, GpuError> {
+fn gpu_timestamp_now(ctx: &GpuContext) -> Result<ClockReading, GpuError> {
     let device = &ctx.device;
     let set = device.create_query_set(&wgpu::QuerySetDescriptor {
         label: Some("tracy clock"),
@@ -164,9 +193,14 @@ fn gpu_timestamp_now(ctx: &GpuContext) -> Result<u64, GpuError> {
     }));
     encoder.resolve_query_set(&set, 0..1, &resolve, 0);
     encoder.copy_buffer_to_buffer(&resolve, 0, &readback, 0, 8);
+    let submitted = Instant::now();
     ctx.queue.submit([encoder.finish()]);
     let bytes = map_and_read(ctx, &readback)?;
-    Ok(u64::from_le_bytes(bytes[..8].try_into().expect("8 bytes")))
+    Ok(ClockReading {
+        ticks: u64::from_le_bytes(bytes[..8].try_into().expect("8 bytes")),
+        submitted,
+        read: Instant::now(),
+    })
 }
 
 #[cfg(test)]
@@ -187,5 +221,33 @@ mod tests {
         // The clock went back: tie now.
         assert!(tie_due(just, 100, 99));
         assert!(tie_due(just, u64::MAX, 0));
+    }
+
+    #[test]
+    fn a_tie_moves_the_timestamp_on_from_the_middle_of_its_wait() {
+        let submitted = Instant::now();
+        let reading = ClockReading {
+            ticks: 1_000,
+            submitted,
+            read: submitted + Duration::from_micros(100),
+        };
+        let ms = |n| submitted + Duration::from_micros(n);
+        // Written at 50 µs (the wait's middle); at the read, 50 µs on: 50,000 ns of 1 ns ticks.
+        assert_eq!(reading.ticks_at(ms(100), 1.0), 51_000);
+        // 30 µs later, with ticks of 10 ns: 80 µs = 8,000 ticks on.
+        assert_eq!(reading.ticks_at(ms(130), 10.0), 9_000);
+        // Exact in integer ticks past 2^53 (a clock running for years); never before the write,
+        // whatever `at` is; a huge reading saturates.
+        let late = ClockReading {
+            ticks: (1 << 60) + 1,
+            ..reading
+        };
+        assert_eq!(late.ticks_at(ms(100), 1.0), (1 << 60) + 50_001);
+        assert_eq!(reading.ticks_at(submitted, 1.0), 1_000);
+        let huge = ClockReading {
+            ticks: u64::MAX,
+            ..reading
+        };
+        assert_eq!(huge.ticks_at(ms(100), 1.0), i64::MAX);
     }
 }
