@@ -281,6 +281,59 @@ mod tests {
         }
     }
 
+    /// This process's mapped size (`VmSize`), in bytes.
+    #[cfg(target_os = "linux")]
+    fn mapped_bytes() -> u64 {
+        let status = std::fs::read_to_string("/proc/self/status").unwrap();
+        let line = status.lines().find(|l| l.starts_with("VmSize:")).unwrap();
+        let kib: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+        kib * 1024
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_headroom_under_an_address_space_cap_leaves_out_what_is_mapped() {
+        // Run again under `ulimit -v` (this process has no cap to measure): the headroom is
+        // the cap less what is mapped now, in bytes. With the cap alone, a run the check passed
+        // aborted in its allocator (audit).
+        const CAP_KIB: u64 = 4_000_000;
+        const CHILD: &str = "MYRIAD_TEST_UNDER_ADDRESS_SPACE_CAP";
+        let name = "the_headroom_under_an_address_space_cap_leaves_out_what_is_mapped";
+        if std::env::var_os(CHILD).is_some() {
+            let cap = CAP_KIB * 1024;
+            let before = mapped_bytes();
+            let headroom = address_space_headroom_bytes().expect("a cap is set");
+            let after = mapped_bytes();
+            // What is mapped is tens of megabytes at the least (code, stacks, the allocator's
+            // arenas); a megabyte of slack for what the reads themselves map.
+            let slack = 1 << 20;
+            assert!(
+                headroom + slack >= cap - after && headroom <= cap - before + slack,
+                "headroom {headroom} under a {cap}-byte cap with {before}..{after} bytes mapped"
+            );
+            assert!(memory_limit_bytes().unwrap() <= headroom);
+            return;
+        }
+        let test = format!("{}::{name}", module_path!().split_once("::").unwrap().1);
+        let out = std::process::Command::new("sh")
+            .args(["-c", &format!(r#"ulimit -v {CAP_KIB} && exec "$0" "$@""#)])
+            .arg(std::env::current_exe().unwrap())
+            .args(["--exact", &test, "--test-threads", "1"])
+            .env(CHILD, "1")
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "{text}");
+        assert!(
+            text.contains("1 passed"),
+            "the test did not run capped:\n{text}"
+        );
+    }
+
     #[test]
     fn thread_counts_are_bounded() {
         let e = thread_pool(MAX_THREADS + 1).unwrap_err().to_string();

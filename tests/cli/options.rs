@@ -211,3 +211,57 @@ fn a_list_option_naming_an_item_twice_is_refused() {
     ]);
     assert!(!dir.join("report").exists(), "nothing is written");
 }
+
+/// The names of the threads of process `pid` (Linux: `/proc/PID/task/*/comm`).
+#[cfg(target_os = "linux")]
+fn thread_names(pid: u32) -> Vec<String> {
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return Vec::new();
+    };
+    tasks
+        .filter_map(|task| std::fs::read_to_string(task.ok()?.path().join("comm")).ok())
+        .map(|name| name.trim_end().to_string())
+        .collect()
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn the_worker_threads_are_started_and_named_before_any_work() {
+    // The global pool's workers are named "rayon N" (Tracy, a debugger or `top` tell them
+    // apart; unnamed, every one is "myriad"), and started first thing, before the command runs.
+    // `scene --out FIFO` waits for the FIFO's reader, which holds the run alive to be looked at.
+    let dir = work_dir("worker_thread_names");
+    let fifo = dir.join("scene.fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    assert!(
+        made.is_ok_and(|s| s.success()),
+        "mkfifo (coreutils) made no FIFO"
+    );
+    let mut child = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(["scene", "--preset", "uniform", "--lights", "10", "--out"])
+        .arg(&fifo)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("cannot run the myriad binary");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let mut names = thread_names(child.id());
+    while !names.iter().any(|n| n == "rayon 0") && std::time::Instant::now() < deadline {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "myriad scene stopped before writing its FIFO"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        names = thread_names(child.id());
+    }
+    // Read the scene, which lets the run finish.
+    let scene = std::fs::read(&fifo).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        scene.starts_with(b"{"),
+        "{:?}",
+        &scene[..20.min(scene.len())]
+    );
+    assert!(names.iter().any(|n| n == "rayon 0"), "{names:?}");
+}
