@@ -429,3 +429,124 @@ fn stress_rejects_bad_options_clearly() {
         ),
     ]);
 }
+
+/// The milliseconds `myriad stress` printed on stderr for `stage` ("stress: STAGE: done in X ms").
+fn stress_progress_ms(stderr: &str, stage: &str) -> f64 {
+    let prefix = format!("stress: {stage}: done in ");
+    let line = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix(&prefix))
+        .unwrap_or_else(|| panic!("no {prefix:?} line in:\n{stderr}"));
+    line.strip_suffix(" ms")
+        .and_then(|ms| ms.parse().ok())
+        .unwrap_or_else(|| panic!("not a time in ms: {line:?}"))
+}
+
+#[test]
+fn stress_reports_the_stage_times_its_progress_lines_announced() {
+    if !gpu_available() {
+        return;
+    }
+    // Each stage is timed once, announced on stderr in ms to 0.1, and reported in the JSON:
+    // the two must be one figure in one unit.
+    let out = myriad_ok(&["stress", "--json", "--lights", "20000", "--size", "64x36"]);
+    let r: Value = serde_json::from_str(&stdout(&out)).expect("stress --json prints JSON");
+    let (err, stages) = (stderr(&out), &r["stages"]);
+    let ms = |field: &str| {
+        stages[field]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{field} missing in {stages}"))
+    };
+    let same = |reported: f64, stage: &str| {
+        let announced = stress_progress_ms(&err, stage);
+        assert!(
+            (reported - announced).abs() <= 0.051,
+            "{stage}: {reported} ms reported, {announced} ms announced\n{stages}"
+        );
+    };
+    same(ms("scene_ms"), "scene generation");
+    same(ms("assign_ms"), "light assignment (first call, allocating)");
+    same(
+        ms("assign_again_ms"),
+        "light assignment (again, buffers reused)",
+    );
+    same(ms("gpu_setup_ms"), "GPU setup (device, geometry, warm-up)");
+    same(
+        ms("upload_ms") + ms("encode_ms"),
+        "upload + encode + submit",
+    );
+    // The frame's wall time is the wait for the GPU plus the encode and submit before it.
+    same(
+        ms("gpu_wall_ms") - ms("encode_ms"),
+        "GPU render (clustered)",
+    );
+    same(ms("check_ms"), "oracle check (every cluster, exact lists)");
+    // The peak resident size held at least what was uploaded, and no more than the machine has.
+    #[cfg(target_os = "linux")]
+    {
+        let peak = u64_field(&r, "peak_memory_bytes");
+        let held = u64_field(&r, "upload_bytes").max(u64_field(&r["assignment"], "list_bytes"));
+        let info = std::fs::read_to_string("/proc/meminfo").unwrap();
+        let total_kib: u64 = info
+            .lines()
+            .find_map(|l| l.strip_prefix("MemTotal:"))
+            .and_then(|l| l.split_whitespace().next()?.parse().ok())
+            .expect("MemTotal in /proc/meminfo");
+        assert!(
+            held <= peak && peak <= total_kib * 1024,
+            "peak {peak} bytes; {held} uploaded; {total_kib} KiB in all"
+        );
+    }
+}
+
+#[test]
+fn stress_without_json_prints_the_table_and_its_verdict() {
+    if !gpu_available() {
+        return;
+    }
+    let out = myriad_ok(&["stress", "--lights", "3000", "--size", "64x36"]);
+    let table = stdout(&out);
+    assert_mentions(
+        &table,
+        &[
+            "default scene (atrium) — 3000 lights, 64x36, grid 24x12x16, method refined, seed 1",
+            "oracle check (full)",
+            "4608 of 4608 clusters",
+            "0 misses",
+            "peak memory (VmHWM): ",
+            "PASS: no light missing from any checked cluster",
+        ],
+    );
+    // The lists' size in MiB: 4 bytes for each of 2 × 4608 clusters' offset and count, and for
+    // each pair.
+    let pairs: u64 = table
+        .lines()
+        .find(|l| l.starts_with("light assignment (first call, allocating)"))
+        .and_then(|l| {
+            l.split(" pairs;")
+                .next()?
+                .split_whitespace()
+                .last()?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("no pairs in the first assignment's row:\n{table}"));
+    let mib = (4 * (2 * 4608 + pairs)) as f64 / (1024.0 * 1024.0);
+    assert_mentions(&table, &[&format!("; lists {mib:.1} MiB")]);
+}
+
+#[test]
+fn stress_past_the_shader_loop_limit_suggests_a_finer_grid() {
+    if !gpu_available() || !adapter_limits_loops() {
+        return;
+    }
+    // One cluster: a pixel would loop over every visible light (about 100 000 of 150 000),
+    // past llvmpipe's budget (65 534). Refused, and told how to shorten the lists.
+    let out = myriad_fails(&[
+        "stress", "--grid", "1x1x1", "--lights", "150000", "--size", "16x16",
+    ]);
+    assert_mentions(
+        &out,
+        &["rendering 150000 lights clustered (a finer --grid gives shorter lists)"],
+    );
+}
