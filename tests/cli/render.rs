@@ -203,6 +203,53 @@ fn frames_compares_sequential_and_pipelined_loops() {
 }
 
 #[test]
+fn frames_reports_times_in_milliseconds_that_fit_its_frames() {
+    if !gpu_available() {
+        return;
+    }
+    // The sequential loop runs a frame's stages (and its GPU work) one after another within that
+    // frame: their sum is at most the frame time. Every frame after the first, of both loops, ran within this
+    // run's wall time; and no frame assigns 3000 lights in a microsecond.
+    let start = std::time::Instant::now();
+    let out = myriad_ok(&[
+        "frames", "--lights", "3000", "--size", "64x32", "--frames", "6", "--json",
+    ]);
+    let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    let loops: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let loops = loops.as_array().unwrap();
+    let ms = |l: &Value, field: &str| {
+        l[field]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{field} missing in {l}"))
+    };
+    let sequential = &loops[0];
+    assert_eq!(sequential["pipelined"], false);
+    assert!(
+        ms(sequential, "stage_sum_ms") <= ms(sequential, "frame_ms") * (1.0 + 1e-9),
+        "{sequential}"
+    );
+    let steady_ms: f64 = loops.iter().map(|l| 5.0 * ms(l, "frame_ms")).sum();
+    assert!(
+        steady_ms <= wall_ms,
+        "{steady_ms} ms of frames in {wall_ms} ms"
+    );
+    // The GPU passes' mean, where the adapter times them; sequential, within the frame.
+    let has_timestamps = myriad::gpu::GpuContext::headless_for_tests()
+        .expect("no adapter")
+        .has_timestamps();
+    for l in loops {
+        assert!(ms(l, "assign_ms") > 1e-3, "{l}");
+        assert_eq!(l["gpu_passes_ms"].as_f64().is_some(), has_timestamps, "{l}");
+    }
+    if has_timestamps {
+        assert!(
+            ms(sequential, "gpu_passes_ms") <= ms(sequential, "frame_ms"),
+            "{sequential}"
+        );
+    }
+}
+
+#[test]
 fn outputs_never_replace_their_inputs_or_fifos() {
     let dir = work_dir("outputs_vs_inputs");
     let scene = paper_scene(&dir, 30);
