@@ -891,4 +891,156 @@ mod tests {
         assert_eq!(model.camera(2, 640, 480), None);
         assert_eq!(model.camera_index("Ortho"), Some(1));
     }
+
+    /// A perspective camera named `name` at `position` looking along `forward`, with no far plane.
+    fn infinite_camera(name: &str, position: Vec3, forward: Vec3) -> ModelCamera {
+        ModelCamera {
+            name: name.into(),
+            node: 0,
+            position,
+            forward,
+            up: Vec3::Y,
+            projection: Projection::Perspective {
+                yfov: 1.0,
+                znear: 0.001,
+                zfar: None,
+                aspect_ratio: None,
+            },
+        }
+    }
+
+    #[test]
+    fn a_box_inverted_along_any_one_axis_is_empty() {
+        assert!(!Aabb::new(Vec3::ZERO, Vec3::ONE).is_empty());
+        // A single point is a box that holds it.
+        assert!(!Aabb::new(Vec3::ONE, Vec3::ONE).is_empty());
+        for axis in 0..3 {
+            let mut max = Vec3::ONE;
+            max[axis] = -1.0;
+            let b = Aabb::new(Vec3::ZERO, max);
+            assert!(b.is_empty(), "inverted along axis {axis}: {b:?}");
+        }
+    }
+
+    #[test]
+    fn the_centre_is_halfway_between_the_corners() {
+        let b = Aabb::new(Vec3::new(2.0, -4.0, 1.0), Vec3::new(6.0, 0.0, 1.0));
+        assert_eq!(b.center(), Vec3::new(4.0, -2.0, 1.0));
+    }
+
+    #[test]
+    fn an_infinite_far_plane_reaches_just_past_the_farthest_corner_from_the_camera() {
+        // The quad spans (0..1, 0..1, 0); seen from (3, 0, 0) its farthest corner is (0, 1, 0).
+        let mut model = quads_at(&[Mat4::IDENTITY]);
+        model.cameras.push(infinite_camera(
+            "Side",
+            Vec3::new(3.0, 0.0, 0.0),
+            Vec3::NEG_X,
+        ));
+        let c = model.camera(0, 64, 64).unwrap();
+        let farthest = Vec3::new(-3.0, 1.0, 0.0).length();
+        assert!((c.far - 1.01 * farthest).abs() < 1e-5, "{}", c.far);
+    }
+
+    #[test]
+    fn cameras_are_found_by_name_the_first_of_equal_names_winning() {
+        let mut model = Model::new("test");
+        for name in ["A", "B", "A"] {
+            model
+                .cameras
+                .push(infinite_camera(name, Vec3::ZERO, Vec3::NEG_Z));
+        }
+        assert_eq!(model.camera_index("A"), Some(0));
+        assert_eq!(model.camera_index("B"), Some(1));
+        assert_eq!(model.camera_index("C"), None);
+    }
+
+    #[test]
+    fn the_view_without_a_camera_says_whether_the_camera_is_orthographic_or_missing() {
+        let mut model = quads_at(&[Mat4::IDENTITY]);
+        model.cameras.push(ModelCamera {
+            name: "Ortho".into(),
+            node: 1,
+            position: Vec3::new(0.0, 0.0, 5.0),
+            forward: Vec3::NEG_Z,
+            up: Vec3::Y,
+            projection: Projection::Orthographic {
+                xmag: 1.0,
+                ymag: 1.0,
+                znear: 0.0,
+                zfar: 10.0,
+            },
+        });
+        model.cameras.push(infinite_camera(
+            "Persp",
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::NEG_Z,
+        ));
+        let view = model.view_of_bounds(64, 32).unwrap();
+        let (c, why) = model.camera_or_view(0, 64, 32).unwrap();
+        assert_eq!(c, view);
+        assert!(why.contains("camera 0 is orthographic"), "{why}");
+        let (c, why) = model.camera_or_view(5, 64, 32).unwrap();
+        assert_eq!(c, view);
+        assert!(why.contains("camera 5 does not exist"), "{why}");
+        let (c, why) = model.camera_or_view(1, 64, 32).unwrap();
+        assert_eq!(why, "Persp");
+        assert_eq!(c.position, Vec3::new(0.0, 0.0, 5.0));
+    }
+
+    /// Asserts that `a` and `b` agree to within 1e-4 in every coordinate.
+    fn assert_near(a: Vec3, b: Vec3) {
+        assert!((a - b).abs().max_element() < 1e-4, "{a} is not {b}");
+    }
+
+    #[test]
+    fn the_view_of_the_bounds_stands_inside_the_near_end_of_the_long_axis_at_a_sixth_of_the_height()
+    {
+        // Two 30 × 12 quads at z = 3 and z = 9: bounds (2, 1, 3)..(32, 13, 9), long in x.
+        let x_long = quads_at(&[3.0, 9.0].map(|z| {
+            Mat4::from_translation(Vec3::new(2.0, 1.0, z))
+                * Mat4::from_scale(Vec3::new(30.0, 12.0, 1.0))
+        }));
+        let size = Vec3::new(30.0, 12.0, 6.0);
+        let c = x_long.view_of_bounds(64, 32).unwrap();
+        // 5% of the length in from the low end, a sixth of the height up, centred across.
+        assert_near(c.position, Vec3::new(2.0 + 1.5, 1.0 + 2.0, 6.0));
+        // Towards the far end, rising by a tenth of the height.
+        assert_near(c.target, Vec3::new(32.0, 3.0 + 1.2, 6.0));
+        assert!((c.far - 1.1 * size.length()).abs() < 1e-4, "{}", c.far);
+
+        // Two 6 × 12 quads at z = 2 and z = 32: bounds (3, 1, 2)..(9, 13, 32), long in z.
+        let z_long = quads_at(&[2.0, 32.0].map(|z| {
+            Mat4::from_translation(Vec3::new(3.0, 1.0, z))
+                * Mat4::from_scale(Vec3::new(6.0, 12.0, 1.0))
+        }));
+        let c = z_long.view_of_bounds(64, 32).unwrap();
+        assert_near(c.position, Vec3::new(6.0, 3.0, 2.0 + 1.5));
+        assert_near(c.target, Vec3::new(6.0, 3.0 + 1.2, 32.0));
+    }
+
+    #[test]
+    fn the_summary_counts_primitives_and_each_kind_of_placed_light() {
+        let mut model = quads_at(&[Mat4::IDENTITY]);
+        model.meshes.push(Mesh {
+            name: None,
+            primitives: vec![unit_quad(), unit_quad()],
+        });
+        let placed = |kind| PlacedLight {
+            name: None,
+            node: 0,
+            light: 0,
+            kind,
+            range: None,
+        };
+        let spot = PunctualKind::Spot {
+            inner_cone_angle: 0.1,
+            outer_cone_angle: 0.2,
+        };
+        model.placed_lights = vec![placed(spot), placed(PunctualKind::Point), placed(spot)];
+        assert_eq!(model.primitive_count(), 3);
+        let s = model.summary();
+        assert_eq!(s.primitives, 3);
+        assert_eq!((s.point_lights, s.spot_lights), (1, 2));
+    }
 }
