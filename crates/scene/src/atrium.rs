@@ -628,4 +628,450 @@ mod tests {
             assert!(b.contains(c.position + 5.0 * c.forward), "{}", c.name);
         }
     }
+
+    #[test]
+    fn uvs_are_metres_across_the_faces_dominant_axis() {
+        let mut b = Builder::default();
+        // Facing +x, +y and +z: UVs (z, y), (x, z) and (x, y).
+        b.polygon(&[v(1.0, 2.0, 3.0), v(1.0, 5.0, 3.0), v(1.0, 5.0, 7.0)]);
+        b.polygon(&[v(1.0, 2.0, 3.0), v(1.0, 2.0, 7.0), v(4.0, 2.0, 7.0)]);
+        b.polygon(&[v(1.0, 2.0, 3.0), v(4.0, 2.0, 3.0), v(4.0, 5.0, 3.0)]);
+        let p = b.finish(0);
+        assert_eq!(
+            p.normals,
+            [[Vec3::X; 3], [Vec3::Y; 3], [Vec3::Z; 3]].concat()
+        );
+        let uv = |x, y| Vec2::new(x, y);
+        assert_eq!(
+            p.tex_coords,
+            [
+                uv(3.0, 2.0),
+                uv(3.0, 5.0),
+                uv(7.0, 5.0),
+                uv(1.0, 3.0),
+                uv(1.0, 7.0),
+                uv(4.0, 7.0),
+                uv(1.0, 2.0),
+                uv(4.0, 2.0),
+                uv(4.0, 5.0),
+            ]
+        );
+    }
+
+    #[test]
+    fn materials_are_named_coloured_and_only_the_cloth_is_double_sided() {
+        let m = materials();
+        let names: Vec<_> = m.iter().map(|mat| mat.name.as_deref().unwrap()).collect();
+        assert_eq!(
+            names,
+            [
+                "floor_stone",
+                "plaster",
+                "column_stone",
+                "brick",
+                "bronze",
+                "glass",
+                "cloth_red",
+                "cloth_blue",
+                "cloth_green",
+                "timber"
+            ]
+        );
+        for mat in &m {
+            let name = mat.name.as_deref().unwrap();
+            // Coloured, not glTF's default white.
+            assert_ne!(mat.base_color_factor.truncate(), Vec3::ONE, "{name}");
+            // Only the bronze is a metal, and nothing is as rough as glTF's default.
+            let metallic = if name == "bronze" { 1.0 } else { 0.0 };
+            assert_eq!(mat.metallic_factor, metallic, "{name}");
+            assert!(mat.roughness_factor < 1.0, "{name}");
+            let cloth = name.starts_with("cloth_");
+            assert_eq!(mat.double_sided, cloth, "{name}");
+            if cloth || name == "glass" {
+                // See-through, and blended rather than cut out.
+                let alpha = mat.base_color_factor.w;
+                assert!(alpha > 0.0 && alpha < 1.0, "{name}");
+                assert_eq!(mat.alpha_mode, AlphaMode::Blend, "{name}");
+            } else {
+                assert_eq!(mat.base_color_factor.w, 1.0, "{name}");
+                assert_eq!(mat.alpha_mode, AlphaMode::Opaque, "{name}");
+            }
+        }
+        // Glass is nearly smooth; cloth is rougher than bronze.
+        assert!(m[GLASS].roughness_factor < 0.1);
+        assert!(m[CLOTH[0]].roughness_factor > m[BRONZE].roughness_factor);
+    }
+
+    /// Where every instance whose name starts with `prefix` puts its mesh's origin, in
+    /// placement order.
+    fn placed(m: &Model, prefix: &str) -> Vec<Vec3> {
+        m.instances
+            .iter()
+            .filter(|i| i.name.as_deref().is_some_and(|n| n.starts_with(prefix)))
+            .map(|i| i.world_from_local.w_axis.truncate())
+            .collect()
+    }
+
+    #[test]
+    fn each_arcade_storey_has_ten_columns_3_m_apart_and_an_arch_centred_in_each_bay() {
+        let m = atrium();
+        let columns: Vec<f32> = (0..10).map(|k| -13.5 + 3.0 * k as f32).collect();
+        let bays: Vec<f32> = columns.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+        let row = |xs: &[f32], y: f32, z: f32| xs.iter().map(|&x| v(x, y, z)).collect::<Vec<_>>();
+        for (side, z) in [("north", -3.5), ("south", 3.5)] {
+            // Columns stand on the floor and on the gallery floor; arches spring from 4 m and 9 m.
+            for (storey, floor, spring) in [("lower", 0.0, 4.0), ("upper", 6.0, 9.0)] {
+                let name = format!("{storey}_{side}_");
+                let at_columns = row(&columns, floor, z);
+                assert_eq!(placed(&m, &format!("column_{name}")), at_columns, "{name}");
+                let at_bays = row(&bays, spring, z);
+                assert_eq!(placed(&m, &format!("arch_{name}")), at_bays, "{name}");
+            }
+            // Glass balustrades in the upper bays.
+            assert_eq!(placed(&m, &format!("glass_{side}_")), row(&bays, 6.0, z));
+        }
+    }
+
+    #[test]
+    fn no_instance_mirrors_its_mesh_and_the_galleries_lie_behind_the_arcades() {
+        let m = atrium();
+        // A mirroring transform would turn every face of its mesh inside out.
+        for i in &m.instances {
+            let det = i.world_from_local.determinant();
+            assert!((det - 1.0).abs() < 1e-6, "{:?}: {det}", i.name);
+        }
+        // The gallery slabs reach from an arcade (local z = 0.3) to its outer wall (z = 3.7).
+        for (side, z, outer) in [("north", -3.5f32, -1.0), ("south", 3.5f32, 1.0)] {
+            let slabs = m
+                .instances
+                .iter()
+                .find(|i| i.name.as_deref() == Some(&format!("slabs_{side}")))
+                .unwrap();
+            let wall_side = slabs.world_from_local.transform_point3(v(0.0, 6.0, 3.7));
+            assert!(
+                (wall_side.z - (z + outer * 3.7)).abs() < 1e-6,
+                "{side}: {wall_side}"
+            );
+        }
+    }
+
+    /// The world-space boxes of the meshes made of boxes.
+    fn world_boxes(m: &Model) -> Vec<(String, Aabb)> {
+        let box_meshes = [
+            "floor",
+            "walls",
+            "beams",
+            "gallery_slabs",
+            "glass_panel",
+            "lantern",
+        ];
+        let mut boxes = Vec::new();
+        for i in &m.instances {
+            let mesh = &m.meshes[i.mesh];
+            let name = mesh.name.as_deref().unwrap();
+            if box_meshes.contains(&name) {
+                for corners in mesh.primitives[0].positions.chunks(24) {
+                    let world = corners
+                        .iter()
+                        .map(|&p| i.world_from_local.transform_point3(p));
+                    boxes.push((name.to_string(), Aabb::from_points(world)));
+                }
+            }
+        }
+        boxes
+    }
+
+    #[test]
+    fn the_courtyard_and_the_arcade_bays_are_open() {
+        let boxes = world_boxes(&atrium());
+        let mut open = Vec::new();
+        for x in [-12.0, -6.0, 0.0, 6.0, 12.0] {
+            for y in [2.0, 5.0, 8.0, 12.0] {
+                open.push(v(x, y, 0.0));
+            }
+        }
+        for x in (0..9).map(|k| -12.0 + 3.0 * k as f32) {
+            for z in [-3.5, 3.5] {
+                // Under each arch of each storey (the glass balustrade is 6 m to 7 m).
+                for y in [2.0, 4.5, 8.0, 9.5] {
+                    open.push(v(x, y, z));
+                }
+            }
+        }
+        for p in open {
+            for (name, b) in &boxes {
+                assert!(!b.contains(p), "{name} {b:?} fills {p}");
+            }
+        }
+    }
+
+    /// The volume a closed triangle mesh encloses: positive when its faces point outwards.
+    fn signed_volume(p: &Primitive) -> f64 {
+        (0..p.triangle_count())
+            .map(|t| {
+                let [a, b, c] = p.triangle(t).map(|v| v.as_dvec3());
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn a_column_is_plinth_shaft_and_capital_of_the_given_total_height() {
+        let (plinth, height) = (0.3, 4.0);
+        let mesh = column(plinth, height);
+        let bounds = mesh.bounds();
+        assert_eq!((bounds.min.y, bounds.max.y), (0.0, height));
+        // 0.8 m square plinth, octagonal shaft of circumradius 0.3 m, 0.7 m square capital
+        // 0.3 m tall, all facing outwards.
+        let octagon = 2.0 * 2f64.sqrt() * 0.3 * 0.3;
+        let expected =
+            0.8 * 0.8 * plinth as f64 + octagon * (height - 0.3 - plinth) as f64 + 0.7 * 0.7 * 0.3;
+        let volume = signed_volume(&mesh.primitives[0]);
+        assert!((volume - expected).abs() < 1e-5, "{volume} vs {expected}");
+    }
+
+    #[test]
+    fn an_arch_fills_the_square_above_its_opening_with_voussoirs_and_spandrel() {
+        let mesh = arch();
+        let b = mesh.bounds();
+        assert!(
+            (b.min - v(-1.5, 0.0, -0.3)).abs().max_element() < 1e-6,
+            "{b:?}"
+        );
+        assert!(
+            (b.max - v(1.5, 1.5, 0.3)).abs().max_element() < 1e-6,
+            "{b:?}"
+        );
+        // The rings between radii 1.2 and 1.45 and what is left of the 3 × 1.5 square above the
+        // opening, 0.6 deep; the curves are 8 chords of 22.5° each.
+        let chords = |r: f64| 4.0 * r * r * (PI / 8.0).sin();
+        let voussoirs = 0.6 * (chords(1.45) - chords(1.2));
+        let spandrel = 0.6 * (3.0 * 1.5 - chords(1.45));
+        let volumes = mesh
+            .primitives
+            .iter()
+            .map(signed_volume)
+            .collect::<Vec<_>>();
+        assert!((volumes[0] - voussoirs).abs() < 1e-5, "{volumes:?}");
+        assert!((volumes[1] - spandrel).abs() < 1e-5, "{volumes:?}");
+    }
+
+    #[test]
+    fn a_banner_hangs_from_its_top_centre_and_is_waved_8_cm_either_way() {
+        let mesh = banner(CLOTH[1], "banner_blue");
+        let p = &mesh.primitives[0];
+        assert_eq!(p.material, Some(CLOTH[1]));
+        // A 6 × 12 grid of cells, two triangles each.
+        assert_eq!(p.triangle_count(), 6 * 12 * 2);
+        let b = mesh.bounds();
+        assert!(
+            (b.min - v(-0.9, -3.6, -0.08)).abs().max_element() < 1e-6,
+            "{b:?}"
+        );
+        assert!(
+            (b.max - v(0.9, 0.0, 0.08)).abs().max_element() < 1e-6,
+            "{b:?}"
+        );
+    }
+
+    #[test]
+    fn a_banner_is_one_unbroken_sheet() {
+        let p = &banner(CLOTH[0], "banner_red").primitives[0];
+        // Triangle corners are compared by bits: a grid point is computed the same way for
+        // every triangle that uses it.
+        let key = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut edges = std::collections::HashMap::new();
+        for t in 0..p.triangle_count() {
+            let [a, b, c] = p.triangle(t).map(key);
+            for edge in [(a, b), (b, c), (c, a)] {
+                *edges.entry(edge).or_insert(0) += 1;
+            }
+        }
+        // No two triangles overlap along an edge (one would run the same way round as the
+        // other), and only the outline of 6 + 12 + 6 + 12 cell edges is left unshared.
+        assert!(edges.values().all(|&n| n == 1));
+        let outline = edges.keys().filter(|(a, b)| !edges.contains_key(&(*b, *a)));
+        assert_eq!(outline.count(), 2 * (6 + 12));
+    }
+
+    #[test]
+    fn every_box_of_the_atrium_faces_outwards() {
+        let m = atrium();
+        let box_meshes = [
+            "floor",
+            "walls",
+            "beams",
+            "gallery_slabs",
+            "glass_panel",
+            "lantern",
+        ];
+        for mesh in m.meshes.iter() {
+            let name = mesh.name.as_deref().unwrap();
+            if !box_meshes.contains(&name) {
+                continue;
+            }
+            let p = &mesh.primitives[0];
+            // A box is 6 quads: 24 corners and 12 triangles.
+            assert_eq!(p.positions.len(), 24 * p.indices.len() / 36, "{name}");
+            for (k, (corners, indices)) in
+                p.positions.chunks(24).zip(p.indices.chunks(36)).enumerate()
+            {
+                let one_box = Primitive {
+                    positions: p.positions.clone(),
+                    indices: indices.to_vec(),
+                    ..p.clone()
+                };
+                let size = Aabb::from_points(corners.iter().copied()).size().as_dvec3();
+                let volume = signed_volume(&one_box);
+                let expected = size.x * size.y * size.z;
+                assert!(
+                    volume > 0.0 && (volume - expected).abs() < 1e-4 * expected,
+                    "{name} box {k}: {volume} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn banners_and_lanterns_hang_6_m_apart_along_both_sides_in_alternating_colours() {
+        let m = atrium();
+        let xs = [-12.0, -6.0, 0.0, 6.0, 12.0];
+        for (side, z) in [("north", -1.0), ("south", 1.0)] {
+            let banners = xs.map(|x| v(x, 10.4, 3.05 * z));
+            assert_eq!(placed(&m, &format!("banner_{side}_")), banners, "{side}");
+            let lanterns = xs.map(|x| v(x, 5.0, 5.5 * z));
+            assert_eq!(placed(&m, &format!("lantern_{side}_")), lanterns, "{side}");
+        }
+        let colour = |name: String| {
+            let i = m.instances.iter().find(|i| i.name == Some(name.clone()));
+            m.meshes[i.unwrap().mesh].primitives[0].material.unwrap()
+        };
+        for k in 0..5 {
+            let north = colour(format!("banner_north_{k}"));
+            let south = colour(format!("banner_south_{k}"));
+            assert!(CLOTH.contains(&north) && CLOTH.contains(&south));
+            assert_ne!(north, south, "facing banners {k}");
+            if k > 0 {
+                assert_ne!(
+                    north,
+                    colour(format!("banner_north_{}", k - 1)),
+                    "north {k}"
+                );
+                assert_ne!(
+                    south,
+                    colour(format!("banner_south_{}", k - 1)),
+                    "south {k}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn cameras_are_upright_60_degree_views_and_main_and_gallery_look_down_the_long_axis() {
+        let m = atrium();
+        for c in &m.cameras {
+            let Projection::Perspective { yfov, .. } = c.projection else {
+                panic!("{} is not perspective", c.name);
+            };
+            assert!(
+                (yfov - 60f32.to_radians()).abs() < 1e-6,
+                "{}: {yfov}",
+                c.name
+            );
+            // A unit up, square to the view direction, on the sky's side.
+            assert!((c.up.length() - 1.0).abs() < 1e-6, "{}", c.name);
+            assert!(c.up.dot(c.forward).abs() < 1e-6, "{}", c.name);
+            assert!(c.up.y > 0.0, "{}", c.name);
+        }
+        let camera = |name: &str| &m.cameras[m.camera_index(name).unwrap()];
+        // Main: 2 m inside an end wall, looking down the long axis towards the other end.
+        let main = camera("Main");
+        assert!(
+            (main.position.x.abs() - 13.0).abs() < 1e-6,
+            "{}",
+            main.position
+        );
+        assert!(
+            main.forward.x * main.position.x.signum() < -0.9,
+            "{}",
+            main.forward
+        );
+        // Gallery: in an upper gallery, looking along it.
+        let gallery = camera("Gallery");
+        assert!((6.0..11.0).contains(&gallery.position.y));
+        assert!((3.8..7.2).contains(&gallery.position.z.abs()));
+        assert!(gallery.forward.x.abs() > 0.9, "{}", gallery.forward);
+    }
+
+    #[test]
+    fn cameras_and_lights_are_numbered_as_the_nodes_after_the_instances() {
+        let m = atrium();
+        let n = m.instances.len();
+        for (i, instance) in m.instances.iter().enumerate() {
+            assert_eq!(instance.node, i);
+        }
+        let camera_nodes: Vec<usize> = m.cameras.iter().map(|c| c.node).collect();
+        assert_eq!(camera_nodes, [n, n + 1, n + 2, n + 3]);
+        for (k, placed) in m.placed_lights.iter().enumerate() {
+            assert_eq!((placed.node, placed.light), (n + 4 + k, k));
+            assert_eq!(m.lights.get(k).source_index, k as u32);
+        }
+    }
+
+    #[test]
+    fn a_lamp_burns_in_each_lantern_and_two_spots_on_the_end_walls_aim_at_the_courtyard() {
+        let m = atrium();
+        let mut lanterns = placed(&m, "lantern_");
+        assert_eq!(lanterns.len(), 10);
+        let (mut lamps, mut spots) = (Vec::new(), Vec::new());
+        for (k, placed) in m.placed_lights.iter().enumerate() {
+            let light = m.lights.get(k);
+            assert_eq!(placed.range, Some(light.radius));
+            match placed.kind {
+                PunctualKind::Point => {
+                    assert_eq!(light.spot, None);
+                    assert_eq!(light.radius, 6.0);
+                    lamps.push(light.position);
+                }
+                PunctualKind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => {
+                    let cone = light.spot.unwrap();
+                    assert!((inner_cone_angle - 25f32.to_radians()).abs() < 1e-6);
+                    assert!((outer_cone_angle - 35f32.to_radians()).abs() < 1e-6);
+                    assert_eq!(cone.angle, outer_cone_angle);
+                    assert_eq!(light.radius, 25.0);
+                    // High on an end wall, aimed down, its axis reaching the courtyard floor's
+                    // centre.
+                    let p = light.position;
+                    assert!((p.x.abs() - 14.2).abs() < 1e-6 && p.y == 12.0 && p.z == 0.0);
+                    assert!(cone.direction.y < 0.0, "{}", cone.direction);
+                    let floor_hit = p + cone.direction * (p.y / -cone.direction.y);
+                    assert!(floor_hit.length() < 1e-4, "{floor_hit}");
+                    spots.push(p.x.signum());
+                }
+            }
+        }
+        let key = |p: &Vec3| (p.x.to_bits(), p.z.to_bits());
+        lanterns.sort_by_key(key);
+        lamps.sort_by_key(key);
+        assert_eq!(lamps, lanterns);
+        assert_eq!(spots, [-1.0, 1.0]);
+    }
+
+    #[test]
+    fn the_atrium_glb_loads_back_as_the_atrium() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("atrium.glb");
+        std::fs::write(&path, atrium_glb().unwrap()).unwrap();
+        let loaded = Model::load(&path, &crate::LoadOptions::default()).unwrap();
+        let made = atrium();
+        assert_eq!(loaded.meshes, made.meshes);
+        assert_eq!(loaded.materials, made.materials);
+        assert_eq!(loaded.instances, made.instances);
+        assert_eq!(loaded.placed_lights, made.placed_lights);
+        let names = |m: &Model| m.cameras.iter().map(|c| c.name.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&loaded), names(&made));
+    }
 }
