@@ -755,21 +755,23 @@ mod tests {
         }
     }
 
+    /// The meshes made only of boxes.
+    const BOX_MESHES: [&str; 6] = [
+        "floor",
+        "walls",
+        "beams",
+        "gallery_slabs",
+        "glass_panel",
+        "lantern",
+    ];
+
     /// The world-space boxes of the meshes made of boxes.
     fn world_boxes(m: &Model) -> Vec<(String, Aabb)> {
-        let box_meshes = [
-            "floor",
-            "walls",
-            "beams",
-            "gallery_slabs",
-            "glass_panel",
-            "lantern",
-        ];
         let mut boxes = Vec::new();
         for i in &m.instances {
             let mesh = &m.meshes[i.mesh];
             let name = mesh.name.as_deref().unwrap();
-            if box_meshes.contains(&name) {
+            if BOX_MESHES.contains(&name) {
                 for corners in mesh.primitives[0].positions.chunks(24) {
                     let world = corners
                         .iter()
@@ -897,17 +899,9 @@ mod tests {
     #[test]
     fn every_box_of_the_atrium_faces_outwards() {
         let m = atrium();
-        let box_meshes = [
-            "floor",
-            "walls",
-            "beams",
-            "gallery_slabs",
-            "glass_panel",
-            "lantern",
-        ];
         for mesh in m.meshes.iter() {
             let name = mesh.name.as_deref().unwrap();
-            if !box_meshes.contains(&name) {
+            if !BOX_MESHES.contains(&name) {
                 continue;
             }
             let p = &mesh.primitives[0];
