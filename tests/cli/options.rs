@@ -212,6 +212,19 @@ fn a_list_option_naming_an_item_twice_is_refused() {
     assert!(!dir.join("report").exists(), "nothing is written");
 }
 
+#[test]
+fn skips_takes_two_different_models_for_two_not_a_repeat() {
+    // Two files are two models: the run goes on to load both, and stops at the one that is not
+    // there, by its name (not "lists it twice"); without an adapter it stops before loading.
+    let absent = work_dir("skips_two_models").join("absent.glb");
+    let absent = absent.to_str().unwrap();
+    let text = myriad_fails(&["skips", "--gltf", "assets/atrium.glb", "--gltf", absent]);
+    assert!(!text.contains("twice"), "{text}");
+    if gpu_available() {
+        assert_mentions(&text, &[absent]);
+    }
+}
+
 /// The names of the threads of process `pid` (Linux: `/proc/PID/task/*/comm`).
 #[cfg(target_os = "linux")]
 fn thread_names(pid: u32) -> Vec<String> {

@@ -655,23 +655,41 @@ fn render_takes_scene_files_presets_and_sizes() {
     assert_mentions(&out, &["--camera", "--preset"]);
 }
 
+/// `myriad skips --json` on the atrium, run once for the tests that read it: its report and the
+/// run's wall time in milliseconds.
+fn skips_json() -> &'static (Value, f64) {
+    static RUN: std::sync::OnceLock<(Value, f64)> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
+        let start = std::time::Instant::now();
+        let out = myriad_ok(&[
+            "skips",
+            "--gltf",
+            atrium.to_str().unwrap(),
+            "--size",
+            "96x48",
+            "--runs",
+            "1",
+            "--json",
+        ]);
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        (serde_json::from_str(&stdout(&out)).unwrap(), wall_ms)
+    })
+}
+
+/// The row of `skips_json` whose saving starts with `prefix`.
+fn skips_row<'a>(rows: &'a [Value], prefix: &str) -> &'a Value {
+    rows.iter()
+        .find(|r| r["saving"].as_str().unwrap().starts_with(prefix))
+        .unwrap_or_else(|| panic!("no row {prefix}"))
+}
+
 #[test]
 fn skips_measures_every_saving_and_the_image_stays() {
     if !gpu_available() {
         return;
     }
-    let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
-    let out = myriad_ok(&[
-        "skips",
-        "--gltf",
-        atrium.to_str().unwrap(),
-        "--size",
-        "96x48",
-        "--runs",
-        "1",
-        "--json",
-    ]);
-    let reports: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let (reports, _) = skips_json();
     let rows = reports[0]["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 8);
     for row in rows {
@@ -680,11 +698,7 @@ fn skips_measures_every_saving_and_the_image_stays() {
             "{row}"
         );
     }
-    let by_name = |prefix: &str| {
-        rows.iter()
-            .find(|r| r["saving"].as_str().unwrap().starts_with(prefix))
-            .unwrap()
-    };
+    let by_name = |prefix: &str| skips_row(rows, prefix);
     let cull = by_name("1.");
     assert!(cull["after"]["lights_assigned"].as_u64() < cull["before"]["lights_assigned"].as_u64());
     let active = by_name("2.");
@@ -708,4 +722,126 @@ fn skips_measures_every_saving_and_the_image_stays() {
     );
     assert_eq!(decision["frames_per_side"], 3);
     assert!(decision["use_prepass"].is_boolean(), "{decision}");
+}
+
+#[test]
+fn skips_times_in_milliseconds_only_the_stages_each_saving_runs() {
+    if !gpu_available() {
+        return;
+    }
+    let (reports, wall_ms) = skips_json();
+    let rows = reports[0]["rows"].as_array().unwrap();
+    let ms = |side: &Value, field: &str| {
+        side[field]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{field} missing in {side}"))
+    };
+    // Every configuration culls, assigns or stages an upload on the CPU in its timed frame.
+    // Before is every saving off: no depth prepass and nothing to mask.
+    for row in rows {
+        let (before, after) = (&row["before"], &row["after"]);
+        assert!(ms(before, "cpu_ms") > 0.0, "{row}");
+        assert!(ms(after, "cpu_ms") > 0.0, "{row}");
+        assert_eq!(ms(before, "prepass_ms"), 0.0, "{row}");
+        assert_eq!(ms(before, "mask_ms"), 0.0, "{row}");
+    }
+    // After: the prepass and the mask only where a saving needs the depth buffer.
+    for prefix in ["2.", "3.", "1-3 and 5 (no reuse)"] {
+        let after = &skips_row(rows, prefix)["after"];
+        assert!(ms(after, "prepass_ms") > 0.0, "{prefix}: {after}");
+        assert!(ms(after, "mask_ms") > 0.0, "{prefix}: {after}");
+    }
+    // "All five" reuses: its timed frame kept the untimed first one's lists, without a prepass.
+    for prefix in ["1.", "4.", "5.", "all five"] {
+        let after = &skips_row(rows, prefix)["after"];
+        assert_eq!(ms(after, "prepass_ms"), 0.0, "{prefix}: {after}");
+        assert_eq!(ms(after, "mask_ms"), 0.0, "{prefix}: {after}");
+    }
+    // Each reported time is a stage of one frame that ran, one after another, within this run.
+    let reported: f64 = rows
+        .iter()
+        .flat_map(|row| [&row["before"], &row["after"]])
+        .map(|side| ms(side, "cpu_ms") + ms(side, "prepass_ms") + ms(side, "mask_ms"))
+        .sum();
+    assert!(
+        reported <= *wall_ms,
+        "{reported} ms of stages in {wall_ms} ms"
+    );
+    // The GPU shading time (shading and forward passes), where the adapter times passes.
+    let has_timestamps = myriad::gpu::GpuContext::headless_for_tests()
+        .expect("no adapter")
+        .has_timestamps();
+    for row in rows {
+        for side in [&row["before"], &row["after"]] {
+            let shading = side["shading_ms"].as_f64();
+            assert_eq!(shading.is_some(), has_timestamps, "{row}");
+            assert!(shading.is_none_or(|v| v >= 0.0), "{row}");
+        }
+    }
+}
+
+#[test]
+fn skips_fits_the_depth_range_only_for_the_savings_that_fit_it() {
+    if !gpu_available() {
+        return;
+    }
+    let (reports, _) = skips_json();
+    let rows = reports[0]["rows"].as_array().unwrap();
+    for row in rows {
+        let name = row["saving"].as_str().unwrap();
+        let fits = match name {
+            "3. fitted depth range" | "1-3 and 5 (no reuse)" | "all five" => true,
+            // Tuned, only when the tuner kept the prepass the fit needs.
+            "1-3 and 5, tuned" => row["prepass_decision"]["use_prepass"].as_bool().unwrap(),
+            _ => false,
+        };
+        let range = &row["fitted_range"];
+        assert_eq!(range.is_array(), fits, "{row}");
+        if fits {
+            let [near, far] = [0, 1].map(|i| range[i].as_f64().unwrap());
+            assert!(0.0 < near && near < far, "{row}");
+        }
+    }
+}
+
+#[test]
+fn skips_prints_every_saving_with_its_notes_in_a_table() {
+    if !gpu_available() {
+        return;
+    }
+    let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
+    let out = myriad_ok(&[
+        "skips",
+        "--gltf",
+        atrium.to_str().unwrap(),
+        "--size",
+        "32x16",
+        "--runs",
+        "1",
+    ]);
+    let text = stdout(&out);
+    assert_mentions(
+        &text,
+        &[
+            "method refined; medians of 1 frames",
+            "1000 lights (spots: ",
+            "saving (before → after)",
+            "1. frustum cull",
+            "2. active clusters",
+            "3. fitted depth range",
+            "4. nothing moved: reuse",
+            "5. feature variants",
+            "1-3 and 5 (no reuse)",
+            "1-3 and 5, tuned",
+            "all five",
+            // The notes under a row: what the saving changed.
+            "lights assigned 1000 → ",
+            "clusters active",
+            "depth range fitted to [",
+            "tuned: ",
+            "Δimage = largest channel difference",
+        ],
+    );
+    // Only the cull changes how many lights are assigned, and only a change is noted.
+    assert!(!text.contains("lights assigned 1000 → 1000"), "{text}");
 }
