@@ -845,3 +845,59 @@ fn skips_prints_every_saving_with_its_notes_in_a_table() {
     // Only the cull changes how many lights are assigned, and only a change is noted.
     assert!(!text.contains("lights assigned 1000 → 1000"), "{text}");
 }
+
+#[test]
+fn render_times_the_prepass_and_mask_of_the_skips_column_only_where_its_savings_run_them() {
+    if !gpu_available() {
+        return;
+    }
+    let dir = work_dir("render_skips_stages");
+    // `active` needs the depth prepass and masks clusters with it, but fits no depth range;
+    // `cull` needs no depth buffer at all. One timed frame each: its median is that frame's.
+    for (skips, prepass) in [("active", true), ("cull", false)] {
+        let out_dir = dir.join(skips);
+        myriad_ok(&[
+            "render",
+            "--preset",
+            "paper",
+            "--lights",
+            "200",
+            "--size",
+            "64x32",
+            "--runs",
+            "1",
+            "--skips",
+            skips,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        let skipping = &read_json(&out_dir.join("stats.json"))["with_skips"];
+        let ms = |value: &Value| {
+            value
+                .as_f64()
+                .unwrap_or_else(|| panic!("{skips}: a time missing in {skipping}"))
+        };
+        // Cull and assignment on the CPU take some time, as in every column.
+        assert!(
+            ms(&skipping["result"]["assign_ms"]) > 0.0,
+            "{skips}: {skipping}"
+        );
+        for field in ["prepass_ms", "mask_ms"] {
+            let t = ms(&skipping[field]);
+            if prepass {
+                assert!(t > 0.0, "{skips}: {field} {t}");
+            } else {
+                assert_eq!(t, 0.0, "{skips}: {field}");
+            }
+        }
+        assert_eq!(
+            skipping["active_clusters"].is_u64(),
+            prepass,
+            "{skips}: {skipping}"
+        );
+        assert!(
+            skipping["fitted_depth_range"].is_null(),
+            "{skips}: {skipping}"
+        );
+    }
+}
