@@ -481,6 +481,27 @@ fn stress_reports_the_stage_times_its_progress_lines_announced() {
         "GPU render (clustered)",
     );
     same(ms("check_ms"), "oracle check (every cluster, exact lists)");
+    // Each stage is announced as it begins, before its time; the note under the upload carries
+    // the report's byte count.
+    for stage in [
+        "scene generation",
+        "light assignment (first call, allocating)",
+        "GPU setup (device, geometry, warm-up)",
+        "upload + encode + submit",
+        "GPU render (clustered)",
+    ] {
+        let begun = err.find(&format!("stress: {stage}…\n"));
+        let done = err.find(&format!("stress: {stage}: done in "));
+        assert!(
+            begun.is_some_and(|b| done.is_some_and(|d| b < d)),
+            "{stage}: not announced before its time in:\n{err}"
+        );
+    }
+    let uploaded = format!(
+        "stress:   {} bytes uploaded\n",
+        u64_field(&r, "upload_bytes")
+    );
+    assert!(err.contains(&uploaded), "no {uploaded:?} in:\n{err}");
     // The peak resident size held at least what was uploaded, and no more than the machine has.
     #[cfg(target_os = "linux")]
     {
