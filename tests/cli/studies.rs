@@ -186,7 +186,11 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
         "--grids",
         "8x4x8,16x9x24",
         "--runs",
-        "3",
+        "4",
+        "--seed",
+        "7",
+        "--threads",
+        "2",
         "--out",
         dir.to_str().unwrap(),
     ]);
@@ -247,6 +251,92 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
         );
         assert_eq!(r["lit_clusters"], exact["lit_clusters"]);
         assert!(r["false_positive_ratio"].as_f64().unwrap() >= 0.0, "{r}");
+        // With no misses, the false positives are the pairs beyond the exact ones.
+        let exact_pairs = u64_field(exact, "pairs") as f64;
+        let extra = (u64_field(r, "pairs") as f64 - exact_pairs) / exact_pairs;
+        assert!(
+            (r["false_positive_ratio"].as_f64().unwrap() - extra).abs() < 1e-12,
+            "{r} vs {exact}"
+        );
+        // A lit cluster is one of the grid's, and each holds at least one exact light.
+        let grid = r["grid"].as_array().unwrap();
+        let clusters: u64 = grid.iter().map(|d| d.as_u64().unwrap()).product();
+        let lit = u64_field(r, "lit_clusters");
+        assert!(0 < lit && lit <= clusters, "{r}");
+        // `exact` takes at most three timed runs (the slow oracle), the others `--runs`.
+        let runs = if r["method"] == "exact" { 3 } else { 4 };
+        assert_eq!(u64_field(r, "runs"), runs, "{r}");
+    }
+    // Exact's shading cost is its mean list length over the clusters it lights.
+    for exact in json_rows.iter().filter(|r| r["method"] == "exact") {
+        let mean = u64_field(exact, "pairs") as f64 / u64_field(exact, "lit_clusters") as f64;
+        assert!(
+            (exact["shading_cost"].as_f64().unwrap() - mean).abs() < 1e-9,
+            "{exact}"
+        );
+    }
+    for (field, value) in [
+        ("lights", 500),
+        ("seed", 7),
+        ("threads", 2),
+        ("runs", 4),
+        ("exact_runs", 3),
+    ] {
+        assert_eq!(u64_field(&report, field), value, "{field}");
+    }
+    assert_mentions(
+        &md,
+        &[
+            "500 lights",
+            "seed 7",
+            "2 threads",
+            "4 timed runs",
+            "(3 for exact)",
+        ],
+    );
+    // The Pareto flag: exactly the rows of a scene that no other row of that scene beats in
+    // both median time and false-positive ratio (no worse in either, better in one), and the
+    // table's ✓ says the same as the JSON.
+    let point = |r: &Value| {
+        (
+            r["median_us"].as_f64().unwrap(),
+            r["false_positive_ratio"].as_f64().unwrap(),
+        )
+    };
+    for r in json_rows {
+        let p = point(r);
+        let dominated = json_rows
+            .iter()
+            .filter(|q| q["scene"] == r["scene"])
+            .any(|q| {
+                let q = point(q);
+                q.0 <= p.0 && q.1 <= p.1 && (q.0 < p.0 || q.1 < p.1)
+            });
+        assert_eq!(r["pareto"].as_bool(), Some(!dominated), "{r}");
+        let grid: Vec<String> = r["grid"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.to_string())
+            .collect();
+        let row = rows
+            .iter()
+            .find(|m| {
+                m[..3]
+                    == [
+                        r["scene"].as_str().unwrap(),
+                        grid.join("×").as_str(),
+                        r["method"].as_str().unwrap(),
+                    ]
+            })
+            .unwrap();
+        assert_eq!(row[8] == "✓", !dominated, "{row:?} vs {r}");
+        // The table's numbers are the JSON's, rounded.
+        assert_eq!(row[3], format!("{:.1}", p.0), "{row:?} vs {r}");
+        assert_eq!(row[4], r["pairs"].to_string(), "{row:?} vs {r}");
+        assert_eq!(row[5], format!("{:.4}", p.1), "{row:?} vs {r}");
+        let cost = r["shading_cost"].as_f64().unwrap();
+        assert_eq!(row[7], format!("{cost:.2}"), "{row:?} vs {r}");
     }
 
     // report.svg: an SVG with the method and scene names and one Pareto-front line per scene and
