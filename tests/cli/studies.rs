@@ -361,6 +361,7 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
         1 + 6,
         "legend sample + one front per scene and error measure"
     );
+    assert_plot_shows(&svg, json_rows, &scenes, &methods);
 
     // Bad options fail before measuring anything.
     let out = myriad_fails(&[
@@ -373,6 +374,171 @@ fn report_covers_every_scene_grid_and_method_and_draws_the_fronts() {
     assert_mentions(&out, &["--grids", "16x9"]);
     let out = myriad_fails(&["report", "--runs", "0", "--out", dir.to_str().unwrap()]);
     assert_mentions(&out, &["--runs"]);
+}
+
+/// The value of attribute `name` in one SVG element's line.
+fn svg_attr<'a>(line: &'a str, name: &str) -> Option<&'a str> {
+    let start = line.find(&format!(" {name}=\""))? + name.len() + 3;
+    line[start..].split('"').next()
+}
+
+/// A marker or legend sample of `myriad report`'s SVG: its centre, fill and shape.
+#[derive(Debug)]
+struct SvgMark {
+    x: f64,
+    y: f64,
+    fill: String,
+    triangle: bool,
+}
+
+/// The filled discs and triangles of an SVG, in drawing order (plotters writes one element a
+/// line; a triangle's centre is the mean of its corners).
+fn svg_marks(svg: &str) -> Vec<SvgMark> {
+    let number = |line: &str, name: &str| svg_attr(line, name).unwrap().parse::<f64>().unwrap();
+    svg.lines()
+        .filter_map(|line| {
+            let fill = svg_attr(line, "fill")?.to_string();
+            if line.starts_with("<circle") {
+                let (x, y) = (number(line, "cx"), number(line, "cy"));
+                Some(SvgMark {
+                    x,
+                    y,
+                    fill,
+                    triangle: false,
+                })
+            } else if line.starts_with("<polygon") {
+                let corners: Vec<(f64, f64)> = svg_attr(line, "points")?
+                    .split_whitespace()
+                    .map(|p| {
+                        let (x, y) = p.split_once(',').unwrap();
+                        (x.parse().unwrap(), y.parse().unwrap())
+                    })
+                    .collect();
+                let n = corners.len() as f64;
+                let x = corners.iter().map(|c| c.0).sum::<f64>() / n;
+                let y = corners.iter().map(|c| c.1).sum::<f64>() / n;
+                Some(SvgMark {
+                    x,
+                    y,
+                    fill,
+                    triangle: true,
+                })
+            } else {
+                None
+            }
+        })
+        .collect()
+}
+
+/// `myriad report`'s plot shows its rows: a legend of the methods' colours and the grids'
+/// markers, left to right, each sample just before its name; then one panel per scene (columns)
+/// and error measure (false positives above, shading cost below), where each row of the scene is
+/// a marker in its method's colour and its grid's shape, inside the panel, placed further right
+/// for a longer time and higher for a larger error. Two grids given: discs, then triangles.
+fn assert_plot_shows(svg: &str, rows: &[Value], scenes: &[&str], methods: &[&str]) {
+    const COLOURS: [(&str, &str); 5] = [
+        ("exact", "#282828"),
+        ("linear", "#D62728"),
+        ("binary", "#1F77B4"),
+        ("refined", "#2CA02C"),
+        ("cone", "#9467BD"),
+    ];
+    let colour = |method: &str| COLOURS.iter().find(|c| c.0 == method).unwrap().1;
+    for axis in [
+        "false-positive ratio",
+        "shading cost (lights per lit cluster)",
+    ] {
+        assert!(svg.contains(axis), "no axis {axis:?} in the SVG");
+    }
+    // The legend: the strip above y = 78. Its names and samples alternate, left to right.
+    let texts: Vec<(f64, &str)> = {
+        let lines: Vec<&str> = svg.lines().collect();
+        lines
+            .windows(2)
+            .filter(|w| w[0].starts_with("<text") && svg_attr(w[0], "y") == Some("45"))
+            .map(|w| (svg_attr(w[0], "x").unwrap().parse().unwrap(), w[1]))
+            .collect()
+    };
+    let names: Vec<&str> = texts.iter().map(|t| t.1).collect();
+    assert_eq!(
+        names,
+        [methods, &["8×4×8", "16×9×24", "Pareto front"]].concat(),
+        "legend"
+    );
+    let marks = svg_marks(svg);
+    let (legend, plotted): (Vec<&SvgMark>, Vec<&SvgMark>) = marks.iter().partition(|m| m.y < 78.0);
+    assert_eq!(legend.len(), methods.len() + 2, "{legend:?}");
+    for (i, (mark, name)) in legend.iter().zip(&texts).enumerate() {
+        let gap = name.0 - mark.x;
+        assert!(
+            (0.0..=14.0).contains(&gap),
+            "{name:?} is {gap} px after its sample"
+        );
+        if i > 0 {
+            assert!(
+                name.0 >= texts[i - 1].0 + 60.0,
+                "{name:?} overlaps {:?}",
+                texts[i - 1]
+            );
+        }
+        match methods.get(i) {
+            Some(&method) => assert_eq!(mark.fill, colour(method), "{method}"),
+            None => assert_eq!(mark.triangle, i == methods.len() + 1, "{name:?}"),
+        }
+    }
+    let front = texts.last().unwrap().0;
+    assert!(front < 1400.0, "the legend runs off the plot: {front}");
+
+    // The panels: a 3 × 2 array of 500 × 541 px cells below the legend, each drawn in turn.
+    let per_scene = rows.len() / scenes.len();
+    assert_eq!(
+        plotted.len(),
+        2 * rows.len(),
+        "one marker per row and panel"
+    );
+    for (panel, marks) in plotted.chunks(per_scene).enumerate() {
+        let (row_of_panels, column) = (panel / scenes.len(), panel % scenes.len());
+        let error = ["false_positive_ratio", "shading_cost"][row_of_panels];
+        let of_scene: Vec<&Value> = rows
+            .iter()
+            .filter(|r| r["scene"] == scenes[column])
+            .collect();
+        let point = |r: &Value| (r["median_us"].as_f64().unwrap(), r[error].as_f64().unwrap());
+        let y_max = of_scene.iter().map(|r| point(r).1).fold(0.01, f64::max);
+        let first_grid = &of_scene[0]["grid"];
+        let cell_x = 500.0 * column as f64;
+        let cell_y = 78.0 + 541.0 * row_of_panels as f64;
+        // The times spread over the panel's width (they span a decade or more here), not
+        // squeezed into a corner.
+        let (left, right) = marks
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(l, r), m| (l.min(m.x), r.max(m.x)));
+        assert!(
+            right - left > 200.0,
+            "panel {panel}: markers from x {left} to {right}"
+        );
+        for (a, (mark, row)) in marks.iter().zip(&of_scene).enumerate() {
+            let what = format!("{} panel {panel}, marker {a}: {mark:?} for {row}", error);
+            assert_eq!(mark.fill, colour(row["method"].as_str().unwrap()), "{what}");
+            assert_eq!(mark.triangle, row["grid"] != *first_grid, "{what}");
+            // Inside the cell's plotting area (right of the y labels, 70 px, above the x labels,
+            // 56 px, within its 12 px margin), off its frame.
+            assert!(
+                (cell_x + 75.0..cell_x + 483.0).contains(&mark.x)
+                    && (cell_y..cell_y + 541.0 - 61.0).contains(&mark.y),
+                "{what}"
+            );
+            for (other, next) in marks.iter().zip(&of_scene) {
+                let (p, q) = (point(row), point(next));
+                if q.0 > p.0 * 1.1 {
+                    assert!(other.x > mark.x, "{what}: not left of {next}");
+                }
+                if q.1 - p.1 > 0.05 * y_max {
+                    assert!(other.y < mark.y, "{what}: not below {next}");
+                }
+            }
+        }
+    }
 }
 
 /// The stage times every `myriad stress --json` report carries.
