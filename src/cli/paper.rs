@@ -29,7 +29,7 @@ use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::layout::GpuLight;
 use myriad::gpu::legend::with_heat_legend;
-use myriad::gpu::{GpuContext, encode_png};
+use myriad::gpu::{GpuContext, PassTimes, encode_png};
 use myriad::render::{PixelStats, RenderScene, Shading, Viewer, pixel_stats};
 use myriad::scene::{LoadOptions, Model, check_replaceable, replace_files};
 use serde::Serialize;
@@ -253,6 +253,20 @@ struct Timed {
     pairs: u64,
 }
 
+/// A frame's "shading" column from its pass times: the shading pass plus the forward pass of
+/// blended geometry where it ran; `None` where the shading pass was not timed.
+fn shading_column(p: &PassTimes) -> Option<f64> {
+    p.shading_ms.map(|s| s + p.forward_ms.unwrap_or(0.0))
+}
+
+/// Whether a configuration has its frames once `timed` frames are timed (the warm-up frame
+/// before them is not) and the last frame took `frame_seconds`: after `runs` timed frames, or
+/// after the first timed one if it took over [`SLOW_FRAME_SECONDS`] (a slow warm-up alone
+/// proves nothing: it also builds pipelines and buffers).
+fn timing_done(timed: usize, runs: usize, frame_seconds: f64) -> bool {
+    timed >= runs || (timed >= 1 && frame_seconds > SLOW_FRAME_SECONDS)
+}
+
 /// Renders one untimed warm-up frame (pipelines, buffers), then `runs` timed frames (one if a
 /// frame takes longer than [`SLOW_FRAME_SECONDS`]); every frame assigns its lights anew.
 fn time_frames(
@@ -275,15 +289,13 @@ fn time_frames(
             wall.push((submitted.elapsed().as_secs_f64() + frame.report.encode_seconds) * 1e3);
             if let Some(p) = viewer.renderer.last_pass_times(&viewer.ctx)? {
                 gbuffer.extend(p.gbuffer_ms);
-                if let Some(s) = p.shading_ms {
-                    shade.push(s + p.forward_ms.unwrap_or(0.0));
-                }
+                shade.extend(shading_column(&p));
             }
         }
         let pairs = frame.stats.map_or(0, |s| s.pairs);
         let timed = frame_index;
         frame_index += 1;
-        if timed >= runs || (timed >= 1 && frame_seconds > SLOW_FRAME_SECONDS) {
+        if timing_done(timed, runs, frame_seconds) {
             break pairs;
         }
     };
@@ -686,4 +698,38 @@ fn print_speedup(r: &Report, lights: usize) {
         best.config,
         paper[3].total_ms / paper_best
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shading_column_adds_the_forward_pass_to_the_shading_pass() {
+        let passes = |shading_ms, forward_ms| PassTimes {
+            gbuffer_ms: Some(4.0),
+            shading_ms,
+            forward_ms,
+            upload_ms: Some(0.25),
+        };
+        assert_eq!(shading_column(&passes(Some(2.0), Some(0.5))), Some(2.5));
+        assert_eq!(shading_column(&passes(Some(2.0), None)), Some(2.0));
+        assert_eq!(shading_column(&passes(None, Some(0.5))), None);
+    }
+
+    #[test]
+    fn timing_stops_after_the_runs_or_after_one_timed_frame_over_ten_seconds() {
+        // Fast frames: `runs` timed frames after the warm-up.
+        for runs in [1, 3] {
+            for timed in 0..runs {
+                assert!(!timing_done(timed, runs, 0.5), "{timed} of {runs}");
+            }
+            assert!(timing_done(runs, runs, 0.5), "{runs}");
+        }
+        // A slow first timed frame is the only one; a slow warm-up still gets one timed frame.
+        assert!(timing_done(1, 3, 10.5));
+        assert!(!timing_done(0, 3, 60.0));
+        // "Over 10 s": exactly 10 s is not slow.
+        assert!(!timing_done(1, 3, SLOW_FRAME_SECONDS));
+    }
 }
