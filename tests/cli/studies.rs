@@ -14,7 +14,7 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     let out_dir = dir.join("results");
     let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
         .current_dir(&dir)
-        .args(["paper", "--size", "192x96", "--runs", "1", "--out"])
+        .args(["paper", "--size", "192x96", "--runs", "2", "--out"])
         .arg(&out_dir)
         .output()
         .expect("cannot run the myriad binary");
@@ -35,6 +35,9 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
             "the paper's Table 1",
             "Figure 4",
             "paper_heatmap.png",
+            // The grids' depth slicing, and the paper's where it differs.
+            "assignment: refined; grids: log depth slicing (the paper: uniform, --depth linear); \
+             medians of up to 2 frame(s)",
         ],
     );
     if !sponza {
@@ -47,6 +50,14 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
     ];
     for (table, paper_totals) in paper_rows {
         let start = text.find(table).unwrap();
+        // Our eight columns, one bar, the paper's four: the bar of every line under the
+        // title's "| the paper's Table N".
+        let bar = |line: &str| line.chars().position(|c| c == '|');
+        let title = text[start..].lines().next().unwrap();
+        for line in text[start..].lines().skip(1).take(6) {
+            assert_eq!(line.matches('|').count(), 1, "{table}: {line:?}");
+            assert_eq!(bar(line), bar(title), "{table}: {line:?} under {title:?}");
+        }
         let lines: Vec<&str> = text[start..].lines().skip(3).take(4).collect();
         let configs = ["24x12x16", "24x12x32", "24x12x64", "no clustering"];
         for ((line, config), total) in lines.iter().zip(configs).zip(paper_totals) {
@@ -60,17 +71,29 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
             );
         }
     }
-    // Progress: one result line per configuration (and a start line each).
+    // Progress: one result line per configuration (and a start line each), with its frames.
     let err = stderr(&out);
-    let results = err
+    let results: Vec<&str> = err
         .lines()
         .filter(|l| l.contains("/8] ") && l.contains(": shading "))
-        .count();
-    assert_eq!(results, 8, "{err}");
+        .collect();
+    assert_eq!(results.len(), 8, "{err}");
+    for line in results {
+        assert!(line.contains(" (2 frames)"), "{line}");
+    }
 
     let json = read_json(&out_dir.join("paper.json"));
     let rows = json["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 8);
+    let timestamps = json["timestamps"].as_bool().unwrap();
+    assert_mentions(
+        &text,
+        &[if timestamps {
+            "pass timestamps: yes"
+        } else {
+            "pass timestamps: no"
+        }],
+    );
     for (i, row) in rows.iter().enumerate() {
         let lights = if i < 4 { 10 } else { 1000 };
         assert_eq!(row["lights"], lights, "{row}");
@@ -78,6 +101,24 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
         let shading = row["shading_ms"].as_f64().unwrap();
         let total = row["total_ms"].as_f64().unwrap();
         assert!(shading > 0.0 && total >= shading, "{row}");
+        // The total is our three stages; the G-buffer is a pass of its own where the adapter
+        // times passes, else inside the shading's wall clock.
+        let gbuffer = row["gbuffer_ms"].as_f64();
+        assert_eq!(gbuffer.is_some(), timestamps, "{row}");
+        assert_eq!(
+            row["shading_source"],
+            if timestamps {
+                "timestamps"
+            } else {
+                "wall clock"
+            },
+            "{row}"
+        );
+        let stages = row["assign_ms"].as_f64().unwrap() + gbuffer.unwrap_or(0.0) + shading;
+        assert!((total - stages).abs() <= 1e-9 * total, "{row}");
+        // --runs 2 timed frames each: a frame this small takes far less than the 10 s that
+        // would cut a configuration to one.
+        assert_eq!(row["frames"], 2, "{row}");
         assert!(row["paper"]["total_ms"].as_f64().unwrap() > 0.0, "{row}");
         if i % 4 < 3 {
             let z = [16, 32, 64][i % 4];
@@ -100,7 +141,64 @@ fn paper_reproduces_both_tables_with_json_and_heat_map() {
             );
         }
     }
-    assert_eq!(json["heat_map"]["grid"], serde_json::json!([24, 12, 32]));
+    // No clustering against the best grid, on the paper's total (shading + assignment) for
+    // both; ours from the rows, the paper's from its Tables 1 and 2.
+    for (table, table_rows, paper) in [
+        ("Table 1", &rows[4..], "18.8"),
+        ("Table 2", &rows[..4], "2.5"),
+    ] {
+        let paper_total =
+            |r: &Value| r["shading_ms"].as_f64().unwrap() + r["assign_ms"].as_f64().unwrap();
+        let best = table_rows[..3]
+            .iter()
+            .min_by(|a, b| paper_total(a).total_cmp(&paper_total(b)))
+            .unwrap();
+        let line = text[text.find(table).unwrap()..].lines().nth(7).unwrap();
+        assert_eq!(
+            line,
+            format!(
+                "no clustering vs the best grid, shading + assignment: ours {:.1}x ({}), \
+                 the paper {paper}x",
+                paper_total(&table_rows[3]) / paper_total(best),
+                best["config"].as_str().unwrap()
+            ),
+            "{table}"
+        );
+    }
+    // The light data, left out of the lists as the paper's VRAM leaves it out.
+    let light_bytes = size_of::<myriad::gpu::layout::GpuLight>();
+    assert_eq!(
+        json["light_buffer_bytes"],
+        serde_json::json!([[10, 10 * light_bytes], [1000, 1000 * light_bytes]])
+    );
+    assert_mentions(
+        &text,
+        &[&format!(
+            "({} bytes for 10 lights, {} bytes for 1000 lights)",
+            10 * light_bytes,
+            1000 * light_bytes
+        )],
+    );
+
+    // Figure 4: the lights per pixel of the 1000-light 24x12x32 row, on the paper's scale (0–50)
+    // unless a pixel has more.
+    let heat_map = &json["heat_map"];
+    assert_eq!(heat_map["lights"], 1000);
+    assert_eq!(heat_map["grid"], serde_json::json!([24, 12, 32]));
+    let pixels = &rows[5]["pixels"];
+    assert_eq!(heat_map["max_lights_per_pixel"], pixels["max_lights"]);
+    assert_eq!(heat_map["mean_lights_per_pixel"], pixels["mean_lights"]);
+    let max = u64_field(heat_map, "max_lights_per_pixel");
+    assert_eq!(u64_field(heat_map, "scale_max"), max.max(50));
+    assert_mentions(
+        &text,
+        &[&format!(
+            "Figure 4 (1000 lights, 24x12x32): at most {max} lights per pixel, {:.1} on average \
+             (the paper: fewer than 50); heat map scale 0–{}",
+            heat_map["mean_lights_per_pixel"].as_f64().unwrap(),
+            max.max(50)
+        )],
+    );
     let heat = out_dir.join("paper_heatmap.png");
     assert!(heat.is_file(), "no {}", heat.display());
     assert!(std::fs::metadata(&heat).unwrap().len() > 1000);
