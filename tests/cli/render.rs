@@ -86,6 +86,7 @@ fn no_arguments_runs_the_main_job() {
         "{skip_pairs} pairs with skips"
     );
     assert_mentions(&text, &["clustered+skips", "clusters active"]);
+    assert_main_job_table(&text, &stats);
     // A strategy whose warm-up frame alone passed the time budget (brute force on llvmpipe) is
     // measured on that one frame, and the table says so; every other one on its 5 timed frames
     // after the warm-up, or fewer once the budget is spent, never none.
@@ -104,6 +105,146 @@ fn no_arguments_runs_the_main_job() {
             assert!(!text.contains(&note), "{name}:\n{text}");
         }
     }
+}
+
+/// The main job's printed table says what its stats.json says: a column per strategy
+/// (clustered+skips right after clustered), each row that column's median or count, rounded;
+/// the GPU passes timed exactly where the adapter has timestamps; and the speed-up over brute
+/// force, brute force's shading pass over clustered's, as printed.
+fn assert_main_job_table(text: &str, stats: &Value) {
+    let strategies = stats["strategies"].as_array().unwrap();
+    let mut columns: Vec<&Value> = strategies.iter().collect();
+    columns.insert(1, &stats["with_skips"]["result"]);
+    let names: Vec<&str> = columns
+        .iter()
+        .map(|c| c["shading"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["clustered", "clustered+skips", "tiled", "brute force"]
+    );
+    assert_mentions(
+        text,
+        &["default scene (atrium) — 1000 lights, 1536x768, grid 24x12x16, method refined"],
+    );
+    let timestamps = stats["timestamps"].as_bool().unwrap();
+    let said = if timestamps {
+        "yes"
+    } else {
+        "no (wall clock only)"
+    };
+    assert_mentions(text, &[&format!("; pass timestamps: {said}\n")]);
+
+    // A row: its name in 34 characters, then one cell of 16 per column.
+    let row = |name: &str| -> Vec<String> {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(name) && l.chars().nth(34) == Some(' '))
+            .unwrap_or_else(|| panic!("no row {name:?} in:\n{text}"));
+        let cells: Vec<char> = line.chars().skip(34).collect();
+        cells
+            .chunks(16)
+            .map(|c| c.iter().collect::<String>().trim().to_string())
+            .collect()
+    };
+    let f = |c: &Value, field: &str| c[field].as_f64().unwrap_or_else(|| panic!("{field}: {c}"));
+    assert_eq!(row("stage (median ms)"), names);
+    type Cell = fn(&Value) -> String;
+    let rows: [(&str, Cell); 13] = [
+        ("CPU light assignment", |c| {
+            format!("{:.3}", c["assign_ms"].as_f64().unwrap())
+        }),
+        ("upload (KiB)", |c| {
+            format!("{:.1}", c["upload_bytes"].as_f64().unwrap() / 1024.0)
+        }),
+        ("upload: convert + stage", |c| {
+            format!("{:.3}", c["upload_ms"].as_f64().unwrap())
+        }),
+        ("encode + submit", |c| {
+            format!("{:.3}", c["encode_ms"].as_f64().unwrap())
+        }),
+        ("GPU upload (buffer copies)", |c| {
+            match c["gpu_upload_ms"].as_f64() {
+                Some(v) => format!("{v:.3}"),
+                None => "—".into(),
+            }
+        }),
+        ("GPU G-buffer pass", |c| {
+            match c["gpu_gbuffer_ms"].as_f64() {
+                Some(v) => format!("{v:.2}"),
+                None => "—".into(),
+            }
+        }),
+        ("GPU shading pass", |c| match c["gpu_shading_ms"].as_f64() {
+            Some(v) => format!("{v:.2}"),
+            None => "—".into(),
+        }),
+        ("GPU forward pass", |c| match c["gpu_forward_ms"].as_f64() {
+            Some(v) => format!("{v:.2}"),
+            None => "—".into(),
+        }),
+        ("GPU frame (submit to idle, wall)", |c| {
+            format!("{:.2}", c["gpu_frame_wall_ms"].as_f64().unwrap())
+        }),
+        ("cluster-light pairs", |c| c["pairs"].to_string()),
+        ("lights per pixel: mean", |c| {
+            format!("{:.1}", c["pixels"]["mean_lights"].as_f64().unwrap())
+        }),
+        ("lights per pixel: max", |c| {
+            c["pixels"]["max_lights"].to_string()
+        }),
+        ("lighting calculations skipped", |c| {
+            format!(
+                "{:.1}%",
+                c["pixels"]["skipped_fraction"].as_f64().unwrap() * 100.0
+            )
+        }),
+    ];
+    for (name, cell) in rows {
+        let want: Vec<String> = columns.iter().map(|c| cell(c)).collect();
+        assert_eq!(row(name), want, "row {name:?}");
+    }
+    for c in &columns {
+        let name = &c["shading"];
+        // Encoding is part of the frame's wall time, frame by frame, so of its median too.
+        assert!(
+            f(c, "encode_ms") <= f(c, "gpu_frame_wall_ms"),
+            "{name}: {c}"
+        );
+        // The passes are timed exactly where the adapter has timestamps.
+        for pass in ["gpu_upload_ms", "gpu_gbuffer_ms", "gpu_shading_ms"] {
+            assert_eq!(c[pass].is_number(), timestamps, "{name} {pass}: {c}");
+        }
+    }
+    // The speed-up: brute force's shading pass (its wall time without timestamps) over
+    // clustered's, which over 1000 lights per pixel is far slower.
+    let time = |c: &Value| {
+        c["gpu_shading_ms"]
+            .as_f64()
+            .unwrap_or_else(|| f(c, "gpu_frame_wall_ms"))
+    };
+    let (clustered, brute) = (time(columns[0]), time(columns[3]));
+    let speedup = f(stats, "speedup_vs_brute_force");
+    assert!(
+        (speedup - brute / clustered).abs() <= 1e-9 * speedup,
+        "{speedup} vs {brute} / {clustered}"
+    );
+    // Timed on the GPU, the shading pass over 1000 lights per pixel is far slower (~40x on
+    // llvmpipe); wall times alone also carry each frame's fixed costs.
+    if timestamps {
+        assert!(
+            speedup > 2.0,
+            "brute force {brute} ms, clustered {clustered} ms"
+        );
+    }
+    let mut line = format!(
+        "clustered deferred shading is {speedup:.1}x faster than brute-force deferred (shading pass)"
+    );
+    if timestamps {
+        let skipping = columns[1]["gpu_shading_ms"].as_f64().unwrap();
+        line += &format!("; {:.1}x with clustered+skips", brute / skipping);
+    }
+    assert_mentions(text, &[&format!("{line}\n")]);
 }
 
 /// The headless device follows wgpu's environment variables: with `WGPU_BACKEND` naming only a
