@@ -87,6 +87,27 @@ fn no_arguments_runs_the_main_job() {
     );
     assert_mentions(&text, &["clustered+skips", "clusters active"]);
     assert_main_job_table(&text, &stats);
+    // Each strategy's stages happen one after another within its frames, all within the time
+    // its progress line gives it: at least half its timed frames took each stage's median or
+    // more (the warm-up's own time comes on top).
+    let progress = stderr(&out);
+    for r in strategies {
+        let name = r["shading"].as_str().unwrap();
+        let line = format!("render: {name}: done in ");
+        let done_ms: f64 = progress
+            .lines()
+            .find_map(|l| l.strip_prefix(&line)?.strip_suffix(" ms")?.parse().ok())
+            .unwrap_or_else(|| panic!("no {line:?} in:\n{progress}"));
+        let frames = r["frames"].as_u64().unwrap().div_ceil(2) as f64;
+        let stages: f64 = ["assign_ms", "upload_ms", "gpu_frame_wall_ms"]
+            .iter()
+            .map(|s| r[s].as_f64().unwrap())
+            .sum();
+        assert!(
+            done_ms + 0.05 >= frames * stages,
+            "{name}: done in {done_ms} ms, {frames} frames of {stages} ms: {r}"
+        );
+    }
     // A strategy whose warm-up frame alone passed the time budget (brute force on llvmpipe) is
     // measured on that one frame, and the table says so; every other one on its 5 timed frames
     // after the warm-up, or fewer once the budget is spent, never none.
