@@ -232,9 +232,25 @@ fn assert_main_job_table(text: &str, stats: &Value) {
             f(c, "encode_ms") <= f(c, "gpu_frame_wall_ms"),
             "{name}: {c}"
         );
-        // The passes are timed exactly where the adapter has timestamps.
+        // The passes are timed exactly where the adapter has timestamps, and each runs between
+        // the frame's submission and the GPU going idle, so within its wall time, frame by
+        // frame (the clocks' rates may differ by a hair).
         for pass in ["gpu_upload_ms", "gpu_gbuffer_ms", "gpu_shading_ms"] {
             assert_eq!(c[pass].is_number(), timestamps, "{name} {pass}: {c}");
+        }
+        for pass in [
+            "gpu_upload_ms",
+            "gpu_gbuffer_ms",
+            "gpu_shading_ms",
+            "gpu_forward_ms",
+        ] {
+            if let Some(ms) = c[pass].as_f64() {
+                let wall = f(c, "gpu_frame_wall_ms");
+                assert!(
+                    ms <= wall * 1.001,
+                    "{name} {pass}: {ms} ms in a {wall} ms frame"
+                );
+            }
         }
     }
     // The speed-up: brute force's shading pass (its wall time without timestamps) over
