@@ -50,9 +50,9 @@ pub fn measure() -> Option<CoreLink> {
     if rayon::current_num_threads() < 2 {
         return None;
     }
-    let round_trip_ns = probe(ROUND_TRIPS, |_| ()) * 1e9;
+    let round_trip_ns = probe(ROUND_TRIPS, PROBE_LIMIT, |_| ()) * 1e9;
     let lines: Vec<AtomicU32> = (0..HANDOFF_BYTES / 4).map(|_| AtomicU32::new(0)).collect();
-    let handoff_us = probe(HANDOFFS, |turn| match turn {
+    let handoff_us = probe(HANDOFFS, PROBE_LIMIT, |turn| match turn {
         Turn::Write(i) => {
             for slot in lines.iter().step_by(LINE_STRIDE) {
                 slot.store(i, Ordering::Relaxed);
@@ -79,8 +79,8 @@ enum Turn {
 }
 
 /// Seconds per round of `rounds` turns passed 0 → 1 → 0, each doing `work` first; stops early at
-/// [`PROBE_LIMIT`].
-fn probe(rounds: u32, work: impl Fn(Turn) + Sync) -> f64 {
+/// `limit` ([`PROBE_LIMIT`]).
+fn probe(rounds: u32, limit: Duration, work: impl Fn(Turn) + Sync) -> f64 {
     let baton = AtomicU32::new(0);
     let arrived = AtomicU32::new(0);
     let stop = AtomicBool::new(false);
@@ -106,7 +106,7 @@ fn probe(rounds: u32, work: impl Fn(Turn) + Sync) -> f64 {
                 spin_loop();
                 spins = spins.wrapping_add(1);
                 if spins.is_multiple_of(1024)
-                    && (stop.load(Ordering::Relaxed) || start.elapsed() > PROBE_LIMIT)
+                    && (stop.load(Ordering::Relaxed) || start.elapsed() > limit)
                 {
                     stop.store(true, Ordering::Relaxed);
                     return (ctx.index() == 0).then(|| (start.elapsed(), done));
@@ -140,6 +140,7 @@ fn probe(rounds: u32, work: impl Fn(Turn) + Sync) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Mutex;
 
     fn pool(threads: usize) -> rayon::ThreadPool {
         rayon::ThreadPoolBuilder::new()
@@ -156,18 +157,118 @@ mod tests {
     #[test]
     fn two_threads_report_a_plausible_link() {
         let link = pool(2).install(measure).expect("two threads have a link");
-        // A round trip is at least two cache-line transfers (tens of ns on any machine) and, on a
-        // loaded one, at most the probe's limit.
+        // A round trip is at least two cache-line transfers (tens of ns on any machine), a
+        // hand-off a thousand stores and loads besides (far more than a nanosecond), and either,
+        // on a loaded machine, at most the probe's limit.
         assert!(
             link.round_trip_ns > 1.0 && link.round_trip_ns < PROBE_LIMIT.as_nanos() as f64,
             "{link:?}"
         );
         assert!(
-            link.handoff_us > 0.0 && link.handoff_us < PROBE_LIMIT.as_micros() as f64,
+            link.handoff_us > 1e-3 && link.handoff_us < PROBE_LIMIT.as_micros() as f64,
             "{link:?}"
         );
         // (Which probe takes longer is a timing, not a property: on a shared machine the
         // scheduler's slices decide it — a 9.4 µs round trip beside a 2.4 µs hand-off failed CI
         // once. `myriad bench` prints both.)
+    }
+
+    /// Spins through a turn of `d`, so that two turns at once would overlap.
+    fn busy(d: Duration) {
+        let begun = Instant::now();
+        while begun.elapsed() < d {
+            spin_loop();
+        }
+    }
+
+    /// A turn as the tests record it: the thread that took it, `Some(i)` for `Turn::Write(i)` or
+    /// `None` for `Turn::Read`, and when it began and ended.
+    type Taken = (usize, Option<u32>, Instant, Instant);
+
+    /// Probes `rounds` rounds on two threads, up to `limit`, each turn taking `pause(turn)`: the
+    /// turns in the order they were taken, the seconds per round the probe reported, and how
+    /// long the call took seen from outside.
+    fn traced_probe(
+        rounds: u32,
+        limit: Duration,
+        pause: impl Fn(&Turn) + Sync,
+    ) -> (Vec<Taken>, f64, Duration) {
+        let turns = Mutex::new(Vec::new());
+        let pool = pool(2);
+        let called = Instant::now();
+        let per_round = pool.install(|| {
+            probe(rounds, limit, |turn| {
+                let begun = Instant::now();
+                // Held through the turn: a turn taken while another is under way finds it taken.
+                let mut turns = turns.try_lock().expect("one turn at a time");
+                pause(&turn);
+                let what = match turn {
+                    Turn::Write(i) => Some(i),
+                    Turn::Read => None,
+                };
+                let thread = rayon::current_thread_index().unwrap();
+                turns.push((thread, what, begun, Instant::now()));
+            })
+        });
+        let outside = called.elapsed();
+        (turns.into_inner().unwrap(), per_round, outside)
+    }
+
+    /// Thread 0 writing round `i`, then thread 1 reading it, for each of `rounds` rounds.
+    fn rounds_of_turns(rounds: u32) -> Vec<(usize, Option<u32>)> {
+        (0..rounds)
+            .flat_map(|i| [(0, Some(i)), (1, None)])
+            .collect()
+    }
+
+    #[test]
+    fn the_turn_goes_from_thread_0_to_thread_1_and_back_and_each_round_is_timed_whole() {
+        // A limit no descheduled thread reaches, even on a loaded machine: every round runs.
+        let limit = Duration::from_secs(10);
+        let (turns, per_round, outside) =
+            traced_probe(2, limit, |_| busy(Duration::from_millis(2)));
+        let taken: Vec<_> = turns
+            .iter()
+            .map(|&(thread, what, ..)| (thread, what))
+            .collect();
+        // Thread 0 writes round 0, thread 1 reads it, and so on, one turn at a time.
+        assert_eq!(taken, rounds_of_turns(2));
+        // The time reported for the two rounds spans the turns, the last ending when the turn is
+        // back, and lies within the call.
+        let spanned = turns[3].3 - turns[0].2;
+        let timed = per_round * 2.0;
+        assert!(
+            timed >= spanned.as_secs_f64() - 1e-9 && timed <= outside.as_secs_f64() + 1e-9,
+            "{timed} s for two rounds, turns over {spanned:?}, {outside:?} in all"
+        );
+    }
+
+    #[test]
+    fn a_partner_that_keeps_the_turn_past_the_limit_stops_the_probe_with_thread_0s_time() {
+        // Thread 1 keeps its first turn for twenty times the limit.
+        let kept = 20 * PROBE_LIMIT;
+        let (turns, per_round, _) = traced_probe(3, PROBE_LIMIT, |turn| {
+            if matches!(turn, Turn::Read) {
+                std::thread::sleep(kept);
+            }
+        });
+        let taken: Vec<_> = turns
+            .iter()
+            .map(|&(thread, what, ..)| (thread, what))
+            .collect();
+        // Thread 0 stops waiting at the limit instead of waiting the turn out, and thread 1,
+        // once it passes the turn back, finds the probe stopped: no second round.
+        let first_round = rounds_of_turns(1);
+        assert!(
+            !taken.is_empty() && first_round.starts_with(&taken),
+            "{taken:?}"
+        );
+        // The time is thread 0's: it stopped long before the turn came back, and, once it had
+        // passed the turn (which only a thread 0 descheduled past the limit would not have
+        // done), at the limit.
+        assert!(per_round < kept.as_secs_f64(), "{per_round}");
+        if taken == first_round {
+            assert!(per_round >= PROBE_LIMIT.as_secs_f64(), "{per_round}");
+        }
     }
 }
