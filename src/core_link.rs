@@ -51,25 +51,37 @@ pub fn measure() -> Option<CoreLink> {
         return None;
     }
     let round_trip_ns = probe(ROUND_TRIPS, PROBE_LIMIT, |_| ()) * 1e9;
-    let lines: Vec<AtomicU32> = (0..HANDOFF_BYTES / 4).map(|_| AtomicU32::new(0)).collect();
-    let handoff_us = probe(HANDOFFS, PROBE_LIMIT, |turn| match turn {
-        Turn::Write(i) => {
-            for slot in lines.iter().step_by(LINE_STRIDE) {
-                slot.store(i, Ordering::Relaxed);
-            }
-        }
-        Turn::Read => {
-            let sum = lines
-                .iter()
-                .step_by(LINE_STRIDE)
-                .fold(0u32, |a, s| a.wrapping_add(s.load(Ordering::Relaxed)));
-            std::hint::black_box(sum);
-        }
+    let lines = handoff_lines();
+    let handoff_us = probe(HANDOFFS, PROBE_LIMIT, |turn| {
+        std::hint::black_box(hand_off(&lines, turn));
     }) * 1e6;
     Some(CoreLink {
         round_trip_ns,
         handoff_us,
     })
+}
+
+/// [`HANDOFF_BYTES`] of `u32` slots, all 0.
+fn handoff_lines() -> Vec<AtomicU32> {
+    (0..HANDOFF_BYTES / 4).map(|_| AtomicU32::new(0)).collect()
+}
+
+/// A turn of the hand-off: `Write(i)` stores `i` in the first slot of each cache line of `lines`
+/// (and returns 0); `Read` loads those slots back and returns their (wrapping) sum, for the
+/// caller to keep.
+fn hand_off(lines: &[AtomicU32], turn: Turn) -> u32 {
+    match turn {
+        Turn::Write(i) => {
+            for slot in lines.iter().step_by(LINE_STRIDE) {
+                slot.store(i, Ordering::Relaxed);
+            }
+            0
+        }
+        Turn::Read => lines
+            .iter()
+            .step_by(LINE_STRIDE)
+            .fold(0u32, |a, s| a.wrapping_add(s.load(Ordering::Relaxed))),
+    }
 }
 
 /// What a thread does when the turn reaches it: thread 0 writes (round `i`), thread 1 reads.
@@ -270,5 +282,17 @@ mod tests {
         if taken == first_round {
             assert!(per_round >= PROBE_LIMIT.as_secs_f64(), "{per_round}");
         }
+    }
+
+    #[test]
+    fn a_hand_off_stores_and_loads_one_slot_in_each_of_the_1024_cache_lines_of_64_kib() {
+        let lines = handoff_lines();
+        assert_eq!(lines.len() * 4, 64 * 1024);
+        assert_eq!(hand_off(&lines, Turn::Write(3)), 0);
+        for (k, slot) in lines.iter().enumerate() {
+            let stored = if k % 16 == 0 { 3 } else { 0 };
+            assert_eq!(slot.load(Ordering::Relaxed), stored, "slot {k}");
+        }
+        assert_eq!(hand_off(&lines, Turn::Read), 3 * 1024);
     }
 }
