@@ -168,17 +168,21 @@ mod tests {
 
     #[test]
     fn two_threads_report_a_plausible_link() {
-        let link = pool(2).install(measure).expect("two threads have a link");
+        let pool = pool(2);
+        let called = Instant::now();
+        let link = pool.install(measure).expect("two threads have a link");
+        let outside = called.elapsed();
         // A round trip is at least two cache-line transfers (tens of ns on any machine), a
-        // hand-off a thousand stores and loads besides (far more than a nanosecond), and either,
-        // on a loaded machine, at most the probe's limit.
+        // hand-off a thousand stores and loads besides (far more than a nanosecond), and either
+        // at most the call (not the probe's limit: on a loaded machine a probe can stop well
+        // past it, with no round done).
         assert!(
-            link.round_trip_ns > 1.0 && link.round_trip_ns < PROBE_LIMIT.as_nanos() as f64,
-            "{link:?}"
+            link.round_trip_ns > 1.0 && link.round_trip_ns <= outside.as_nanos() as f64,
+            "{link:?} in {outside:?}"
         );
         assert!(
-            link.handoff_us > 1e-3 && link.handoff_us < PROBE_LIMIT.as_micros() as f64,
-            "{link:?}"
+            link.handoff_us > 1e-3 && link.handoff_us <= outside.as_secs_f64() * 1e6,
+            "{link:?} in {outside:?}"
         );
         // (Which probe takes longer is a timing, not a property: on a shared machine the
         // scheduler's slices decide it — a 9.4 µs round trip beside a 2.4 µs hand-off failed CI
