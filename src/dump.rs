@@ -291,4 +291,20 @@ mod tests {
         dump.offsets[7..].fill(2);
         dump.check_against(&grid(), 2).unwrap();
     }
+
+    #[test]
+    fn an_unknown_key_or_a_whole_number_written_as_a_float_is_not_a_dump() {
+        let text = serde_json::to_string(&one_pair()).unwrap();
+        let read =
+            |text: &str| serde_json::from_str::<AssignmentDump>(text).map_err(|e| e.to_string());
+        assert_eq!(read(&text), Ok(one_pair()));
+        // A misspelt key beside the real one is refused, not ignored.
+        let e = read(&text.replacen('{', r#"{"offests":[],"#, 1)).unwrap_err();
+        assert!(e.contains("unknown field `offests`"), "{e}");
+        // So is a count of 1.0.
+        let float = text.replacen("[0,0,0,0,0,1,", "[0,0,0,0,0,1.0,", 1);
+        assert_ne!(float, text);
+        let e = read(&float).unwrap_err();
+        assert!(e.contains("floating point `1.0`"), "{e}");
+    }
 }
