@@ -225,6 +225,20 @@ fn assert_main_job_table(text: &str, stats: &Value) {
         let want: Vec<String> = columns.iter().map(|c| cell(c)).collect();
         assert_eq!(row(name), want, "row {name:?}");
     }
+    // The skips column's own stages, only in its column (the main job's savings run both).
+    let skipping = &stats["with_skips"];
+    for (name, field, decimals) in [
+        ("depth prepass + read-back (wall)", "prepass_ms", 2),
+        ("depth → fitted range + mask", "mask_ms", 3),
+    ] {
+        let ms = f(skipping, field);
+        assert!(ms > 0.0, "{field}: {skipping}");
+        assert_eq!(
+            row(name),
+            ["—", &format!("{ms:.decimals$}"), "—", "—"],
+            "row {name:?}"
+        );
+    }
     for c in &columns {
         let name = &c["shading"];
         // Encoding is part of the frame's wall time, frame by frame, so of its median too.
@@ -282,6 +296,41 @@ fn assert_main_job_table(text: &str, stats: &Value) {
         line += &format!("; {:.1}x with clustered+skips", brute / skipping);
     }
     assert_mentions(text, &[&format!("{line}\n")]);
+}
+
+/// `--lights` under the model's own light count keeps its first lights and says so; at that
+/// count or over it there is nothing to say (the atrium has 12: 10 points, 2 spots).
+#[test]
+fn render_with_fewer_lights_than_the_model_has_keeps_its_first_and_says_so() {
+    if !gpu_available() {
+        return;
+    }
+    let out_dir = work_dir("render_model_lights").join("out");
+    for (lights, note) in [(5, true), (12, false), (13, false)] {
+        let out = myriad_ok(&[
+            "render",
+            "--lights",
+            &lights.to_string(),
+            "--size",
+            "32x16",
+            "--runs",
+            "1",
+            "--skips",
+            "none",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        let said = format!(
+            "note: --lights {lights} keeps the first {lights} of the model's 12 own lights"
+        );
+        assert_eq!(
+            stderr(&out).contains(&said),
+            note,
+            "{lights}:\n{}",
+            stderr(&out)
+        );
+        assert_eq!(read_json(&out_dir.join("stats.json"))["lights"], lights);
+    }
 }
 
 /// The headless device follows wgpu's environment variables: with `WGPU_BACKEND` naming only a
