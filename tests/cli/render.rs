@@ -85,7 +85,14 @@ fn no_arguments_runs_the_main_job() {
         skip_pairs > 0 && skip_pairs < clustered["pairs"].as_u64().unwrap(),
         "{skip_pairs} pairs with skips"
     );
-    assert_mentions(&text, &["clustered+skips", "clusters active"]);
+    assert_mentions(
+        &text,
+        &[
+            "clustered+skips",
+            "clusters active",
+            &format!("; {lights_assigned} lights assigned;"),
+        ],
+    );
     assert_main_job_table(&text, &stats);
     // Each strategy's stages happen one after another within its frames, all within the time
     // its progress line gives it: at least half its timed frames took each stage's median or
@@ -1090,7 +1097,7 @@ fn render_times_the_prepass_and_mask_of_the_skips_column_only_where_its_savings_
     // `cull` needs no depth buffer at all. One timed frame each: its median is that frame's.
     for (skips, prepass) in [("active", true), ("cull", false)] {
         let out_dir = dir.join(skips);
-        myriad_ok(&[
+        let out = myriad_ok(&[
             "render",
             "--preset",
             "paper",
@@ -1116,12 +1123,27 @@ fn render_times_the_prepass_and_mask_of_the_skips_column_only_where_its_savings_
             ms(&skipping["result"]["assign_ms"]) > 0.0,
             "{skips}: {skipping}"
         );
-        for field in ["prepass_ms", "mask_ms"] {
+        // The table's rows for them: the time where it ran, "—" (not 0.00) where it did not.
+        let text = stdout(&out);
+        for (field, row, decimals) in [
+            ("prepass_ms", "depth prepass + read-back (wall)", 2),
+            ("mask_ms", "depth → fitted range + mask", 3),
+        ] {
             let t = ms(&skipping[field]);
+            let line = text
+                .lines()
+                .find(|l| l.starts_with(row))
+                .unwrap_or_else(|| panic!("no row {row:?} in:\n{text}"));
+            let cells: String = line.chars().skip(34).collect();
             if prepass {
                 assert!(t > 0.0, "{skips}: {field} {t}");
+                assert!(
+                    cells.contains(&format!(" {t:.decimals$}")),
+                    "{skips}: {line}"
+                );
             } else {
                 assert_eq!(t, 0.0, "{skips}: {field}");
+                assert!(!cells.contains(char::is_numeric), "{skips}: {line}");
             }
         }
         assert_eq!(
