@@ -135,6 +135,12 @@ fn no_arguments_runs_the_main_job() {
     }
 }
 
+/// A table cell of a time the adapter may not have measured: `decimals` places, or "—".
+fn timed_cell(ms: &Value, decimals: usize) -> String {
+    ms.as_f64()
+        .map_or("—".to_string(), |v| format!("{v:.decimals$}"))
+}
+
 /// The main job's printed table says what its stats.json says: a column per strategy
 /// (clustered+skips right after clustered), each row that column's median or count, rounded;
 /// the GPU passes timed exactly where the adapter has timestamps; and the speed-up over brute
@@ -192,25 +198,11 @@ fn assert_main_job_table(text: &str, stats: &Value) {
             format!("{:.3}", c["encode_ms"].as_f64().unwrap())
         }),
         ("GPU upload (buffer copies)", |c| {
-            match c["gpu_upload_ms"].as_f64() {
-                Some(v) => format!("{v:.3}"),
-                None => "—".into(),
-            }
+            timed_cell(&c["gpu_upload_ms"], 3)
         }),
-        ("GPU G-buffer pass", |c| {
-            match c["gpu_gbuffer_ms"].as_f64() {
-                Some(v) => format!("{v:.2}"),
-                None => "—".into(),
-            }
-        }),
-        ("GPU shading pass", |c| match c["gpu_shading_ms"].as_f64() {
-            Some(v) => format!("{v:.2}"),
-            None => "—".into(),
-        }),
-        ("GPU forward pass", |c| match c["gpu_forward_ms"].as_f64() {
-            Some(v) => format!("{v:.2}"),
-            None => "—".into(),
-        }),
+        ("GPU G-buffer pass", |c| timed_cell(&c["gpu_gbuffer_ms"], 2)),
+        ("GPU shading pass", |c| timed_cell(&c["gpu_shading_ms"], 2)),
+        ("GPU forward pass", |c| timed_cell(&c["gpu_forward_ms"], 2)),
         ("GPU frame (submit to idle, wall)", |c| {
             format!("{:.2}", c["gpu_frame_wall_ms"].as_f64().unwrap())
         }),
