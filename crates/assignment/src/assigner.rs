@@ -87,9 +87,12 @@ pub enum AppendStrategy {
 pub enum OutsideCalls {
     /// The calling thread works on the frame's tasks and parts itself, alongside one helper job
     /// per other thread of the global pool, spawned as each region starts (`fan_out.rs`): the
-    /// frame starts at once and the caller only waits for the helpers' last items, spinning. It
-    /// costs one small heap allocation per helper and region (rayon boxes a spawned job): at
-    /// most 2 × (threads − 1) per frame, fewer where a region has fewer items to share. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
+    /// frame starts at once and the caller only waits for the helpers' last items, spinning. A
+    /// helper no worker has started by the time the caller has done the rest is not waited for:
+    /// with every worker busy on a long job of the engine's own, the frame runs wholly on the
+    /// caller and returns. It costs small heap allocations: one per helper (rayon boxes a
+    /// spawned job) and one per region with helpers (their shared control block), at most
+    /// 2 × threads per frame, fewer where a region has fewer items to share. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
     /// medians of the `targets` bench, three runs: `binary` 25.1–25.8 µs against 30.9–34.2 µs
     /// handed off, `refined` 38.7–39.8 against 44.2–50.1 µs; 21–23 and 36–44 µs on a worker).
     #[default]
@@ -200,7 +203,7 @@ impl std::error::Error for InvalidFrame {}
 /// (install your own with `ThreadPool::install` to pick the thread count). A thread that calls it
 /// every frame from outside any pool, as an engine's main thread does, works on each parallel
 /// frame itself alongside helper jobs it spawns on the global pool ([`OutsideCalls::Join`]:
-/// one small allocation per helper, rayon's boxed job) or hands the frame to a worker
+/// a few small allocations: rayon's boxed jobs) or hands the frame to a worker
 /// ([`OutsideCalls::HandOff`]: no allocation, two cross-thread wake-ups); made a member of the
 /// pool (`ThreadPoolBuilder::use_current_thread`) it starts its frames as a worker does (README,
 /// "Things to know", has the three timed side by side).

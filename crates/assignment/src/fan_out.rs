@@ -5,29 +5,35 @@
 //! `join` or `par_iter` itself: rayon injects the whole region into the pool and puts the caller
 //! to sleep until a worker has finished it. That costs two cross-thread wake-ups per region and
 //! leaves the caller's core idle. Instead, the caller spawns one helper job per other thread of
-//! the pool (`rayon::in_place_scope`) and works on the region's items itself, taking them one at
-//! a time from a shared queue, as the helpers do once a worker runs them. The region starts at
-//! once; a helper that arrives late only finds less left to do.
+//! the pool (`rayon::spawn`) and works on the region's items itself, taking them one at a time
+//! from a shared queue, as the helpers do once a worker runs them. The region starts at once; a
+//! helper that arrives late only finds less left to do.
 //!
-//! When the queue is empty the caller spins until the items the helpers took are done (a short
-//! wait: at most one item each) before it leaves the scope, so it does not go to sleep on the
-//! scope's latch while the last item finishes. A helper that no worker has started by then still
-//! has to run (it finds the queue empty) before the scope can end: under [`crate::Parallelism`]'s
-//! default pacing a frame only runs in parallel when the workers are awake or the frame is big,
-//! so that wait is rare. The same holds when every worker is busy with someone else's long job:
-//! the caller does the whole region itself and then waits for a worker to pick up its helpers
-//! (which find nothing left) — where a hand-off waits for such a worker to run the whole frame.
-//! (Helpers that borrow nothing, so that the caller could return without them, would need the
-//! frame's borrowed inputs behind `unsafe` lifetime erasure; not done.)
+//! When the queue is empty the caller *closes* the region and spins until the helpers already
+//! inside it have finished their items (a short wait: at most one item each). It never waits for
+//! a helper that has not started: when every worker is busy with someone else's long job (an
+//! engine's asset loading on the global pool), the caller does the whole region itself and
+//! returns, where waiting for its helpers to be picked up would have held the frame until a
+//! worker came free. A helper that starts after the close finds it closed and returns at once.
 //!
-//! The price is one small heap allocation per helper (rayon boxes each spawned job): at most
-//! 2 × (threads − 1) per frame called from outside the pool. A frame job on a worker allocates nothing, and
-//! [`crate::OutsideCalls::HandOff`] keeps outside calls allocation-free too, at the hand-off's
-//! cost. Measured on the 2-vCPU CI machine in the `targets` bench (`paper/*-from-outside`):
-//! see [`crate::OutsideCalls`].
+//! That is why the helpers borrow nothing: they are `'static` jobs holding an [`Arc`] of the
+//! region's control block, and reach the caller's items and work (which live on the caller's
+//! stack) through a type-erased pointer that they follow only while counted inside an open
+//! region. The caller does not leave [`with_caller`] — not even by unwinding — until it has
+//! closed the region and every counted helper has left, so the pointer never dangles while
+//! followed (see [`Control`]). A panic in a helper's item is caught there and raised again on
+//! the caller, as a scope would.
+//!
+//! The price is small heap allocations: the control block once per region and one per helper
+//! (rayon boxes each spawned job), at most 2 × threads per frame called from outside the pool.
+//! A frame job on a worker allocates nothing, and [`crate::OutsideCalls::HandOff`] keeps outside
+//! calls allocation-free too, at the hand-off's cost. Measured on the 2-vCPU CI machine in the
+//! `targets` bench (`paper/*-from-outside`): see [`crate::OutsideCalls`].
 
+use std::any::Any;
+use std::panic::{self, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, PoisonError};
+use std::sync::{Arc, Mutex, PoisonError};
 
 /// How a frame's parallel regions (its tasks, then the append's parts) are run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,11 +59,11 @@ impl FanOut {
 /// `helpers` jobs spawned on the global pool, each taking the next item from the shared queue
 /// until it is empty. Items are taken in order, but which thread runs which depends on timing:
 /// `work` must give the same result wherever an item runs (each of ours writes only its item).
+/// Returns once every item is done, without waiting for helpers no worker has started.
 ///
 /// No more helpers are spawned than there can be items besides the caller's first (the upper
 /// bound of `items.size_hint()`): on a many-core pool a small frame's four tasks would otherwise
-/// wake every worker, and the caller would wait for each to pick up its empty helper. Returns
-/// the helpers spawned.
+/// wake every worker for nothing. Returns the helpers spawned.
 pub(crate) fn with_caller<I, F>(items: I, helpers: usize, work: F) -> usize
 where
     I: Iterator + Send,
@@ -68,56 +74,135 @@ where
         .1
         .map_or(usize::MAX, |n| n.saturating_sub(1));
     let helpers = helpers.min(at_most);
-    let queue = Queue {
+    let region = Region {
         items: Mutex::new(items),
-        taken: AtomicUsize::new(0),
-        done: AtomicUsize::new(0),
+        work,
     };
-    rayon::in_place_scope(|scope| {
-        for _ in 0..helpers {
-            scope.spawn(|_| queue.drain(&work));
-        }
-        queue.drain(&work);
-        queue.wait_for_taken();
+    if helpers == 0 {
+        region.drain();
+        return 0;
+    }
+    let control = Arc::new(Control {
+        region: ErasedRegion {
+            data: std::ptr::from_ref(&region).cast(),
+            drain: drain_erased::<I, F>,
+        },
+        inside: AtomicUsize::new(0),
+        panic: Mutex::new(None),
     });
+    {
+        // Closes the region and waits for the helpers inside it however this block is left,
+        // unwinding included: only then may `region` go.
+        let _close = CloseOnExit(&control);
+        for _ in 0..helpers {
+            let control = Arc::clone(&control);
+            rayon::spawn(move || control.help());
+        }
+        region.drain();
+    }
+    let panicked = control
+        .panic
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .take();
+    if let Some(payload) = panicked {
+        panic::resume_unwind(payload);
+    }
     helpers
 }
 
-/// The items of one region and how many have been taken and finished.
-struct Queue<I> {
+/// The items of one region and the work on each: on the caller's stack.
+struct Region<I, F> {
     items: Mutex<I>,
-    taken: AtomicUsize,
-    done: AtomicUsize,
+    work: F,
 }
 
-impl<I: Iterator> Queue<I> {
+impl<I: Iterator, F: Fn(I::Item)> Region<I, F> {
     /// Takes and works on items until none are left.
-    fn drain(&self, work: &impl Fn(I::Item)) {
+    fn drain(&self) {
         while let Some(item) = self.take() {
-            // Counted as done even if `work` panics, so the caller's wait still ends (and the
-            // scope then re-raises the panic).
-            let _done = Done(&self.done);
-            work(item);
+            (self.work)(item);
         }
     }
 
     fn take(&self) -> Option<I::Item> {
         // A panic in `work` never holds this lock (it is released before `work` runs), so a
-        // poisoned lock only means another thread panicked elsewhere: the scope re-raises that.
-        let mut items = self.items.lock().unwrap_or_else(PoisonError::into_inner);
-        let item = items.next()?;
-        // Counted under the lock: once a thread has found the queue empty, `taken` is final.
-        self.taken.fetch_add(1, Ordering::Relaxed);
-        Some(item)
+        // poisoned lock only means another thread panicked in `next`: that panic is raised.
+        self.items
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .next()
+    }
+}
+
+/// A [`Region`] with its types erased, so that `'static` helper jobs can hold it.
+struct ErasedRegion {
+    data: *const (),
+    /// [`drain_erased`] for the region's types.
+    drain: unsafe fn(*const ()),
+}
+
+// SAFETY: `data` points to a `Region<I, F>` whose `I: Send` and `F: Sync` (`with_caller`'s
+// bounds), so sharing it between threads is sound; helpers follow it only while it lives
+// (`Control::help`).
+unsafe impl Send for ErasedRegion {}
+// SAFETY: as for `Send`: the region itself is `Sync`.
+unsafe impl Sync for ErasedRegion {}
+
+/// # Safety
+/// `data` must point to a live `Region<I, F>`.
+unsafe fn drain_erased<I: Iterator, F: Fn(I::Item)>(data: *const ()) {
+    // SAFETY: the caller's promise.
+    unsafe { (*data.cast::<Region<I, F>>()).drain() }
+}
+
+/// What a region's caller and its helpers share, on the heap so that a helper that starts late
+/// can still read it after the caller has returned.
+///
+/// `inside` counts the helpers inside the region, its top bit set once the caller has closed it.
+/// A helper enters with one `fetch_add`: if the bit was clear, it is counted before the close, and
+/// the caller waits for it to leave; if set, it leaves without following `region`. The count and
+/// the bit live in one atomic, so every entry is ordered before or after the close.
+struct Control {
+    region: ErasedRegion,
+    inside: AtomicUsize,
+    /// The first panic of a helper's item, raised again on the caller.
+    panic: Mutex<Option<Box<dyn Any + Send>>>,
+}
+
+/// `Control::inside`'s bit: the region is closed.
+const CLOSED: usize = 1 << (usize::BITS - 1);
+
+impl Control {
+    /// A helper job: works on the region's items if it is still open.
+    fn help(&self) {
+        if self.inside.fetch_add(1, Ordering::Acquire) & CLOSED != 0 {
+            self.inside.fetch_sub(1, Ordering::Relaxed);
+            return;
+        }
+        // SAFETY: counted inside an open region: the caller is still in `with_caller`, which
+        // does not leave (nor drop the region) until this helper has left.
+        let drained = panic::catch_unwind(AssertUnwindSafe(|| unsafe {
+            (self.region.drain)(self.region.data)
+        }));
+        if let Err(payload) = drained {
+            self.panic
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .get_or_insert(payload);
+        }
+        // Release: the items this helper worked on are visible to the caller once it sees the
+        // count drop.
+        self.inside.fetch_sub(1, Ordering::Release);
     }
 
-    /// Spins until every item taken has been worked on. Called once the queue is empty, so the
-    /// others are each finishing at most one item; after a while it yields its core instead of
-    /// spinning, in case a helper's thread is waiting for one.
-    fn wait_for_taken(&self) {
-        let taken = self.taken.load(Ordering::Relaxed);
+    /// Closes the region to helpers not yet inside and spins until those inside have left.
+    /// Called once the queue is empty, so each is finishing at most one item; after a while it
+    /// yields its core instead of spinning, in case a helper's thread is waiting for one.
+    fn close_and_wait(&self) {
+        self.inside.fetch_or(CLOSED, Ordering::Relaxed);
         let mut spins = 0u32;
-        while self.done.load(Ordering::Acquire) < taken {
+        while self.inside.load(Ordering::Acquire) != CLOSED {
             if spins < SPINS_BEFORE_YIELDING {
                 spins += 1;
                 std::hint::spin_loop();
@@ -128,16 +213,16 @@ impl<I: Iterator> Queue<I> {
     }
 }
 
-/// Adds one to its counter when dropped: an item's end, however it ended.
-struct Done<'a>(&'a AtomicUsize);
+/// Closes its region when dropped: at the region's end, however it ended.
+struct CloseOnExit<'a>(&'a Control);
 
-impl Drop for Done<'_> {
+impl Drop for CloseOnExit<'_> {
     fn drop(&mut self) {
-        self.0.fetch_add(1, Ordering::Release);
+        self.0.close_and_wait();
     }
 }
 
-/// Spins of [`Queue::wait_for_taken`] before it starts yielding (a few microseconds).
+/// Spins of [`Control::close_and_wait`] before it starts yielding (a few microseconds).
 const SPINS_BEFORE_YIELDING: u32 = 4096;
 
 #[cfg(test)]
@@ -190,6 +275,59 @@ mod tests {
             finished.fetch_add(1, Ordering::Release);
         });
         assert_eq!(finished.load(Ordering::Acquire), 4);
+    }
+
+    /// With every worker of the global pool held by someone else's long job, the caller does the
+    /// whole region itself and returns while the workers are still held: it never waits for a
+    /// helper to be picked up. The helpers it spawned run once the workers are free, find the
+    /// region closed and leave without touching it (its items and work are long gone by then).
+    #[test]
+    fn returns_without_waiting_for_helpers_no_worker_has_started() {
+        use std::sync::atomic::AtomicBool;
+        use std::time::{Duration, Instant};
+        let workers = rayon::current_num_threads();
+        let (held, release) = (
+            Arc::new(AtomicUsize::new(0)),
+            Arc::new(AtomicBool::new(false)),
+        );
+        let (released_in_time, blockers_done) =
+            (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
+        for _ in 0..workers {
+            let (held, release) = (Arc::clone(&held), Arc::clone(&release));
+            let (in_time, done) = (Arc::clone(&released_in_time), Arc::clone(&blockers_done));
+            rayon::spawn(move || {
+                held.fetch_add(1, Ordering::AcqRel);
+                // Held until the test releases it, or a minute: a caller that waited for its
+                // helpers would only return after that.
+                let deadline = Instant::now() + Duration::from_secs(60);
+                while !release.load(Ordering::Acquire) && Instant::now() < deadline {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                if release.load(Ordering::Acquire) {
+                    in_time.fetch_add(1, Ordering::AcqRel);
+                }
+                done.fetch_add(1, Ordering::AcqRel);
+            });
+        }
+        while held.load(Ordering::Acquire) < workers {
+            std::thread::yield_now();
+        }
+        // Every worker is held: the region runs on this thread alone.
+        let mut slots = vec![None; 16];
+        let spawned = with_caller(slots.iter_mut(), workers, |slot| {
+            *slot = Some(rayon::current_thread_index());
+        });
+        release.store(true, Ordering::Release);
+        assert_eq!(spawned, workers);
+        assert!(slots.iter().all(|s| *s == Some(None)), "{slots:?}");
+        while blockers_done.load(Ordering::Acquire) < workers {
+            std::thread::yield_now();
+        }
+        assert_eq!(
+            released_in_time.load(Ordering::Acquire),
+            workers,
+            "the caller returned only after the workers' long job ended"
+        );
     }
 
     /// A panic in an item reaches the caller, whether the caller ran it or a helper did (a

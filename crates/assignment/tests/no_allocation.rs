@@ -8,8 +8,8 @@
 //! injected, whoever injects them. So calls from outside are held to that amortised bound, over
 //! many frames: with `OutsideCalls::HandOff` (one job a frame) at most one block per 63 frames;
 //! with the default `OutsideCalls::Join` exactly the helper jobs the frame spawns (rayon boxes
-//! each: one per other thread of the pool and region, capped by the region's items), plus those
-//! blocks. Both are a fixed
+//! each: one per other thread of the pool and region, capped by the region's items) and one
+//! control block per region that has helpers, plus those blocks. Both are a fixed
 //! number per frame, whatever the lights or the grid; the lists and scratch never grow.
 //!
 //! Only the threads that run frames count (the test's own and the pools' workers): the test
@@ -134,7 +134,7 @@ fn steady_state_frames_do_not_allocate() {
     count_on_the_pools(Some(&pool));
     // A parallel frame from outside runs two regions, the tasks and the append's parts (one per
     // depth slice), each spawning one helper per other thread of the global pool, but no more
-    // than the region has items besides the caller's first.
+    // than the region has items besides the caller's first, and their shared control block.
     let others = rayon::current_num_threads() - 1;
     let parts = scene.grid.dims().z as usize;
     for (spots, in_pool, calls) in [
@@ -170,8 +170,12 @@ fn steady_state_frames_do_not_allocate() {
                 (Some(OutsideCalls::HandOff), _) => (0, bound(0, 1)),
                 (Some(OutsideCalls::Join), _) => {
                     let tasks = stats.tasks as usize;
-                    let helper_jobs = others.min(tasks - 1) + others.min(parts - 1);
-                    (FRAMES * helper_jobs, bound(helper_jobs, helper_jobs))
+                    let helpers = [others.min(tasks - 1), others.min(parts - 1)];
+                    let helper_jobs: usize = helpers.iter().sum();
+                    // Each helper is a boxed job; a region with helpers also has its control
+                    // block, which they share.
+                    let per_frame = helper_jobs + helpers.iter().filter(|&&h| h > 0).count();
+                    (FRAMES * per_frame, bound(per_frame, helper_jobs))
                 }
             };
             assert!(

@@ -129,3 +129,90 @@ fn outside_calls_under_a_pair_budget_coarsen_as_one_thread_does() {
     );
     assert!(lists == reference, "lists differ from one thread's");
 }
+
+/// An engine whose global pool is busy with long jobs of its own (asset loading) still gets its
+/// frames from its main thread at once: with every worker held, a parallel frame called from
+/// outside runs wholly on the caller and returns while the workers are still held, its lists
+/// equal to one thread's. (A caller that waited for its helpers to be picked up would return only
+/// when the workers' job ended: here after a minute, which the test would see.)
+#[test]
+fn outside_calls_return_while_every_worker_is_busy() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::time::{Duration, Instant};
+    global_pool();
+    let scene = make_scene(&SceneParams {
+        seed: 13,
+        lights: 6000,
+        ..SceneParams::HD
+    });
+    let input = scene.lights.input(true);
+    let mut reference = LightLists::new();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    one.install(|| {
+        Assigner::new().assign(
+            Method::Refined,
+            &input,
+            &scene.camera,
+            &scene.grid,
+            &mut reference,
+        )
+    });
+
+    let held = Arc::new(AtomicUsize::new(0));
+    let release = Arc::new(AtomicBool::new(false));
+    let released_in_time = Arc::new(AtomicUsize::new(0));
+    let done = Arc::new(AtomicUsize::new(0));
+    for _ in 0..GLOBAL_THREADS {
+        let (held, release) = (Arc::clone(&held), Arc::clone(&release));
+        let (in_time, done) = (Arc::clone(&released_in_time), Arc::clone(&done));
+        rayon::spawn(move || {
+            held.fetch_add(1, Ordering::AcqRel);
+            let deadline = Instant::now() + Duration::from_secs(60);
+            while !release.load(Ordering::Acquire) && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            if release.load(Ordering::Acquire) {
+                in_time.fetch_add(1, Ordering::AcqRel);
+            }
+            done.fetch_add(1, Ordering::AcqRel);
+        });
+    }
+    while held.load(Ordering::Acquire) < GLOBAL_THREADS {
+        std::thread::yield_now();
+    }
+
+    let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
+    let mut lists = LightLists::new();
+    let frames: Vec<_> = (0..3)
+        .map(|_| {
+            let stats = assigner.assign(
+                Method::Refined,
+                &input,
+                &scene.camera,
+                &scene.grid,
+                &mut lists,
+            );
+            (stats, lists == reference)
+        })
+        .collect();
+    release.store(true, Ordering::Release);
+    while done.load(Ordering::Acquire) < GLOBAL_THREADS {
+        std::thread::yield_now();
+    }
+    assert_eq!(
+        released_in_time.load(Ordering::Acquire),
+        GLOBAL_THREADS,
+        "the frames returned only after the workers' job ended"
+    );
+    for (frame, (stats, same)) in frames.iter().enumerate() {
+        assert!(
+            stats.parallel && stats.tasks > 1,
+            "frame {frame} ran serially"
+        );
+        assert!(*same, "frame {frame}'s lists differ from one thread's");
+    }
+}
