@@ -315,10 +315,14 @@ pub fn run_frames(
             for _ in 0..FRAMES_IN_FLIGHT {
                 free_tx.send(empty_work()).expect("channel has room");
             }
-            // Named, so Tracy and debuggers tell it from the rayon workers it hands jobs to.
+            // Named, so Tracy and debuggers tell it from the rayon workers it hands jobs to: for
+            // the OS, and told to Tracy too, which otherwise reads the OS name only when the
+            // profiler asks, and finds none once the thread has ended (a short capture showed
+            // it as a number: `tests/tracy_capture`).
             std::thread::Builder::new()
                 .name("cpu stage".into())
                 .spawn_scoped(s, move || {
+                    crate::profiling::name_this_thread("cpu stage");
                     let mut cpu = CpuStage::new(scene, method, cull);
                     for index in 0..frames {
                         // The renderer hung up (an error): stop.

@@ -1,0 +1,184 @@
+//! The `myriad` binary built with the `tracy` feature, captured over Tracy's own wire protocol by
+//! a minimal server (`capture.rs`) as the profiler would capture it: what a profiling session
+//! receives, not only what the code hands the client. The frame loop's spans arrive named and
+//! nested on their threads, with the threads named; one frame mark per drawn frame; the plots;
+//! and the renderer's GPU track: a named GPU context whose clock is tied to the CPU's, and one
+//! GPU zone per timed pass and frame, each with both timestamps, lasting what the frame's
+//! `GPU … ms` plot says.
+
+mod capture;
+mod protocol;
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+/// A port no other test of this run is using: bound, read, released.
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+#[test]
+fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
+    let port = free_port();
+    let frames = 4;
+    let child = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(["frames", "--lights", "3000", "--size", "128x64"])
+        .args(["--frames", &frames.to_string()])
+        .env("TRACY_NO_EXIT", "1")
+        .env("TRACY_PORT", port.to_string())
+        .env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
+        )
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let captured = capture::capture(port, Duration::from_secs(120));
+    let output = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "myriad frames failed:\n{stdout}\n{stderr}"
+    );
+    let c = captured.unwrap_or_else(|e| panic!("capture: {e}\n{stdout}\n{stderr}"));
+    let drawn = 2 * frames; // `frames` runs its loop sequentially, then pipelined
+    assert_eq!(c.program, "myriad");
+    assert!(c.nesting_errors.is_empty(), "{:?}", c.nesting_errors);
+    assert_eq!(c.frame_marks, drawn, "one frame mark per drawn frame");
+
+    // Threads: Tracy names the thread that started the client "Main thread" (whatever the OS
+    // calls it); the pipelined loop's worker and the pool's threads by their own names.
+    let threads: Vec<&str> = c.thread_names.values().map(String::as_str).collect();
+    for name in ["Main thread", "cpu stage"] {
+        assert!(threads.contains(&name), "no thread {name:?} in {threads:?}");
+    }
+    assert!(
+        threads.iter().any(|t| t.starts_with("rayon ")),
+        "no rayon worker named in {threads:?}"
+    );
+
+    // Spans: once per drawn frame for the frame's stages, on the threads that run them.
+    let on = |name: &str| c.zone_threads.get(name).cloned().unwrap_or_default();
+    for name in [
+        "animate orbits",
+        "cull lights",
+        "gather visible lights",
+        "cpu stage: animate and assign",
+        "assign on one grid",
+        "append",
+        "upload lights and lists",
+        "encode and submit",
+        "encode pass: G-buffer",
+        "encode pass: deferred shading",
+        "encode pass: forward",
+        "wait for GPU",
+    ] {
+        assert_eq!(c.zones.get(name), Some(&drawn), "{name}: {:?}", c.zones);
+    }
+    assert!(on("cpu stage: animate and assign").contains("cpu stage"));
+    assert!(on("wait for GPU").iter().all(|t| t == "Main thread"));
+    assert!(
+        on("assign task").iter().any(|t| t.starts_with("rayon ")),
+        "no assign task on a pool worker: {:?}",
+        on("assign task")
+    );
+    let tasks = c.zones["assign task"];
+    assert!(tasks >= 2 * drawn, "{tasks} tasks in {drawn} frames");
+    let blocks = c.zones["phase: view and cull"];
+    assert!(blocks >= tasks);
+    for phase in ["phase: z", "phase: x", "phase: y", "phase: emit"] {
+        assert_eq!(c.zones.get(phase), Some(&blocks), "{phase}");
+    }
+    assert!(c.zones.get("build pipeline").is_some_and(|&n| n >= 1));
+
+    // Plots: one value per drawn frame each.
+    for name in [
+        "visible lights",
+        "cluster-light pairs",
+        "bytes uploaded",
+        "GPU upload ms",
+        "GPU G-buffer ms",
+        "GPU shading ms",
+        "GPU forward ms",
+    ] {
+        let values = c.plots.get(name).map(Vec::len);
+        assert_eq!(values, Some(drawn), "plot {name}: {:?}", c.plots.keys());
+    }
+    assert!(
+        c.plots["visible lights"]
+            .iter()
+            .all(|&v| v > 0.0 && v <= 3000.0)
+    );
+    assert!(c.plots["cluster-light pairs"].iter().all(|&v| v > 0.0));
+
+    // The GPU track: one context, named, with a positive clock period.
+    assert_eq!(c.gpu_contexts.len(), 1, "{:?}", c.gpu_contexts);
+    let gpu = &c.gpu_contexts[&0];
+    assert_eq!(gpu.name.as_deref(), Some("myriad renderer"));
+    assert!(gpu.period_ns > 0.0);
+    assert_eq!(c.stray_gpu_times, 0, "GPU times for no zone");
+
+    // A zone per timed pass and frame, in the order the GPU ran them, each with both
+    // timestamps; each lasts what its frame's plot says (both are the same two timestamps).
+    let passes = [
+        ("GPU: upload copies", "GPU upload ms"),
+        ("GPU: G-buffer pass", "GPU G-buffer ms"),
+        ("GPU: shading pass", "GPU shading ms"),
+        ("GPU: forward pass", "GPU forward ms"),
+    ];
+    assert_eq!(
+        c.gpu_zones.len(),
+        passes.len() * drawn,
+        "{:#?}",
+        c.gpu_zones
+    );
+    let mut previous_end = i64::MIN;
+    for (i, zone) in c.gpu_zones.iter().enumerate() {
+        let (frame, (name, plot)) = (i / passes.len(), passes[i % passes.len()]);
+        assert_eq!(zone.name, name, "zone {i}");
+        let (begin, end) = (zone.begin.unwrap(), zone.end.unwrap());
+        assert!(previous_end <= begin && begin <= end, "zone {i}: {zone:?}");
+        previous_end = end;
+        let ms = (end - begin) as f64 * gpu.period_ns as f64 / 1e6;
+        let plotted = c.plots[plot][frame];
+        assert!(
+            (ms - plotted).abs() <= 1e-6 + 1e-6 * plotted,
+            "{name} of frame {frame}: {ms} ms as a zone, {plotted} ms plotted"
+        );
+    }
+
+    // The clock tie: on the CPU's timeline, as the profiler draws them, each frame's GPU zones
+    // lie between the start of the main thread's `encode and submit` (which submits them) and
+    // the end of its `wait for GPU`. The tie is off by at most half its own wait; llvmpipe's
+    // frames here last milliseconds, so a tie off by the wait, or a drifting one, shows.
+    let on_main = |name: &str| -> Vec<&capture::CpuZone> {
+        c.cpu_zones
+            .iter()
+            .filter(|z| z.name == name && z.thread == "Main thread")
+            .collect()
+    };
+    let (submits, waits) = (on_main("encode and submit"), on_main("wait for GPU"));
+    for (frame, zones) in c.gpu_zones.chunks(passes.len()).enumerate() {
+        let from = submits[frame].begin_ns;
+        let to = waits[frame].end_ns.unwrap();
+        for zone in zones {
+            let (begin, end) = (zone.cpu_begin_ns.unwrap(), zone.cpu_end_ns.unwrap());
+            assert!(
+                from <= begin && end <= to,
+                "frame {frame}: {} at {:.3}..{:.3} ms, outside its submission and wait \
+                 {:.3}..{:.3} ms (from the first submission)",
+                zone.name,
+                (begin - submits[0].begin_ns) / 1e6,
+                (end - submits[0].begin_ns) / 1e6,
+                (from - submits[0].begin_ns) / 1e6,
+                (to - submits[0].begin_ns) / 1e6,
+            );
+        }
+    }
+}
