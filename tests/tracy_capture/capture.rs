@@ -111,6 +111,8 @@ struct State {
     source_location_answers: VecDeque<u64>,
     outstanding: usize,
     terminated: bool,
+    /// Threads seen, whose names are asked for at the end.
+    threads_to_name: Vec<u32>,
 }
 
 /// Connects to the client on `port` (retrying while it starts), then reads until it has sent
@@ -303,8 +305,12 @@ impl State {
             THREAD_CONTEXT => {
                 self.thread = u32_at(body, 1);
                 self.thread_time = 0;
-                if !self.capture.thread_names.contains_key(&self.thread) {
-                    self.ask(query::THREAD_STRING, self.thread as u64);
+                // Asked only once the client has terminated, as a profiler reading a
+                // finished capture finds them: a thread that has ended by then is known only
+                // by the name it told Tracy (its OS name is gone), so a short-lived thread
+                // that did not is caught every time, not only when it ends first.
+                if !self.threads_to_name.contains(&self.thread) {
+                    self.threads_to_name.push(self.thread);
                 }
             }
             ZONE_BEGIN | ZONE_BEGIN_CALLSTACK => self.zone_begin(
@@ -477,7 +483,12 @@ impl State {
             MESSAGE_APP_INFO => {
                 self.single_string = None;
             }
-            TERMINATE => self.terminated = true,
+            TERMINATE => {
+                self.terminated = true;
+                for thread in std::mem::take(&mut self.threads_to_name) {
+                    self.ask(query::THREAD_STRING, thread as u64);
+                }
+            }
             CRASH | CRASH_REPORT => return Err("the client reported a crash".into()),
             _ => {}
         }
