@@ -5,7 +5,7 @@
 //! timestamps. It reads what a profiler would receive; drawing it is Tracy's.
 
 use super::protocol::{self, Trailer, event, query};
-use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet, VecDeque};
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
@@ -54,7 +54,7 @@ pub struct Capture {
     pub cpu_zones: Vec<CpuZone>,
     /// CPU zones begun, by name, with the names of the threads they ran on.
     pub zones: BTreeMap<String, usize>,
-    pub zone_threads: BTreeMap<String, std::collections::BTreeSet<String>>,
+    pub zone_threads: BTreeMap<String, BTreeSet<String>>,
     /// Zone ends without a begin on their thread, and zones left open at the end.
     pub nesting_errors: Vec<String>,
     pub thread_names: BTreeMap<u32, String>,
@@ -74,6 +74,14 @@ enum ZoneName {
     Sent(String),
 }
 
+/// A CPU zone as it arrives: its name source, thread, and begin and end times (client units).
+struct ZoneRecord {
+    name: ZoneName,
+    thread: u32,
+    begin: i64,
+    end: Option<i64>,
+}
+
 /// A source location the client described: pointers to its name and function.
 #[derive(Clone, Copy, Debug)]
 struct SourceLocation {
@@ -88,7 +96,7 @@ struct State {
     /// Open CPU zones per thread.
     open: HashMap<u32, Vec<usize>>,
     /// Every CPU zone begun: its name source, thread, and begin and end times.
-    zones: Vec<(ZoneName, u32, i64, Option<i64>)>,
+    zones: Vec<ZoneRecord>,
     /// The thread's time reference: its events carry the difference to the previous one.
     thread_time: i64,
     gpu_names: Vec<ZoneName>,
@@ -107,7 +115,7 @@ struct State {
     gpu_queries: HashMap<(u8, u16), (usize, bool)>,
     /// Queries to send, and those sent whose answers have not arrived.
     to_ask: VecDeque<(u8, u64)>,
-    asked: HashMap<(u8, u64), ()>,
+    asked: HashSet<(u8, u64)>,
     source_location_answers: VecDeque<u64>,
     outstanding: usize,
     terminated: bool,
@@ -122,8 +130,7 @@ pub fn capture(port: u16, patience: Duration) -> Result<Capture, String> {
     let mut stream = loop {
         match TcpStream::connect(("127.0.0.1", port)) {
             Ok(s) => break s,
-            Err(e) if start.elapsed() < patience => {
-                let _ = e;
+            Err(_) if start.elapsed() < patience => {
                 std::thread::sleep(Duration::from_millis(20));
             }
             Err(e) => return Err(format!("no Tracy client on port {port}: {e}")),
@@ -237,7 +244,7 @@ fn f64_at(b: &[u8], at: usize) -> f64 {
 impl State {
     /// Queues a question once per (kind, pointer).
     fn ask(&mut self, kind: u8, ptr: u64) {
-        if ptr != 0 && self.asked.insert((kind, ptr), ()).is_none() {
+        if ptr != 0 && self.asked.insert((kind, ptr)) {
             self.to_ask.push_back((kind, ptr));
         }
     }
@@ -340,7 +347,7 @@ impl State {
                 self.thread_time += delta;
                 let thread = self.thread;
                 match self.open.entry(thread).or_default().pop() {
-                    Some(z) => self.zones[z].3 = Some(self.thread_time),
+                    Some(z) => self.zones[z].end = Some(self.thread_time),
                     None => self
                         .capture
                         .nesting_errors
@@ -500,7 +507,12 @@ impl State {
         if let ZoneName::Static(ptr) = name {
             self.ask(query::SOURCE_LOCATION, ptr);
         }
-        self.zones.push((name, self.thread, self.thread_time, None));
+        self.zones.push(ZoneRecord {
+            name,
+            thread: self.thread,
+            begin: self.thread_time,
+            end: None,
+        });
         let index = self.zones.len() - 1;
         self.open.entry(self.thread).or_default().push(index);
     }
@@ -545,7 +557,13 @@ impl State {
     }
 
     fn finish(mut self) -> Capture {
-        for (name, thread, begin, end) in &self.zones {
+        for ZoneRecord {
+            name,
+            thread,
+            begin,
+            end,
+        } in &self.zones
+        {
             let name = self.name_of(name);
             let thread = self
                 .capture
