@@ -21,6 +21,15 @@ fn global_pool() {
     assert_eq!(rayon::current_num_threads(), GLOBAL_THREADS);
 }
 
+/// Runs `f` on a pool of one thread: the reference every outside call's lists must equal.
+fn on_one_thread<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 /// Points and spots, every splitting method, full and masked grids: the lists from outside equal
 /// a one-thread pool's, frame after frame (the same assigner reused, as an engine does).
 #[test]
@@ -35,16 +44,12 @@ fn outside_calls_list_what_one_thread_lists() {
     for c in (0..scene.grid.cluster_count() as u32).filter(|c| c % 3 != 1) {
         mask.mark(c);
     }
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
     for spots in [false, true] {
         let input = scene.lights.input(spots);
         for method in [Method::Binary, Method::Refined, Method::Cone] {
             for active in [None, Some(&mask)] {
                 let mut reference = LightLists::new();
-                one.install(|| {
+                on_one_thread(|| {
                     Assigner::new().assign_active(
                         method,
                         &input,
@@ -100,11 +105,7 @@ fn outside_calls_under_a_pair_budget_coarsen_as_one_thread_does() {
     let input = scene.lights.input(false);
     let budgeted = || Assigner::new().with_pair_budget(30_000);
     let mut reference = LightLists::new();
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let want = one.install(|| {
+    let want = on_one_thread(|| {
         budgeted().assign(
             Method::Refined,
             &input,
@@ -148,11 +149,7 @@ fn outside_calls_return_while_every_worker_is_busy() {
     });
     let input = scene.lights.input(true);
     let mut reference = LightLists::new();
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    one.install(|| {
+    on_one_thread(|| {
         Assigner::new().assign(
             Method::Refined,
             &input,
