@@ -278,7 +278,10 @@ impl FrameSamples {
         report: &FrameReport,
     ) -> Result<()> {
         let t = Instant::now();
-        viewer.ctx.wait_idle()?;
+        {
+            myriad::profile_span!("wait for GPU");
+            viewer.ctx.wait_idle()?;
+        }
         self.assign.push(cpu_seconds * 1e3);
         self.upload.push(report.upload_seconds * 1e3);
         self.encode.push(report.encode_seconds * 1e3);

@@ -4,7 +4,7 @@
 //! nested on their threads, with the threads named; one frame mark per drawn frame; the plots;
 //! and the renderer's GPU track: a named GPU context whose clock is tied to the CPU's, and one
 //! GPU zone per timed pass and frame, each with both timestamps, lasting what the frame's
-//! `GPU … ms` plot says.
+//! `GPU … ms` plot says; the same for the main job (`myriad render`) with its depth prepass.
 
 mod capture;
 mod protocol;
@@ -21,13 +21,12 @@ fn free_port() -> u16 {
         .port()
 }
 
-#[test]
-fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
+/// Runs `myriad` with `args` under a capture, and returns what the capture received and what the
+/// command printed. The command must succeed.
+fn captured_run(args: &[&str]) -> (capture::Capture, String) {
     let port = free_port();
-    let frames = 4;
     let child = Command::new(env!("CARGO_BIN_EXE_myriad"))
-        .args(["frames", "--lights", "3000", "--size", "128x64"])
-        .args(["--frames", &frames.to_string()])
+        .args(args)
         .env("TRACY_NO_EXIT", "1")
         .env("TRACY_PORT", port.to_string())
         .env(
@@ -40,13 +39,28 @@ fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
         .unwrap();
     let captured = capture::capture(port, Duration::from_secs(120));
     let output = child.wait_with_output().unwrap();
-    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
         output.status.success(),
-        "myriad frames failed:\n{stdout}\n{stderr}"
+        "myriad {args:?} failed:\n{stdout}\n{stderr}"
     );
     let c = captured.unwrap_or_else(|e| panic!("capture: {e}\n{stdout}\n{stderr}"));
+    (c, stdout)
+}
+
+#[test]
+fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
+    let frames = 4;
+    let (c, _) = captured_run(&[
+        "frames",
+        "--lights",
+        "3000",
+        "--size",
+        "128x64",
+        "--frames",
+        &frames.to_string(),
+    ]);
     let drawn = 2 * frames; // `frames` runs its loop sequentially, then pipelined
     assert_eq!(c.program, "myriad");
     assert!(c.nesting_errors.is_empty(), "{:?}", c.nesting_errors);
@@ -178,6 +192,94 @@ fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
                 (end - submits[0].begin_ns) / 1e6,
                 (from - submits[0].begin_ns) / 1e6,
                 (to - submits[0].begin_ns) / 1e6,
+            );
+        }
+    }
+}
+
+/// The main job (`myriad render`, four shading columns, the skips column's depth prepass
+/// included): its spans nest, each timed frame's wait is a span, each timed frame has its four
+/// GPU zones (the skips column's G-buffer is the prepass's, drawn before the frame's upload),
+/// lasting what the frame's plots say, and on the CPU's timeline each frame's zones lie after
+/// the previous timed frame's wait and within its own.
+#[test]
+fn a_profiler_receives_the_main_job_with_its_prepass() {
+    let out = std::env::temp_dir().join(format!("myriad-tracy-render-{}", std::process::id()));
+    let (c, stdout) = captured_run(&[
+        "render",
+        "--lights",
+        "300",
+        "--size",
+        "160x80",
+        "--runs",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let _ = std::fs::remove_dir_all(&out);
+    assert!(c.nesting_errors.is_empty(), "{:?}", c.nesting_errors);
+    assert_eq!(c.stray_gpu_times, 0);
+    // Four columns, a warm-up and two timed frames each.
+    let timed = 4 * 3;
+    for name in [
+        "depth prepass and read-back",
+        "prepass: encode and submit",
+        "fitted depth and active clusters",
+        "skipping frame",
+        "viewer: assign",
+        "encode and submit",
+    ] {
+        assert!(c.zones.contains_key(name), "no span {name}: {:?}", c.zones);
+    }
+    assert_eq!(c.zones.get("wait for GPU"), Some(&timed), "{stdout}");
+    assert!(c.frame_marks >= timed, "{} frame marks", c.frame_marks);
+    let passes = [
+        ("GPU: upload copies", "GPU upload ms"),
+        ("GPU: G-buffer pass", "GPU G-buffer ms"),
+        ("GPU: shading pass", "GPU shading ms"),
+        ("GPU: forward pass", "GPU forward ms"),
+    ];
+    for (_, plot) in passes {
+        assert_eq!(c.plots.get(plot).map(Vec::len), Some(timed), "{plot}");
+    }
+    assert_eq!(c.gpu_zones.len(), passes.len() * timed);
+    let gpu = &c.gpu_contexts[&0];
+    let waits: Vec<_> = c
+        .cpu_zones
+        .iter()
+        .filter(|z| z.name == "wait for GPU")
+        .collect();
+    let mut previous_end = i64::MIN;
+    for (frame, zones) in c.gpu_zones.chunks(passes.len()).enumerate() {
+        let mut names: Vec<&str> = zones.iter().map(|z| z.name.as_str()).collect();
+        names.sort_unstable();
+        let mut want: Vec<&str> = passes.iter().map(|p| p.0).collect();
+        want.sort_unstable();
+        assert_eq!(names, want, "frame {frame}");
+        let after = frame
+            .checked_sub(1)
+            .map_or(f64::MIN, |k| waits[k].end_ns.unwrap());
+        let until = waits[frame].end_ns.unwrap();
+        for zone in zones {
+            let (begin, end) = (zone.begin.unwrap(), zone.end.unwrap());
+            assert!(previous_end <= begin && begin <= end, "{zone:?}");
+            previous_end = end;
+            let plot = passes.iter().find(|p| p.0 == zone.name).unwrap().1;
+            let ms = (end - begin) as f64 * gpu.period_ns as f64 / 1e6;
+            let plotted = c.plots[plot][frame];
+            assert!(
+                (ms - plotted).abs() <= 1e-6 + 1e-6 * plotted,
+                "{} of frame {frame}: {ms} ms as a zone, {plotted} ms plotted",
+                zone.name
+            );
+            let (on_cpu_begin, on_cpu_end) = (zone.cpu_begin_ns.unwrap(), zone.cpu_end_ns.unwrap());
+            assert!(
+                after <= on_cpu_begin && on_cpu_end <= until,
+                "frame {frame}: {} outside the time after the last wait and until its own end \
+                 ({:.3} ms early, {:.3} ms late)",
+                zone.name,
+                (after - on_cpu_begin) / 1e6,
+                (on_cpu_end - until) / 1e6
             );
         }
     }
