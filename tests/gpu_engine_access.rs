@@ -344,6 +344,141 @@ fn a_unorm_target_gets_the_image_of_an_srgb_target() {
     }
 }
 
+/// An engine shades the same lights into targets of several formats (an HDR view, an sRGB
+/// swap chain, an editor thumbnail): one renderer draws them all, each format's pipelines built
+/// once, and every image is byte for byte the one a renderer made for that format draws. Before,
+/// a renderer drew only into its own format, so each format needed a renderer of its own, with
+/// its own copy of the lights, lists and G-buffer.
+#[test]
+fn one_renderer_draws_into_targets_of_several_formats() {
+    use myriad::gpu::{FrameDesc, HEADLESS_FORMAT, read_texels};
+    use myriad::render::{cluster_lists, light_columns};
+    use wgpu::TextureFormat as F;
+    let Some((scene, viewer)) = viewer_after_one_frame(96, 48) else {
+        return;
+    };
+    let ctx = &viewer.ctx;
+    // The glass too: the forward pass blends into each format.
+    assert!(scene.has_blended());
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let target = |format, view_formats: &[F]| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("engine target"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats,
+        })
+    };
+    let lists = viewer.lists().clone();
+    let frame = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        cluster_lists(&lists),
+    );
+    let gpu_scene = &viewer.scene;
+    let draw = |renderer: &mut Renderer, view: &wgpu::TextureView| {
+        renderer.render(ctx, gpu_scene, &frame, view).unwrap();
+    };
+    assert_eq!(HEADLESS_FORMAT, F::Rgba8UnormSrgb);
+    let mut shared = Renderer::try_new(ctx, HEADLESS_FORMAT).unwrap();
+    // Built ahead for a second format: a frame into it builds nothing more.
+    assert_eq!(
+        shared
+            .prepare_for(ctx, gpu_scene, &frame, F::Rgba16Float)
+            .unwrap(),
+        2,
+        "deferred and forward for Rgba16Float"
+    );
+    let formats = [
+        F::Rgba8UnormSrgb,
+        F::Rgba16Float,
+        F::Rgba8Unorm,
+        F::Bgra8UnormSrgb,
+    ];
+    let mut images = Vec::new();
+    for format in formats {
+        let texture = target(format, &[]);
+        let view = texture.create_view(&Default::default());
+        let before = shared.pipelines_built();
+        draw(&mut shared, &view);
+        let built = shared.pipelines_built() - before;
+        // `shared` is new: each format's deferred and forward pipelines are built by its first
+        // frame, but Rgba16Float's, prepared above.
+        let want = if format == F::Rgba16Float { 0 } else { 2 };
+        assert_eq!(
+            built, want,
+            "{format:?}: pipelines built by its first frame"
+        );
+        let image = read_texels(ctx, &texture).unwrap();
+        // The same frame from a renderer made for the format alone.
+        let mut own = Renderer::try_new(ctx, format).unwrap();
+        let alone = target(format, &[]);
+        draw(&mut own, &alone.create_view(&Default::default()));
+        assert!(
+            image == read_texels(ctx, &alone).unwrap(),
+            "{format:?}: not the image of a renderer made for it"
+        );
+        images.push((format, texture, image));
+    }
+    // The images show the scene, and BGRA's is RGBA's swapped (the same hardware encoding).
+    // (`a_unorm_target_gets_the_image_of_an_srgb_target` compares Rgba8Unorm's with sRGB's.)
+    let srgb = &images[0].2;
+    let distinct: std::collections::HashSet<&[u8]> = srgb.chunks(4).collect();
+    assert!(distinct.len() > 5, "{} colours", distinct.len());
+    let bgra = &images[3].2;
+    assert!(
+        srgb.chunks(4)
+            .zip(bgra.chunks(4))
+            .all(|(rgba, bgra)| rgba == [bgra[2], bgra[1], bgra[0], bgra[3]]),
+        "Bgra8UnormSrgb is not Rgba8UnormSrgb's image swapped"
+    );
+    assert_eq!(
+        images[1].2.len(),
+        srgb.len() * 2,
+        "Rgba16Float: 8 bytes a pixel"
+    );
+    // Back to the first target: drawn again, the same bytes (no format's state leaks into
+    // another's frame).
+    let (_, first, first_image) = &images[0];
+    draw(&mut shared, &first.create_view(&Default::default()));
+    assert_eq!(&read_texels(ctx, first).unwrap(), first_image);
+
+    // Views that reinterpret their texture's sRGB-ness are drawn in the view's format: a linear
+    // texture seen as sRGB gives the sRGB image, an sRGB texture seen as linear the UNORM one.
+    for (texture_format, view_format, want) in [
+        (F::Rgba8Unorm, F::Rgba8UnormSrgb, 0),
+        (F::Rgba8UnormSrgb, F::Rgba8Unorm, 2),
+    ] {
+        let texture = target(texture_format, &[view_format]);
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(view_format),
+            ..Default::default()
+        });
+        draw(&mut shared, &view);
+        assert!(
+            read_texels(ctx, &texture).unwrap() == images[want].2,
+            "a {texture_format:?} texture seen as {view_format:?}: not {:?}'s image",
+            images[want].0
+        );
+    }
+    // A format the passes cannot draw is refused ahead as in a frame.
+    let refused = shared.prepare_for(ctx, gpu_scene, &frame, F::Rgba8Uint);
+    assert!(
+        matches!(&refused, Err(GpuError::InvalidInput(m)) if m.contains("cannot draw into")),
+        "{:?}",
+        refused.map(drop)
+    );
+}
+
 /// An engine with two devices (a window's and a headless one) can hand a renderer the other
 /// device's context or scene by mistake: wgpu panicked inside the frame ("Cannot get
 /// non-existent resource", audit); every call that takes a context refuses it instead, and the

@@ -768,8 +768,9 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
         Err(GpuError::InvalidInput(message)) => assert!(message.contains(want), "{message}"),
         other => panic!("want an error with {want:?}, got {other:?}"),
     };
-    // A swap-chain format the renderer was not built for, and a texture it cannot draw into:
-    // both were wgpu validation panics inside a function returning Result.
+    // A texture of a format the passes cannot draw, and one that is no render attachment: both
+    // were wgpu validation panics inside a function returning Result. (Another format than the
+    // renderer's own is drawn: `one_renderer_draws_into_targets_of_several_formats`.)
     let lists = viewer.lists().clone();
     let mut render_into = |view: &wgpu::TextureView, heat_map: bool| {
         let frame = FrameDesc {
@@ -786,57 +787,40 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
             .render(&viewer.ctx, &viewer.scene, &frame, view);
         result.map(|_| ())
     };
-    for target in [
-        texture(wgpu::TextureFormat::Bgra8Unorm, attachment),
-        texture(myriad::gpu::HEADLESS_FORMAT, wgpu::TextureUsages::COPY_SRC),
+    for (target, want) in [
+        (
+            texture(wgpu::TextureFormat::Rgba8Uint, attachment),
+            "cannot draw into Rgba8Uint",
+        ),
+        (
+            texture(myriad::gpu::HEADLESS_FORMAT, wgpu::TextureUsages::COPY_SRC),
+            "the renderer draws into RENDER_ATTACHMENT",
+        ),
     ] {
         let view = target.create_view(&Default::default());
-        invalid(render_into(&view, false), "the renderer draws into");
-    }
-    // Targets only wgpu could tell apart panicked inside it mid-frame (audit f3): a texture
-    // whose sRGB-ness differs from the renderer's format, a view reinterpreting it, and a
-    // multisampled texture.
-    let srgb = myriad::gpu::HEADLESS_FORMAT;
-    let linear = srgb.remove_srgb_suffix();
-    assert_ne!(srgb, linear, "the headless format is an sRGB one");
-    let described = |format, view_formats: &[wgpu::TextureFormat], sample_count| {
-        viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("target the renderer must refuse"),
-            size: wgpu::Extent3d {
-                width: 64,
-                height: 32,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats,
-        })
-    };
-    let linear_texture = described(linear, &[], 1);
-    let srgb_texture = described(srgb, &[linear], 1);
-    let msaa_texture = described(srgb, &[], 4);
-    for (view, want) in [
-        (
-            linear_texture.create_view(&Default::default()),
-            "cannot be drawn into",
-        ),
-        (
-            srgb_texture.create_view(&wgpu::TextureViewDescriptor {
-                format: Some(linear),
-                ..Default::default()
-            }),
-            "cannot be drawn into",
-        ),
-        (
-            msaa_texture.create_view(&Default::default()),
-            "4 samples per pixel",
-        ),
-    ] {
         invalid(render_into(&view, false), want);
     }
+    // Targets only wgpu could tell apart panicked inside it mid-frame (audit f3): a
+    // multisampled texture, and (below) a view of a lower mip.
+    let srgb = myriad::gpu::HEADLESS_FORMAT;
+    let msaa_texture = viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("target the renderer must refuse"),
+        size: wgpu::Extent3d {
+            width: 64,
+            height: 32,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 4,
+        dimension: wgpu::TextureDimension::D2,
+        format: srgb,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    invalid(
+        render_into(&msaa_texture.create_view(&Default::default()), false),
+        "4 samples per pixel",
+    );
     // A view of a lower mip of a texture of the camera's size: without a forward pass (a heat
     // map) it shaded 32x16 pixels as if they were 64x32, with Ok.
     let mipped = viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -893,7 +877,7 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
     );
     // Several layers overran the read-back buffer; samples cannot be copied (audit f3).
     for (shape, want) in [
-        (described(srgb, &[], 4), "4 samples"),
+        (msaa_texture, "4 samples"),
         (
             viewer.ctx.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("two layers"),
@@ -914,9 +898,17 @@ fn targets_and_read_backs_of_the_wrong_kind_are_errors() {
     ] {
         invalid(read_rgba8(&viewer.ctx, &shape).map(|_| ()), want);
     }
+    // `read_texels` reads any uncompressed colour format, not depth.
+    let depth = texture(wgpu::TextureFormat::Depth32Float, attachment);
+    invalid(
+        myriad::gpu::read_texels(&viewer.ctx, &depth).map(|_| ()),
+        "reads uncompressed colour textures, not Depth32Float",
+    );
     // The right kind still works.
     let good = texture(myriad::gpu::HEADLESS_FORMAT, attachment);
     assert_eq!(read_rgba8(&viewer.ctx, &good).unwrap().len(), 64 * 32 * 4);
+    let bgra = myriad::gpu::read_texels(&viewer.ctx, &bgra).unwrap();
+    assert_eq!(bgra.len(), 64 * 32 * 4);
 }
 
 #[test]

@@ -2,7 +2,9 @@
 //!
 //! Variants are WGSL pipeline-overridable constants, not string edits: `MODE` (light lists or
 //! every light), `HEAT_MAP`, and `HAS_SPOTS` (false compiles the spot-cone code out); and, per
-//! renderer, `ENCODE_SRGB` ([`encodes_srgb`] of its output format). Each
+//! output format, `ENCODE_SRGB` ([`encodes_srgb`] of the format). One renderer draws into
+//! targets of any format it can (an engine's HDR view and its sRGB editor thumbnail share the
+//! lights, lists and G-buffer), so the format is part of each final pass's key. Each
 //! combination is built once, on first use, and cached — or ahead of the first frame that needs
 //! it, through `Renderer::prepare`, since building one compiles shaders: the main job's brute-force
 //! frame on llvmpipe encoded in 12.5 ms with its two pipelines built on the way and in 0.22 ms
@@ -36,6 +38,39 @@ pub fn encodes_srgb(format: wgpu::TextureFormat) -> bool {
         )
 }
 
+/// The shaders' `ENCODE_SRGB` for a target of `format`.
+fn encode_srgb_constant(format: wgpu::TextureFormat) -> f64 {
+    f64::from(u8::from(encodes_srgb(format)))
+}
+
+/// Why the final passes cannot draw into textures of `format` on `device`, or `None` when they
+/// can: the shading passes write a float colour and the forward pass blends it, so the format
+/// must sample as float, be a render attachment and blend. Checked before any pipeline of the
+/// format is built (one built for another format would be a wgpu validation error).
+pub(crate) fn drawable_format(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+) -> Option<String> {
+    let features = format.guaranteed_format_features(device.features());
+    let float = matches!(
+        format.sample_type(None, Some(device.features())),
+        Some(wgpu::TextureSampleType::Float { .. })
+    );
+    let drawable = float
+        && features
+            .allowed_usages
+            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+        && features
+            .flags
+            .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE);
+    (!drawable).then(|| {
+        format!(
+            "the renderer cannot draw into {format:?}: it needs a float colour format that this \
+             device can render to and blend (e.g. Rgba8UnormSrgb, Bgra8UnormSrgb, Rgba16Float)"
+        )
+    })
+}
+
 /// Which lights a pixel visits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ShadingMode {
@@ -57,6 +92,7 @@ impl ShadingMode {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct DeferredKey {
+    format: wgpu::TextureFormat,
     mode: ShadingMode,
     heat_map: bool,
     has_spots: bool,
@@ -64,6 +100,7 @@ struct DeferredKey {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct ForwardKey {
+    format: wgpu::TextureFormat,
     mode: ShadingMode,
     has_spots: bool,
 }
@@ -71,6 +108,7 @@ struct ForwardKey {
 /// Layouts, modules and the pipeline cache.
 #[derive(Debug)]
 pub(crate) struct Pipelines {
+    /// The format the renderer was made for: what [`crate::Renderer::prepare`] builds for.
     output_format: wgpu::TextureFormat,
     pub frame_layout: wgpu::BindGroupLayout,
     pub deferred_inputs_layout: wgpu::BindGroupLayout,
@@ -197,14 +235,9 @@ fn depth_test(write: bool) -> Option<wgpu::DepthStencilState> {
 }
 
 impl Pipelines {
-    /// The format of the textures the final passes draw into.
+    /// The format the renderer was made for.
     pub fn output_format(&self) -> wgpu::TextureFormat {
         self.output_format
-    }
-
-    /// The shaders' `ENCODE_SRGB` for this renderer's output format.
-    fn encode_srgb_constant(&self) -> f64 {
-        f64::from(u8::from(encodes_srgb(self.output_format)))
     }
 
     pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
@@ -288,15 +321,18 @@ impl Pipelines {
         self.built
     }
 
-    /// The deferred pipeline for this combination, built on first use.
+    /// The deferred pipeline for this combination, built on first use. `format` must be one
+    /// [`drawable_format`] accepts.
     pub fn deferred(
         &mut self,
         device: &wgpu::Device,
+        format: wgpu::TextureFormat,
         mode: ShadingMode,
         heat_map: bool,
         has_spots: bool,
     ) -> &wgpu::RenderPipeline {
         let key = DeferredKey {
+            format,
             mode,
             heat_map,
             has_spots,
@@ -306,7 +342,7 @@ impl Pipelines {
                 ("MODE", mode.constant()),
                 ("HEAT_MAP", f64::from(u8::from(heat_map))),
                 ("HAS_SPOTS", f64::from(u8::from(has_spots))),
-                ("ENCODE_SRGB", self.encode_srgb_constant()),
+                ("ENCODE_SRGB", encode_srgb_constant(format)),
             ];
             let pipeline = build_pipeline(
                 device,
@@ -320,7 +356,7 @@ impl Pipelines {
                     vertex_entry: "vs_fullscreen",
                     vertex_buffers: &[],
                     depth: None,
-                    targets: &[color_target(self.output_format, None)],
+                    targets: &[color_target(format, None)],
                     constants: &constants,
                 },
             );
@@ -330,19 +366,25 @@ impl Pipelines {
         &self.deferred[&key]
     }
 
-    /// The forward pipeline for this combination, built on first use.
+    /// The forward pipeline for this combination, built on first use. `format` must be one
+    /// [`drawable_format`] accepts.
     pub fn forward(
         &mut self,
         device: &wgpu::Device,
+        format: wgpu::TextureFormat,
         mode: ShadingMode,
         has_spots: bool,
     ) -> &wgpu::RenderPipeline {
-        let key = ForwardKey { mode, has_spots };
+        let key = ForwardKey {
+            format,
+            mode,
+            has_spots,
+        };
         if !self.forward.contains_key(&key) {
             let constants = [
                 ("MODE", mode.constant()),
                 ("HAS_SPOTS", f64::from(u8::from(has_spots))),
-                ("ENCODE_SRGB", self.encode_srgb_constant()),
+                ("ENCODE_SRGB", encode_srgb_constant(format)),
             ];
             let pipeline = build_pipeline(
                 device,
@@ -357,10 +399,7 @@ impl Pipelines {
                     vertex_entry: "vs_main",
                     vertex_buffers: &[Some(Vertex::LAYOUT)],
                     depth: depth_test(false),
-                    targets: &[color_target(
-                        self.output_format,
-                        Some(wgpu::BlendState::ALPHA_BLENDING),
-                    )],
+                    targets: &[color_target(format, Some(wgpu::BlendState::ALPHA_BLENDING))],
                     constants: &constants,
                 },
             );

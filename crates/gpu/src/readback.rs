@@ -15,7 +15,23 @@ pub fn read_rgba8(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>, 
             texture.format()
         )));
     }
-    read_texels(ctx, texture, 4, wgpu::TextureAspect::All)
+    copy_texels(ctx, texture, 4, wgpu::TextureAspect::All)
+}
+
+/// Copies a colour texture of any uncompressed format into its texels as they are stored,
+/// tightly packed, rows top to bottom (an engine's `Rgba16Float` view or `Bgra8UnormSrgb`
+/// swap-chain image; [`read_rgba8`] is this for the two RGBA8 formats). Depth and compressed
+/// formats are refused ([`read_depth`] reads depth).
+pub fn read_texels(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
+    let format = texture.format();
+    match format.block_copy_size(None) {
+        Some(bytes) if format.block_dimensions() == (1, 1) && !format.is_depth_stencil_format() => {
+            copy_texels(ctx, texture, bytes, wgpu::TextureAspect::All)
+        }
+        _ => Err(GpuError::InvalidInput(format!(
+            "read_texels reads uncompressed colour textures, not {format:?}"
+        ))),
+    }
 }
 
 /// Copies a `Depth32Float` texture into one f32 per pixel, rows top to bottom.
@@ -26,12 +42,12 @@ pub fn read_depth(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<f32>,
             texture.format()
         )));
     }
-    let bytes = read_texels(ctx, texture, 4, wgpu::TextureAspect::DepthOnly)?;
+    let bytes = copy_texels(ctx, texture, 4, wgpu::TextureAspect::DepthOnly)?;
     Ok(bytemuck::cast_slice(&bytes).to_vec())
 }
 
 /// Copies a single-mip 2D texture of `texel_bytes` per texel, tightly packed.
-fn read_texels(
+fn copy_texels(
     ctx: &GpuContext,
     texture: &wgpu::Texture,
     texel_bytes: u32,

@@ -7,7 +7,7 @@ mod target_check;
 use crate::buffers::{GrowableBuffer, stage};
 use crate::frame_input::{ClusterLists, LightColumns, fill_gpu_lights};
 use crate::layout::{FrameUniforms, GpuLight};
-use crate::pipelines::{Pipelines, ShadingMode};
+use crate::pipelines::{Pipelines, ShadingMode, drawable_format};
 use crate::profiling::{end_span, profile_span};
 use crate::scene::{GpuScene, SceneGeometry};
 use crate::targets::GBuffer;
@@ -157,8 +157,9 @@ impl Renderer {
     }
 
     /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`]
-    /// ([`GpuError::DeviceLimits`] naming every limit that is too low) and `output_format` (a float colour format the
-    /// device can render to and blend), where `new` would panic in wgpu's validation later.
+    /// ([`GpuError::DeviceLimits`] naming every limit that is too low) and `output_format` (a
+    /// float colour format the device can render to and blend), where `new` would panic in
+    /// wgpu's validation later.
     pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
         let mut short = Vec::new();
         Self::required_limits().check_limits_with_fail_fn(
@@ -169,33 +170,19 @@ impl Renderer {
         if !short.is_empty() {
             return Err(GpuError::DeviceLimits(short.join(", ")));
         }
-        // The shading passes write a float colour and the forward pass blends it.
-        let features = output_format.guaranteed_format_features(ctx.device.features());
-        let float = matches!(
-            output_format.sample_type(None, Some(ctx.device.features())),
-            Some(wgpu::TextureSampleType::Float { .. })
-        );
-        if !(float
-            && features
-                .allowed_usages
-                .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
-            && features
-                .flags
-                .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE))
-        {
-            return Err(GpuError::InvalidInput(format!(
-                "the renderer cannot draw into {output_format:?}: it needs a float colour format \
-                 that this device can render to and blend (e.g. Rgba8UnormSrgb, Bgra8UnormSrgb, \
-                 Rgba16Float)"
-            )));
+        if let Some(problem) = drawable_format(&ctx.device, output_format) {
+            return Err(GpuError::InvalidInput(problem));
         }
         Ok(Self::new(ctx, output_format))
     }
 
-    /// A renderer that writes its output into textures of `output_format` (the headless target's
-    /// [`crate::HEADLESS_FORMAT`], or an engine's). sRGB formats get sRGB, encoded in hardware;
-    /// UNORM formats without sRGB get it too, encoded by the shaders ([`crate::encodes_srgb`]);
-    /// float formats get the linear tone-mapped colour.
+    /// A renderer made for textures of `output_format` (the headless target's
+    /// [`crate::HEADLESS_FORMAT`], or an engine's): [`Renderer::prepare`] builds its pipelines
+    /// for that format. It draws into targets of any other format it can as well (the same
+    /// lights, lists and G-buffer shaded into an HDR view and an sRGB thumbnail), each format's
+    /// pipelines built on first use or ahead with [`Renderer::prepare_for`]. sRGB formats get
+    /// sRGB, encoded in hardware; UNORM formats without sRGB get it too, encoded by the shaders
+    /// ([`crate::encodes_srgb`]); float formats get the linear tone-mapped colour.
     ///
     /// # Panics
     ///
@@ -265,27 +252,45 @@ impl Renderer {
         ))
     }
 
-    /// Builds ahead the pipelines [`Renderer::render`] will use for `frame` on `scene`, so that
-    /// the first such frame does not compile shaders while it encodes (an engine calls this at
-    /// load time, once per kind of frame it will draw: lit, heat map, brute force): the deferred
-    /// shading variant of the frame's mode, heat map and spot lights (spot columns in
-    /// `frame.lights`, or in the last upload when it keeps them), and the forward pass's when
-    /// the frame has one (`scene` has blended geometry, or every feature is forced). Nothing is
-    /// uploaded or checked, and `frame.lists` is not read. Returns how many pipelines it built:
-    /// 0 when they all were already; an error only for a context or scene of another device.
+    /// Builds ahead the pipelines [`Renderer::render`] will use for `frame` on `scene` drawn into
+    /// a target of the renderer's [`Renderer::output_format`], so that the first such frame does
+    /// not compile shaders while it encodes (an engine calls this at load time, once per kind of
+    /// frame it will draw: lit, heat map, brute force): the deferred shading variant of the
+    /// frame's mode, heat map and spot lights (spot columns in `frame.lights`, or in the last
+    /// upload when it keeps them), and the forward pass's when the frame has one (`scene` has
+    /// blended geometry, or every feature is forced). Nothing is uploaded or checked, and
+    /// `frame.lists` is not read. Returns how many pipelines it built: 0 when they all were
+    /// already; an error only for a context or scene of another device.
     pub fn prepare(
         &mut self,
         ctx: &GpuContext,
         scene: &GpuScene,
         frame: &FrameDesc<'_>,
     ) -> Result<usize, GpuError> {
+        self.prepare_for(ctx, scene, frame, self.output_format())
+    }
+
+    /// [`Renderer::prepare`] for targets whose views are of `format` (another format than the
+    /// renderer's own: an engine's second view). An error also for a format the renderer
+    /// cannot draw into, as [`Renderer::try_new`] names it.
+    pub fn prepare_for(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        frame: &FrameDesc<'_>,
+        format: wgpu::TextureFormat,
+    ) -> Result<usize, GpuError> {
         self.check_device(ctx, Some(scene))?;
+        if let Some(problem) = drawable_format(&ctx.device, format) {
+            return Err(GpuError::InvalidInput(problem));
+        }
         let before = self.pipelines.built();
         let has_spots = self.shades_spots(frame);
         self.pipelines
-            .deferred(&ctx.device, frame.mode, frame.heat_map, has_spots);
+            .deferred(&ctx.device, format, frame.mode, frame.heat_map, has_spots);
         if has_forward_pass(scene, frame) {
-            self.pipelines.forward(&ctx.device, frame.mode, has_spots);
+            self.pipelines
+                .forward(&ctx.device, format, frame.mode, has_spots);
         }
         Ok(self.pipelines.built() - before)
     }
@@ -348,7 +353,8 @@ impl Renderer {
         self.gbuffer.as_ref()
     }
 
-    /// The colour format the renderer draws into (targets must have exactly this format).
+    /// The colour format the renderer was made for: what [`Renderer::prepare`] builds for.
+    /// Targets of other formats it can draw into are accepted too (see [`Renderer::new`]).
     pub fn output_format(&self) -> wgpu::TextureFormat {
         self.pipelines.output_format()
     }
@@ -394,10 +400,11 @@ impl Renderer {
     }
 
     /// Records, encodes and submits one frame into `target` (a single-sample view of mip 0 of a
-    /// texture of the camera's size, in exactly the renderer's output format). Returns without
-    /// waiting for the GPU. A target wgpu would reject (another sRGB-ness in the view, a mip of
-    /// another size) is an error: the first frame into each target checks it
-    /// (`target_check.rs`).
+    /// texture of the camera's size, in a format the renderer can draw into: its
+    /// [`Renderer::output_format`] or another, see [`Renderer::new`]; a view may reinterpret its
+    /// texture's sRGB-ness). Returns without waiting for the GPU. A target wgpu would reject (a
+    /// mip of another size, a view format its texture does not allow) is an error: the first
+    /// frame into each target checks it, and finds the view's format (`target_check.rs`).
     pub fn render(
         &mut self,
         ctx: &GpuContext,
@@ -497,22 +504,22 @@ impl Renderer {
         let device = &ctx.device;
         check_camera(frame.camera)?;
         let (width, height) = (frame.camera.width, frame.camera.height);
-        // A view may reinterpret only the sRGB-ness of its texture's format (`view_formats`), and
-        // wgpu does not say which one a view has: compare without the sRGB suffix.
+        // The view's format (its texture's, or that one's sRGB twin) is found by the target
+        // check below; the texture's own must be one the passes can draw.
         let texture = target.texture();
-        let output = self.pipelines.output_format();
-        if texture.format().remove_srgb_suffix() != output.remove_srgb_suffix()
-            || !texture
-                .usage()
-                .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+        if !texture
+            .usage()
+            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         {
             return Err(GpuError::InvalidInput(format!(
-                "the target is a {:?} texture with {:?} usage; the renderer draws into {:?} \
-                 render attachments",
+                "the target is a {:?} texture with {:?} usage; the renderer draws into \
+                 RENDER_ATTACHMENT textures",
                 texture.format(),
                 texture.usage(),
-                output
             )));
+        }
+        if let Some(problem) = drawable_format(device, texture.format()) {
+            return Err(GpuError::InvalidInput(problem));
         }
         if texture.sample_count() != 1 {
             return Err(GpuError::InvalidInput(format!(
@@ -626,7 +633,7 @@ impl Renderer {
         // G-buffer changes nothing a later frame relies on), and the target against the passes.
         self.ensure_gbuffer(device, width, height)?;
         let forward_pass = has_forward_pass(scene, frame);
-        self.check_target(device, frame, target, forward_pass)?;
+        let format = self.check_target(device, frame, target, forward_pass)?;
         profile_span!("upload lights and lists", upload);
         let upload_start = Instant::now();
         let mut report = FrameReport::default();
@@ -714,10 +721,10 @@ impl Renderer {
         if draw_gbuffer {
             self.encode_gbuffer(&mut encoder, scene);
         }
-        self.encode_shading(device, &mut encoder, frame, target);
+        self.encode_shading(device, &mut encoder, frame, target, format);
         report.forward_pass = forward_pass;
         if report.forward_pass {
-            self.encode_forward(device, &mut encoder, scene, frame, target);
+            self.encode_forward(device, &mut encoder, scene, frame, target, format);
         }
         self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);

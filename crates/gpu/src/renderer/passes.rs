@@ -114,19 +114,21 @@ impl Renderer {
         }
     }
 
+    /// The deferred shading pass into `target`, a view of `format` (as `check_target` found).
     pub(super) fn encode_shading(
         &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameDesc<'_>,
         target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
     ) {
         profile_span!("encode pass: deferred shading");
         let has_spots = self.shades_spots(frame);
         let timestamps = self.timer.writes(TimedPass::Shading);
-        let pipeline = self
-            .pipelines
-            .deferred(device, frame.mode, frame.heat_map, has_spots);
+        let pipeline =
+            self.pipelines
+                .deferred(device, format, frame.mode, frame.heat_map, has_spots);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("deferred shading"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -149,6 +151,7 @@ impl Renderer {
         pass.draw(0..3, 0..1);
     }
 
+    /// The forward pass of blended geometry into `target`, a view of `format`.
     pub(super) fn encode_forward(
         &mut self,
         device: &wgpu::Device,
@@ -156,6 +159,7 @@ impl Renderer {
         scene: &GpuScene,
         frame: &FrameDesc<'_>,
         target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
     ) {
         profile_span!("encode pass: forward");
         let gbuffer = self
@@ -165,7 +169,9 @@ impl Renderer {
         scene.blended_back_to_front(frame.camera.position, &mut self.scratch_draws);
         let has_spots = self.shades_spots(frame);
         let timestamps = self.timer.writes(TimedPass::Forward);
-        let pipeline = self.pipelines.forward(device, frame.mode, has_spots);
+        let pipeline = self
+            .pipelines
+            .forward(device, format, frame.mode, has_spots);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("forward"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
