@@ -480,9 +480,9 @@ fn one_renderer_draws_into_targets_of_several_formats() {
 }
 
 /// An engine with two devices (a window's and a headless one) can hand a renderer the other
-/// device's context or scene by mistake: wgpu panicked inside the frame ("Cannot get
-/// non-existent resource", audit); every call that takes a context refuses it instead, and the
-/// renderer still draws on its own device afterwards.
+/// device's context, scene or target by mistake: wgpu panicked inside the frame ("Cannot get
+/// non-existent resource", audit); every call refuses it instead, and the renderer still draws
+/// on its own device afterwards.
 #[test]
 fn a_context_or_scene_of_another_device_is_refused() {
     let Some((scene, mut mine)) = viewer_after_one_frame(64, 32) else {
@@ -552,6 +552,15 @@ fn a_context_or_scene_of_another_device_is_refused() {
         r.render_prepass(&ctx_a, scene_b, &scene.camera),
         "prepass",
         other_scene,
+    );
+    // The right context and scene with the other device's target: the target check's recording
+    // refuses it (wgpu 30 names the mismatch; it panicked inside the frame when the format was
+    // compared alone).
+    refused(
+        r.render(&ctx_a, &mine.scene, &frame, &other.target.view)
+            .map(drop),
+        "render into the other device's target",
+        "of this renderer's device",
     );
     // Nothing of that changed the renderer: its own frame still draws.
     mine.renderer

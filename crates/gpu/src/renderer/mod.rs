@@ -111,7 +111,8 @@ pub struct FrameReport {
 ///
 /// It belongs to the device of the context it was made with: every call takes that context and
 /// the scenes it uploaded, and refuses another device's with [`GpuError::InvalidInput`]. (A
-/// target texture cannot be asked for its device; one of another device panics in wgpu.)
+/// target texture cannot be asked for its device: one of another device is refused by the
+/// target check's recording, `target_check.rs`.)
 #[derive(Debug)]
 pub struct Renderer {
     /// The device everything below lives on: a call with another device's context or scene is

@@ -4,7 +4,8 @@
 //! wgpu 30 cannot tell a `TextureView`'s format, mip level or sample count, only its texture's.
 //! A view whose sRGB-ness differs from its texture's (`view_formats`), a view of a lower mip, or a
 //! multisampled texture then passed the renderer's own checks and panicked inside wgpu's
-//! validation in the middle of the frame (audit f3), or, for a lower mip without a forward pass,
+//! validation in the middle of the frame (audit f3), as did a texture of another device (a
+//! texture cannot be asked for its device), or, for a lower mip without a forward pass,
 //! shaded pixels of the wrong size with `Ok`. So the first frame into a target records both
 //! shading passes' attachments (the forward pass's with the G-buffer's depth, whether it runs or
 //! not) and pipelines into a throwaway encoder under a validation error scope, never submitted,
@@ -90,8 +91,8 @@ impl Renderer {
         }
         Err(GpuError::InvalidInput(format!(
             "the target cannot be drawn into (a single-sample view of mip 0 of a \
-             RENDER_ATTACHMENT texture, in the texture's format {own:?} or its sRGB twin, is \
-             needed): {}",
+             RENDER_ATTACHMENT texture of this renderer's device, in the texture's format \
+             {own:?} or its sRGB twin, is needed): {}",
             own_error.expect("the texture's own format is always tried")
         )))
     }
