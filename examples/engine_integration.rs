@@ -58,9 +58,11 @@ fn main() {
     // pair, a size other than the projection's aspect ratio...).
     let camera = Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 1920, 1080)
         .expect("a centred right-handed perspective");
-    // The far plane is infinite; the grid slices depth over a finite range of its own (lights
-    // past it are culled): a 16×9×24 grid with log slices out to 100 m.
-    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, 100.0);
+    // The far plane is infinite; the grid slices depth over a finite range of its own: a
+    // 16×9×24 grid with log slices, first out to 50 m. Lights wholly past its far edge are in
+    // view but in no list (pixels out there read the last slice): the stats count them
+    // (`beyond_far`) and say how far the lights reach, which the next frame's grid follows.
+    let mut grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, 50.0);
 
     // 10 000 lights on a deterministic spiral in front of the camera.
     let mut lights: Vec<EngineLight> = (0..10_000)
@@ -100,13 +102,23 @@ fn main() {
             &mut lists,
         );
         println!(
-            "frame {frame}: {} lights, {} visible, {} culled -> {} cluster-light pairs, {} KiB to upload",
+            "frame {frame}: {} lights, {} visible, {} culled ({} beyond the grid's far {:.1}) -> {} \
+             cluster-light pairs, {} KiB to upload",
             stats.lights,
             stats.visible(),
             stats.culled,
+            stats.beyond_far,
+            grid.far(),
             stats.pairs,
             lists.byte_size() / 1024
         );
+        // Next frame's grid reaches as far as this frame's lights did (with a little room for
+        // them to move), like Bevy's "max light range" far; a light that moves past it anyway is
+        // missing for one frame, and counted.
+        if let Some(reach) = stats.reach {
+            let far = (reach * 1.05).max(camera.near * 2.0);
+            grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, far);
+        }
     }
 
     // What the shader does per pixel: pixel + view depth -> cluster -> its lights.

@@ -178,7 +178,7 @@ fn a_near_plane_far_below_the_scene_keeps_clustered_equal_to_brute_force() {
 }
 
 /// An engine's camera with an infinite far plane (`Camera::from_matrices` of glam's
-/// `perspective_infinite_reverse_rh`, or `far: f32::INFINITY`) renders with the lists' finite
+/// `camera::rh::proj::directx::perspective_infinite_reverse`, or `far: f32::INFINITY`) renders with the lists' finite
 /// grid: its stored depths are `near / depth`, every one turns back into the view depth the
 /// finite camera's does, and its image is the finite camera's — clustered equal to brute force.
 #[test]

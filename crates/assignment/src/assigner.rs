@@ -105,7 +105,7 @@ pub enum OutsideCalls {
 }
 
 /// What one assignment did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AssignStats {
     /// Lights in the input.
     pub lights: u32,
@@ -133,6 +133,20 @@ pub struct AssignStats {
     /// The pairs exceed the budget even on a 1×1×1 grid; the lists were written anyway (one
     /// cluster holding every visible light), because no light is ever dropped.
     pub over_budget: bool,
+    /// Of the [`culled`](Self::culled) lights, those culled only for lying past the grid's far
+    /// edge, in a frame whose camera sees farther (`camera.far` beyond the grid's far, as with an
+    /// engine's infinite projection and a finite grid). The renderer shades pixels beyond the
+    /// grid with its last slice's lights, which do not include these: their light is missing
+    /// there. 0 when the grid reaches the camera's far plane (nothing is computed then). A grid
+    /// whose far is [`reach`](Self::reach) leaves none out. (Lights whose view-space sphere
+    /// overflows f32, near `f32::MAX`, are not counted.)
+    pub beyond_far: u32,
+    /// When the camera sees past the grid's far edge: the farthest view depth the lights in the
+    /// camera's view reach (the far side of their padded sphere, a spot's bounding sphere), 0 when
+    /// none is in view; the far of a grid that would have left no light beyond it, for the next
+    /// frame's grid (a light that moves past it is then missing for one frame, and counted in
+    /// [`beyond_far`](Self::beyond_far)). `None` when the grid reaches the camera's far plane.
+    pub reach: Option<f32>,
 }
 
 impl AssignStats {
@@ -460,7 +474,7 @@ impl Assigner {
             ..AssignStats::default()
         };
         if method == Method::Linear {
-            let (rejected, culled) = linear::assign_linear(
+            let counts = linear::assign_linear(
                 &mut self.linear,
                 lights,
                 camera,
@@ -470,8 +484,10 @@ impl Assigner {
                 budget,
                 out,
             )?;
-            stats.rejected = rejected;
-            stats.culled = culled;
+            stats.rejected = counts.rejected;
+            stats.culled = counts.culled;
+            stats.beyond_far = counts.beyond_far;
+            stats.reach = counts.reach;
             stats.pairs = out.indices.len() as u64;
             stats.tasks = 1;
             return Ok(stats);
@@ -504,6 +520,7 @@ impl Assigner {
         }
         let parts = plan_parts(grid, tasks);
         let view = active.map(|a| a.view(&mut self.active_before));
+        let cull = jobs::FrustumCull::of_grid(&self.planes, grid);
         let ctx = FrameContext {
             active: view,
             method,
@@ -522,7 +539,8 @@ impl Assigner {
                 &[]
             },
             tan_half_fov,
-            cull: jobs::FrustumCull::of_grid(&self.planes, grid),
+            cull,
+            far_cull: sees_past(camera, grid).then(|| cull.with_far(camera.far)),
         };
         let fan_out = if tasks > 1 { fan_out } else { FanOut::Serial };
         let gather = |(t, task): (usize, &mut CachePadded<TaskOutput>)| {
@@ -565,12 +583,22 @@ impl Assigner {
         for task in work {
             stats.rejected += task.rejected;
             stats.culled += task.culled;
+            stats.beyond_far += task.beyond_far;
+        }
+        if ctx.far_cull.is_some() {
+            stats.reach = Some(work.iter().map(|t| t.reach).fold(0.0, f32::max));
         }
         stats.pairs = pairs as u64;
         stats.tasks = tasks as u32;
         stats.parallel = fan_out.parallel();
         Ok(stats)
     }
+}
+
+/// Whether `camera` sees past the far edge of `grid` (then lights can lie beyond the grid yet in
+/// view: [`AssignStats::beyond_far`]).
+pub(crate) fn sees_past(camera: &Camera, grid: &ClusterGrid) -> bool {
+    camera.far > grid.far()
 }
 
 /// One frame's inputs, as [`Assigner::assign_active`] received them (the grid by value: a pair

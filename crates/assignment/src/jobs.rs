@@ -52,6 +52,10 @@ pub(crate) struct FrameContext<'a> {
     pub slice_shift: u32,
     /// The cheap early cull's six planes.
     pub cull: FrustumCull,
+    /// The same cull with the camera's far plane, when the camera sees past the grid's far edge:
+    /// lights it keeps and `cull` does not are counted as beyond the grid
+    /// ([`crate::AssignStats::beyond_far`]). `None` otherwise, and nothing is computed.
+    pub far_cull: Option<FrustumCull>,
 }
 
 /// The frustum's six planes as plain numbers, for the early cull: copied into each task so the
@@ -87,6 +91,11 @@ impl FrustumCull {
             near: sets.z_depths[0],
             far: sets.z_depths[sets.z_depths.len() - 1],
         }
+    }
+
+    /// This cull with its far plane at `far` instead of the grid's.
+    pub fn with_far(self, far: f32) -> Self {
+        Self { far, ..self }
     }
 
     /// Whether the padded sphere may touch the frustum: the six plane tests of the paper's
@@ -152,6 +161,10 @@ pub(crate) struct TaskOutput {
     cone_columns: Vec<ConeColumn>,
     pub rejected: u32,
     pub culled: u32,
+    /// Culled lights the camera's far plane would keep (counted when `far_cull` is set).
+    pub beyond_far: u32,
+    /// The farthest depth (padded sphere's far side) of the lights `far_cull` keeps; 0 for none.
+    pub reach: f32,
 }
 
 impl TaskOutput {
@@ -165,6 +178,8 @@ impl TaskOutput {
         }
         self.rejected = 0;
         self.culled = 0;
+        self.beyond_far = 0;
+        self.reach = 0.0;
         self.gaps
             .resize(geometry::refine_scratch_len(ctx.grid.dims()), 0.0);
         if ctx.method == Method::Cone {
@@ -319,6 +334,18 @@ fn run_blocks<const B: usize>(
                 inside[b] = fine & cull.may_touch(vx[b], vy[b], vd[b], vr[b]);
                 sound += fine as u32;
             }
+        }
+        // Where the camera sees past the grid, which lights the grid's far plane alone culls, and
+        // how far the lights in view reach: a pass of its own, branch-free, only in such frames.
+        if let Some(wide) = &ctx.far_cull {
+            let (mut beyond, mut reach) = (0u32, out.reach);
+            for b in 0..n {
+                let seen = ok[b] & wide.may_touch(vx[b], vy[b], vd[b], vr[b]);
+                beyond += (seen & !inside[b]) as u32;
+                reach = reach.max(if seen { vd[b] + vr[b] } else { 0.0 });
+            }
+            out.beyond_far += beyond;
+            out.reach = reach;
         }
         // Phase 0c, only for a block with a light that failed the test above: an invalid light is
         // rejected (counted); a valid one whose view-space sphere overflowed f32 (coordinates and

@@ -24,8 +24,15 @@ pub(crate) struct LinearScratch {
     y_normals: Vec<Vec3>,
 }
 
-/// Counts of one run: `Ok((rejected, culled))`, or `Err(pairs)` without writing `out` when the
-/// pairs exceed `budget`. Under an `active` mask only the active clusters' lists are kept, and
+/// What one run counted, as [`crate::AssignStats`] reports it.
+pub(crate) struct LinearCounts {
+    pub rejected: u32,
+    pub culled: u32,
+    pub beyond_far: u32,
+    pub reach: Option<f32>,
+}
+
+/// Counts of one run, or `Err(pairs)` without writing `out` when the pairs exceed `budget`. Under an `active` mask only the active clusters' lists are kept, and
 /// only their pairs count against the budget.
 #[allow(clippy::too_many_arguments)] // One frame's inputs, scratch and output.
 pub(crate) fn assign_linear(
@@ -37,7 +44,7 @@ pub(crate) fn assign_linear(
     active: Option<&ActiveClusters>,
     budget: u64,
     out: &mut LightLists,
-) -> Result<(u32, u32), u64> {
+) -> Result<LinearCounts, u64> {
     let clusters = grid.cluster_count();
     let view_from_world = camera.view_rotation();
     // Only ever grown: shrinking to a smaller grid would drop the per-cluster lists' buffers,
@@ -60,6 +67,10 @@ pub(crate) fn assign_linear(
     let (xn, yn) = (&scratch.x_normals, &scratch.y_normals);
     let (nx, ny) = (grid.dims().x, grid.dims().y);
     let (mut rejected, mut culled) = (0, 0);
+    // Where the camera sees past the grid: lights its far plane alone culls, and the lights'
+    // reach (see `AssignStats::beyond_far`), with the same padded spheres as the tasks' cull.
+    let camera_far = crate::assigner::sees_past(camera, grid).then_some(camera.far);
+    let (mut beyond_far, mut reach) = (0, 0f32);
     for g in 0..lights.len() {
         let p = Vec3::new(lights.x[g], lights.y[g], lights.z[g]);
         let r = lights.radius[g];
@@ -109,7 +120,16 @@ pub(crate) fn assign_linear(
             || xn[nx as usize].dot(c) > r
             || yn[0].dot(c) > r
             || yn[ny as usize].dot(c) < -r;
-        let Some(z) = linear_z(dc, r, &planes.z_depths).filter(|_| !outside) else {
+        let z = linear_z(dc, r, &planes.z_depths).filter(|_| !outside);
+        if let Some(far) = camera_far
+            && !outside
+            && dc + r >= planes.z_depths[0]
+            && dc - r <= far
+        {
+            reach = reach.max(dc + r);
+            beyond_far += u32::from(z.is_none());
+        }
+        let Some(z) = z else {
             culled += 1;
             continue;
         };
@@ -159,7 +179,12 @@ pub(crate) fn assign_linear(
         at += list.len() as u32;
         out.indices.extend_from_slice(list);
     }
-    Ok((rejected, culled))
+    Ok(LinearCounts {
+        rejected,
+        culled,
+        beyond_far,
+        reach: camera_far.map(|_| reach),
+    })
 }
 
 /// Steps through planes 1..=n for the first tile `t` whose far plane `t + 1` satisfies

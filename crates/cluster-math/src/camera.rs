@@ -283,7 +283,7 @@ mod tests {
             .view_from_world()
             .transform_point3(Vec3::new(1.0, 2.0, -2.0));
         assert!((m - v).length() < 1e-5);
-        // Matches glam's look_at_rh in the regular case.
+        // Matches glam's `camera::rh::view::look_at_mat4` in the regular case.
         let glam_view = glam::camera::rh::view::look_at_mat4(c.position, c.target, c.up);
         assert!(glam_view.abs_diff_eq(c.view_from_world(), 1e-6));
     }

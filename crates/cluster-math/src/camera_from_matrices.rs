@@ -13,6 +13,8 @@
 //!   space to the screen with the opposite orientation; no position, target and up reproduce it.
 //!   Mirror the world instead: multiply the view matrix by `Mat4::from_scale(vec3(-1, 1, 1))` on
 //!   the right and negate the lights' x the same way; the pixels and clusters are then the same.
+//!   A y-down projection read as y-up ([`ClipSpace`]) looks mirrored too, and the matrices cannot
+//!   tell the two apart, so the error names both fixes.
 //! * **Orthographic, sheared or non-rigid** matrices (a scaled view matrix would scale light radii
 //!   too), and an aspect ratio other than the target's `width / height`.
 //!
@@ -114,9 +116,12 @@ impl std::fmt::Display for CameraMatrixError {
             ),
             Self::Mirrored => write!(
                 f,
-                "the view and projection are mirrored against a right-handed camera (a \
-                 left-handed pair?): multiply the view matrix by Mat4::from_scale(vec3(-1.0, 1.0, \
-                 1.0)) on the right and negate the lights' x"
+                "the view and projection are mirrored against a right-handed camera: a \
+                 projection that flips y (Vulkan's y-down convention, e.g. glam's \
+                 camera::rh::proj::vulkan) needs ClipSpace::ZeroToOneYDown; a left-handed pair \
+                 needs its view matrix multiplied by Mat4::from_scale(vec3(-1.0, 1.0, 1.0)) on \
+                 the right and the lights' x negated. (The matrices cannot tell the two apart: \
+                 the wrong fix gives a camera upside down.)"
             ),
             Self::AspectMismatch { projection, target } => write!(
                 f,

@@ -89,8 +89,16 @@ impl ClusterGrid {
             )));
         }
         if !(near.is_finite() && far.is_finite() && near > 0.0 && near < far) {
+            // An engine's infinite projection gives `camera.far = ∞`, which a grid cannot take:
+            // its slices must end (say so, rather than "0 < near < far", which ∞ satisfies).
+            let finite = if near.is_finite() && far.is_finite() {
+                ""
+            } else {
+                " with both finite (a camera with an infinite far plane needs a grid with a \
+                 finite far: where its lights end, see the assignment's `AssignStats::reach`)"
+            };
             return Err(InvalidGrid(format!(
-                "cluster grid depth range must satisfy 0 < near < far: [{near}, {far}]"
+                "cluster grid depth range must satisfy 0 < near < far{finite}: [{near}, {far}]"
             )));
         }
         if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing

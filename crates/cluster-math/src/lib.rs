@@ -33,7 +33,7 @@
 //! [`CameraMatrixError`].
 //!
 //! ## Conventions
-//! Right-handed view space, camera looking down −Z, +Y up (glam `look_at_rh`). "View depth" is the
+//! Right-handed view space, camera looking down −Z, +Y up (glam's `camera::rh::view::look_at_mat4`). "View depth" is the
 //! positive distance along the view direction, `depth = -z_view`. Tile `i` spans NDC
 //! x ∈ [−1+2i/X, −1+2(i+1)/X] (left to right); tile row `j` spans NDC y ∈ [1−2(j+1)/Y, 1−2j/Y]
 //! (top to bottom). Pixel `(px, py)` counts from the top-left corner and is sampled at its centre.

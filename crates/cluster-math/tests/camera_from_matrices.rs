@@ -115,10 +115,15 @@ fn a_y_down_projection_is_the_same_camera_when_named_so() {
     let want = Camera::from_matrices(view, y_up, ClipSpace::ZeroToOneYUp, 1536, 768).unwrap();
     let got = Camera::from_matrices(view, y_down, ClipSpace::ZeroToOneYDown, 1536, 768).unwrap();
     assert_close(&got, &want);
-    // Read as y up, the Vulkan matrix shows the world upside down and mirrored: refused.
-    assert_eq!(
-        Camera::from_matrices(view, y_down, ClipSpace::ZeroToOneYUp, 1536, 768),
-        Err(CameraMatrixError::Mirrored)
+    // Read as y up, the Vulkan matrix shows the world upside down and mirrored: refused, and
+    // the message names the right fix first. (It named only the left-handed one, whose mirrored
+    // world then gave a camera upside down with Ok: an engine audit followed it.)
+    let refused = Camera::from_matrices(view, y_down, ClipSpace::ZeroToOneYUp, 1536, 768);
+    assert_eq!(refused, Err(CameraMatrixError::Mirrored));
+    let message = refused.unwrap_err().to_string();
+    assert!(
+        message.contains("y-down") && message.contains("ClipSpace::ZeroToOneYDown"),
+        "{message}"
     );
 }
 

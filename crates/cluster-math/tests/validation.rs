@@ -27,7 +27,7 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
             log,
             0.1,
             f32::INFINITY,
-            "0 < near < far",
+            "with both finite (a camera with an infinite far plane needs a grid with a finite far",
         ),
         (
             UVec3::new(24, 12, 16),

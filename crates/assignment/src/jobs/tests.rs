@@ -48,6 +48,7 @@ fn context<'a>(
             near: camera.near,
             far: camera.far,
         },
+        far_cull: None,
     }
 }
 

@@ -1,0 +1,173 @@
+//! A camera that sees past the grid's far edge (an engine's infinite projection with a finite
+//! grid): the lights the grid's far plane alone culls are counted (`AssignStats::beyond_far`),
+//! identically by every method and thread count, and `AssignStats::reach` is the far of a grid
+//! that leaves none of them out. An engine audit found those lights silently missing from the
+//! pixels beyond the grid (which read its last slice).
+
+mod common;
+
+use common::*;
+use glam::{UVec3, Vec3};
+use myriad_assignment::{Assigner, LightLists, Method};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use rand::{Rng, SeedableRng};
+
+const METHODS: [Method; 5] = [
+    Method::Exact,
+    Method::Linear,
+    Method::Binary,
+    Method::Refined,
+    Method::Cone,
+];
+
+/// `n` point lights well inside the view's sides at depths 1..150 (radii 0.3..3), none within
+/// 0.05 of `grid_far` with its sphere's near side, so that the padding cannot move a light
+/// across the grid's far plane. Returns the lights and how many lie wholly past `grid_far`, and
+/// the farthest depth any of them reaches.
+fn lights_in_view(camera: &Camera, n: usize, grid_far: f32, seed: u64) -> (Columns, u32, f32) {
+    let (right, up, forward) = view_basis(camera);
+    let (tx, ty) = camera.tan_half_fov().into();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let mut lights = Columns::default();
+    let (mut beyond, mut reach) = (0, 0f32);
+    while lights.len() < n {
+        let depth = rng.random_range(1.0..150.0f32);
+        let r = rng.random_range(0.3..3.0f32);
+        if (depth - r - grid_far).abs() < 0.05 {
+            continue;
+        }
+        // Within half the view's width and height: every side plane keeps the whole sphere
+        // when it is this deep, and at least partly when it is shallower.
+        let x = rng.random_range(-0.5..0.5) * tx * depth;
+        let y = rng.random_range(-0.5..0.5) * ty * depth;
+        lights.push(camera.position + forward * depth + right * x + up * y, r);
+        beyond += u32::from(depth - r > grid_far);
+        reach = reach.max(depth + r);
+    }
+    (lights, beyond, reach)
+}
+
+fn camera(far: f32) -> Camera {
+    Camera::new(
+        Vec3::new(3.0, 2.0, 1.0),
+        Vec3::new(3.5, 1.0, -20.0),
+        Vec3::Y,
+        60.0,
+        1280,
+        720,
+        0.1,
+        far,
+    )
+}
+
+#[test]
+fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers_them() {
+    for far in [f32::INFINITY, 400.0] {
+        let camera = camera(far);
+        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0);
+        // 300 lights run as one task; 6000 as several (tasks count their own and are summed).
+        for (n, seed) in [(300, 1), (6000, 2)] {
+            let (lights, beyond, reach) = lights_in_view(&camera, n, grid.far(), seed);
+            assert!(
+                beyond > n as u32 / 2,
+                "the draw puts most lights past the grid"
+            );
+            for method in METHODS {
+                let mut lists = LightLists::new();
+                let stats = Assigner::new().assign(
+                    method,
+                    &lights.input(false),
+                    &camera,
+                    &grid,
+                    &mut lists,
+                );
+                let what = format!("{method}, far {far}, {n} lights");
+                assert_eq!(stats.beyond_far, beyond, "{what}");
+                assert!(stats.culled >= beyond, "{what}: {stats:?}");
+                let got = stats.reach.expect("the camera sees past the grid");
+                // The padded sphere's far side: the exact reach, or a hair beyond it.
+                assert!(
+                    got >= reach && got <= reach * (1.0 + 1e-5),
+                    "{what}: reach {got}, want {reach}"
+                );
+                // A grid out to that reach leaves no light beyond it and lists every light.
+                let covering = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, got);
+                let stats = Assigner::new().assign(
+                    method,
+                    &lights.input(false),
+                    &camera,
+                    &covering,
+                    &mut lists,
+                );
+                assert_eq!(stats.beyond_far, 0, "{what}: {stats:?}");
+                assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}");
+                assert_eq!(
+                    stats.reach,
+                    Some(got),
+                    "{what}: the same lights reach as far"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_grid_that_reaches_the_cameras_far_counts_nothing_beyond_it() {
+    let camera = camera(60.0);
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 60.0);
+    let (lights, _, _) = lights_in_view(&camera, 2000, grid.far(), 3);
+    for method in METHODS {
+        let stats = Assigner::new().assign(
+            method,
+            &lights.input(false),
+            &camera,
+            &grid,
+            &mut LightLists::new(),
+        );
+        assert!(stats.culled > 0, "{method}: lights past the camera's far");
+        assert_eq!((stats.beyond_far, stats.reach), (0, None), "{method}");
+    }
+}
+
+/// Spot lights are counted with the bounding sphere the cull uses, the same by every method
+/// (their reference is `linear`'s, the paper's algorithm, computed apart), for any thread count.
+#[test]
+fn spots_and_thread_counts_give_the_same_counts() {
+    let camera = camera(f32::INFINITY);
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0);
+    let (mut lights, _, _) = lights_in_view(&camera, 3000, grid.far(), 4);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+    for i in 0..lights.len() {
+        let dir = random_dir(&mut rng);
+        (lights.dir_x[i], lights.dir_y[i], lights.dir_z[i]) = (dir.x, dir.y, dir.z);
+        lights.angle[i] = rng.random_range(0.1..1.5);
+    }
+    let reference = Assigner::new().assign(
+        Method::Linear,
+        &lights.input(true),
+        &camera,
+        &grid,
+        &mut LightLists::new(),
+    );
+    assert!(reference.beyond_far > 100, "{reference:?}");
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for method in [Method::Binary, Method::Refined, Method::Cone] {
+            let stats = pool.install(|| {
+                Assigner::new().assign(
+                    method,
+                    &lights.input(true),
+                    &camera,
+                    &grid,
+                    &mut LightLists::new(),
+                )
+            });
+            let what = format!("{method}, {threads} threads");
+            assert_eq!(stats.beyond_far, reference.beyond_far, "{what}");
+            assert_eq!(stats.reach, reference.reach, "{what}");
+        }
+    }
+}
