@@ -42,6 +42,31 @@ fn a_device_below_the_required_limits_is_a_device_limits_error() {
         }
         other => panic!("want DeviceLimits, got {:?}", other.map(|_| ())),
     }
+    // `Renderer::new` there neither panics (it did, in wgpu's validation) nor raises an error
+    // an engine's own handler would see (under one, frames then blamed their target, engine
+    // audit): every call returns the device's limits.
+    let errors = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let seen = errors.clone();
+    ctx.device
+        .on_uncaptured_error(std::sync::Arc::new(move |_| {
+            seen.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }));
+    let renderer = Renderer::new(&ctx, myriad::gpu::HEADLESS_FORMAT);
+    assert_eq!(errors.load(std::sync::atomic::Ordering::Relaxed), 0);
+    let scene = RenderScene::default_scene(10, 32, 16).unwrap();
+    let short = |result: Result<(), GpuError>, call: &str| match result {
+        Err(GpuError::DeviceLimits(limits)) => assert!(
+            limits.contains("max_storage_buffers_per_shader_stage 4 (needs 5)"),
+            "{call}: {limits}"
+        ),
+        other => panic!("{call}: want DeviceLimits, got {other:?}"),
+    };
+    short(
+        renderer.upload_scene(&ctx, &scene.geometry).map(drop),
+        "upload_scene",
+    );
+    short(renderer.read_depth(&ctx).map(drop), "read_depth");
+    short(renderer.last_pass_times(&ctx).map(drop), "last_pass_times");
 }
 
 /// A full-screen triangle at NDC depth `DEPTH` (prepended), drawn red with a `Greater` depth

@@ -579,6 +579,32 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
             .map(|_| ()),
         "upload lists built for these lights",
     );
+    // The camera turned (its lights uploaded again, camera-relative from the same eye) over the
+    // lists kept from before: the same grid seen another way is other clusters in the world.
+    // It shaded with Ok, 195/255 off brute force (engine audit).
+    let mut turned_camera = scene.camera;
+    turned_camera.target += (turned_camera.target - turned_camera.position).cross(turned_camera.up);
+    let all = myriad::render::light_columns(&scene.lights);
+    let turned_with_lights = myriad::gpu::FrameDesc {
+        lights: Some(all),
+        ..frame(&turned_camera, &g)
+    };
+    invalid(
+        renderer
+            .render(ctx, geometry, &turned_with_lights, &target.view)
+            .map(|_| ()),
+        "the kept lists were assigned for another camera",
+    );
+    // A camera of another size, drawn into a texture of the scene's (a lower mip of a larger
+    // texture is refused the same way): the message says which size is the texture's.
+    let mut half = scene.camera;
+    (half.width, half.height) = (half.width / 2, half.height / 2);
+    invalid(
+        renderer
+            .render(ctx, geometry, &frame(&half, &g), &target.view)
+            .map(|_| ()),
+        "camera is 96x48 but the target's texture is 192x96 (the renderer draws into mip 0",
+    );
     // The scene's own grid still renders with the kept lists, and nothing above was uploaded.
     let generation = renderer.upload_generation();
     let kept = renderer.render(ctx, geometry, &frame(&scene.camera, &g), &target.view);

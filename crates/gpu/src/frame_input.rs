@@ -137,8 +137,9 @@ pub const SPOT_INNER_FRACTION: f32 = 0.8;
 /// Converts the columns to camera-relative GPU records in `out` (reusing its storage).
 /// Positions are differenced in f64, so lights far from the origin keep their precision near the
 /// camera. Invalid rows (non-finite values, radius <= 0, negative colour) become records that
-/// light nothing (radius 0 at the camera) — the assignment skips the same rows — and are counted
-/// in the return value.
+/// light nothing (radius 0 at the camera) — the assignment skips the rows whose position or
+/// radius is invalid, and lists those whose appearance alone is — and are counted in the return
+/// value.
 ///
 /// # Panics
 /// When the columns differ in length, with [`LightColumns::check`]'s message (the renderer checks

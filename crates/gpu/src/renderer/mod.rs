@@ -101,7 +101,10 @@ pub struct FrameReport {
     pub encode_seconds: f64,
     /// Lights uploaded.
     pub lights: usize,
-    /// Lights with invalid values, uploaded as records that light nothing.
+    /// Lights with invalid values, uploaded as records that light nothing. More than the
+    /// assignment's `AssignStats::rejected` where only the appearance is invalid (a negative or
+    /// NaN colour or intensity, a NaN spot angle): the assignment, which reads positions and
+    /// radii, lists such a light and the renderer shows nothing of it.
     pub skipped_lights: usize,
     /// Whether the forward pass ran.
     pub forward_pass: bool,
@@ -143,6 +146,9 @@ pub struct Renderer {
     has_spots: bool,
     /// Bumped by every frame that uploads lights or lists (see [`Renderer::upload_generation`]).
     uploads: u64,
+    /// Why wgpu refused what [`Renderer::new`] made (a device below
+    /// [`Renderer::required_limits`]): every call returns it as [`GpuError::DeviceLimits`].
+    refused: Option<String>,
 }
 
 impl Renderer {
@@ -162,14 +168,8 @@ impl Renderer {
     /// float colour format the device can render to and blend), where `new` would panic in
     /// wgpu's validation later.
     pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
-        let mut short = Vec::new();
-        Self::required_limits().check_limits_with_fail_fn(
-            &ctx.device.limits(),
-            false,
-            |name, needed, allowed| short.push(format!("{name} {allowed} (needs {needed})")),
-        );
-        if !short.is_empty() {
-            return Err(GpuError::DeviceLimits(short.join(", ")));
+        if let Some(short) = limits_shortfall(&ctx.device) {
+            return Err(GpuError::DeviceLimits(short));
         }
         if let Some(problem) = drawable_format(&ctx.device, output_format) {
             return Err(GpuError::InvalidInput(problem));
@@ -185,12 +185,18 @@ impl Renderer {
     /// sRGB, encoded in hardware; UNORM formats without sRGB get it too, encoded by the shaders
     /// ([`crate::encodes_srgb`]); float formats get the linear tone-mapped colour.
     ///
-    /// # Panics
-    ///
-    /// In wgpu's validation (with its default error handler) on a device below
-    /// [`Renderer::required_limits`]; [`Renderer::try_new`] returns an error instead.
+    /// On a device below [`Renderer::required_limits`] where wgpu refuses the renderer's layouts
+    /// or pipelines, every call of the renderer returns [`GpuError::DeviceLimits`] naming the
+    /// limits (it panicked here in wgpu's validation; under an engine's own error handler the
+    /// frames blamed their target). [`Renderer::try_new`] refuses such a device up front, and
+    /// also one whose storage bindings are below the 128 MiB `new` leaves to each frame's checks.
     pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Self {
         let device = &ctx.device;
+        // Everything made here is made under an error scope: on a device wgpu refuses them on
+        // (limits below `required_limits`), the renderer keeps the reason and every call returns
+        // it, instead of a panic here or, under an engine's own error handler, frames that
+        // blamed their target (engine audit).
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipelines = Pipelines::new(device, output_format);
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
@@ -205,6 +211,10 @@ impl Renderer {
                 binding: 0,
                 resource: frame_buffer.as_entire_binding(),
             }],
+        });
+        let refused = target_check::ready(scope.pop()).flatten().map(|error| {
+            let short = limits_shortfall(device).unwrap_or_else(|| "none below them".into());
+            format!("{short}; wgpu refused the renderer's layouts and pipelines: {error}")
         });
         Self {
             device: device.clone(),
@@ -231,6 +241,7 @@ impl Renderer {
             checked_target: None,
             has_spots: false,
             pipelines,
+            refused,
         }
     }
 
@@ -298,8 +309,12 @@ impl Renderer {
 
     /// Refuses a context (and scene) of another device than the one this renderer was made on:
     /// the renderer's pipelines and buffers exist only there, and wgpu panics on them elsewhere
-    /// ("Cannot get non-existent resource", audit).
+    /// ("Cannot get non-existent resource", audit). And every call of a renderer made with
+    /// [`Renderer::new`] on a device below the required limits.
     fn check_device(&self, ctx: &GpuContext, scene: Option<&GpuScene>) -> Result<(), GpuError> {
+        if let Some(refused) = &self.refused {
+            return Err(GpuError::DeviceLimits(refused.clone()));
+        }
         if ctx.device != self.device {
             return Err(GpuError::InvalidInput(
                 "the context is of another device than the one this renderer was made on (a \
@@ -532,7 +547,9 @@ impl Renderer {
         let target_size = texture.size();
         if (target_size.width, target_size.height) != (width, height) {
             return Err(GpuError::InvalidInput(format!(
-                "camera is {width}x{height} but the target is {}x{}",
+                "camera is {width}x{height} but the target's texture is {}x{} (the renderer draws \
+                 into mip 0 of a texture of the camera's size: a viewport or a lower mip of a \
+                 larger texture is not drawn into)",
                 target_size.width, target_size.height
             )));
         }
@@ -544,30 +561,6 @@ impl Renderer {
                 "target {width}x{height} with {}x{} tiles overflows the shader's u32 tile arithmetic",
                 dims.x, dims.y
             )));
-        }
-        // Checked before anything is staged, so a refused frame changes nothing.
-        if let Some(max_lights) = ctx.max_lights_per_pixel(frame.mode, dims.z)
-            && !frame.heat_map
-        {
-            let lights = match frame.mode {
-                ShadingMode::BruteForce => {
-                    frame.lights.map_or(self.light_count, |c| c.len()) as u64
-                }
-                ShadingMode::Lists => frame
-                    .lists
-                    .map(|l| l.max_count())
-                    .or(self.lists_uploaded.map(|u| u.max_count))
-                    .unwrap_or(0) as u64,
-            };
-            if lights > max_lights {
-                return Err(GpuError::ShaderLoopLimit {
-                    mode: frame.mode,
-                    lights,
-                    max_lights,
-                    adapter: ctx.describe(),
-                    limit: ctx.shader_loop_limit().unwrap_or_default(),
-                });
-            }
         }
         // Every input is checked before anything is staged, so a refused frame leaves the
         // renderer as it was (lights, lists and counts of the last accepted frame).
@@ -598,6 +591,32 @@ impl Renderer {
             let edges = (frame.grid.dims().z as u64 + 1) * std::mem::size_of::<f32>() as u64;
             self.slice_edges.check_fits(device, edges)?;
         }
+        // Checked before anything is staged, so a refused frame changes nothing, and after the
+        // inputs' own checks, so lists of another grid's shape are named as such (they were
+        // refused for a loop limit, audit).
+        if let Some(max_lights) = ctx.max_lights_per_pixel(frame.mode, dims.z)
+            && !frame.heat_map
+        {
+            let lights = match frame.mode {
+                ShadingMode::BruteForce => {
+                    frame.lights.map_or(self.light_count, |c| c.len()) as u64
+                }
+                ShadingMode::Lists => frame
+                    .lists
+                    .map(|l| l.max_count())
+                    .or(self.lists_uploaded.map(|u| u.max_count))
+                    .unwrap_or(0) as u64,
+            };
+            if lights > max_lights {
+                return Err(GpuError::ShaderLoopLimit {
+                    mode: frame.mode,
+                    lights,
+                    max_lights,
+                    adapter: ctx.describe(),
+                    limit: ctx.shader_loop_limit().unwrap_or_default(),
+                });
+            }
+        }
         let camera_position = frame.camera.position.to_array();
         if frame.lights.is_none()
             && self.light_count > 0
@@ -613,6 +632,16 @@ impl Renderer {
         // would read the records of lights that are gone).
         if frame.mode == ShadingMode::Lists && frame.lists.is_none() {
             match self.lists_uploaded {
+                // And to the camera they were assigned for: the same grid seen from elsewhere is
+                // other clusters in the world (such a frame shaded with Ok, audit).
+                Some(kept) if kept.grid == *frame.grid && kept.camera != *frame.camera => {
+                    return Err(GpuError::InvalidInput(
+                        "the kept lists were assigned for another camera (its position, \
+                         orientation, field of view, size or depth range changed): lists belong \
+                         to one view, so upload lists assigned for this camera"
+                            .into(),
+                    ));
+                }
                 Some(kept) if kept.grid == *frame.grid => {
                     if kept.lights_named > light_count {
                         return Err(GpuError::InvalidInput(format!(
@@ -680,6 +709,7 @@ impl Renderer {
             }
             self.lists_uploaded = Some(UploadedLists {
                 grid: *frame.grid,
+                camera: *frame.camera,
                 max_count: lists.max_count(),
                 lights_named: lists.lights_named(),
             });
@@ -735,11 +765,25 @@ impl Renderer {
     }
 }
 
+/// The limits of `device` below [`Renderer::required_limits`], named with what each needs; `None`
+/// when it meets them all.
+fn limits_shortfall(device: &wgpu::Device) -> Option<String> {
+    let mut short = Vec::new();
+    Renderer::required_limits().check_limits_with_fail_fn(
+        &device.limits(),
+        false,
+        |name, needed, allowed| short.push(format!("{name} {allowed} (needs {needed})")),
+    );
+    (!short.is_empty()).then(|| short.join(", "))
+}
+
 /// What the last accepted lists were built for: a frame that keeps them is checked against it.
 #[derive(Clone, Copy, Debug)]
 struct UploadedLists {
     /// The whole grid (dimensions, depth range, slicing).
     grid: ClusterGrid,
+    /// The camera of the frame that uploaded them (the view the lists were assigned for).
+    camera: Camera,
     /// The longest list (the shader loop-limit guard).
     max_count: u32,
     /// One more than the largest light index.

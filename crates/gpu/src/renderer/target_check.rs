@@ -157,7 +157,7 @@ impl Renderer {
 
 /// The value of a future that is ready at once (a native device's error scope resolves
 /// synchronously); `None` when it is not, which then refuses nothing.
-fn ready<T>(future: impl Future<Output = T>) -> Option<T> {
+pub(super) fn ready<T>(future: impl Future<Output = T>) -> Option<T> {
     let mut future = std::pin::pin!(future);
     match future
         .as_mut()
