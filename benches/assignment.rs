@@ -25,6 +25,8 @@
 //!   `paper/*-from-pool-member` from a thread that joined its pool (`use_current_thread`), as an
 //!   engine's main thread can.
 //!   `scaling` calls from outside too.
+//! * **`far_edge`** — what counting the lights past the grid's far edge costs: `uniform` 100k
+//!   `refined` on one worker, with the camera's far at the grid's and infinite (see [`far_edge`]).
 //!
 //! ## What is timed
 //! One `Assigner::assign` call into a reused `LightLists`: the steady state of a frame, where the
@@ -278,5 +280,44 @@ fn targets(c: &mut Criterion) {
     eprintln!("targets: thread link after {:?}", link());
 }
 
-criterion::criterion_group!(benches, targets, scaling);
+/// What counting the lights past the grid's far edge costs (`AssignStats::beyond_far` and
+/// `reach`, a pass only in frames whose camera sees past the grid): `uniform` 100k `refined` on
+/// one worker with the preset's grid, under the preset's camera (far 100, the grid's: nothing
+/// counted) and under the same camera with an infinite far plane (an engine's infinite
+/// projection: every light is also tested against it).
+fn far_edge(c: &mut Criterion) {
+    let mut group = c.benchmark_group("far_edge");
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("cannot start a rayon pool");
+    let scene = OnceCell::new();
+    for (name, far) in [
+        ("uniform/refined-grid-to-camera-far", None),
+        ("uniform/refined-camera-sees-past", Some(f32::INFINITY)),
+    ] {
+        timing(&mut group, Method::Refined, 100_000);
+        group.throughput(Throughput::Elements(100_000));
+        group.bench_function(BenchmarkId::new(name, 100_000), |b| {
+            let scene: &Scene = scene.get_or_init(|| Preset::Uniform.generate(100_000, SEED));
+            let camera = myriad::cluster_math::Camera {
+                far: far.unwrap_or(scene.camera.far),
+                ..scene.camera
+            };
+            let input = myriad::light_input(&scene.lights);
+            let (mut assigner, mut lists) = (Assigner::new(), LightLists::new());
+            one_thread.install(|| {
+                let mut run = || {
+                    let input = black_box(&input);
+                    assigner.assign(Method::Refined, input, &camera, &scene.grid, &mut lists)
+                };
+                assert_eq!(run().reach.is_some(), far.is_some());
+                b.iter(|| black_box(run()));
+            });
+        });
+    }
+    group.finish();
+}
+
+criterion::criterion_group!(benches, targets, scaling, far_edge);
 criterion::criterion_main!(benches);
