@@ -115,3 +115,50 @@ fn a_pixel_shows_every_light_up_to_the_budget_and_no_more_are_drawn() {
     check_edge(&ctx, Shading::Clustered, 37);
     check_edge(&ctx, Shading::BruteForce, 16);
 }
+
+/// Lists of another grid's shape whose longest list is past the loop budget (lists a pair budget
+/// coarsened to 1×1×1, passed with the grid first asked for) are refused for their shape: the
+/// loop budget was checked first and named a finer grid as the cure (engine audit).
+#[test]
+fn lists_of_another_shape_are_refused_for_their_shape_before_the_loop_budget() {
+    use myriad::gpu::FrameDesc;
+    use myriad::render::light_columns;
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut scene = RenderScene::default_scene(0, 48, 24).unwrap();
+    let (near, far) = (scene.camera.near, scene.camera.far);
+    scene.grid = ClusterGrid::new(UVec3::new(2, 2, 2), DepthSlicing::Log, near, far);
+    // Past the budget of the frame's grid (2 slices), so that checking the budget first refuses.
+    let most = ctx
+        .max_lights_per_pixel(ShadingMode::Lists, 2)
+        .unwrap_or_else(|| {
+            loop_budget::max_lights_per_pixel(LLVMPIPE_LOOP_LIMIT, ShadingMode::Lists, 2)
+        });
+    let n = most as usize + 1;
+    scene.lights = dark_lights_then_one(&scene, n);
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let indices: Vec<u32> = (0..n as u32).collect();
+    let one_cluster = myriad::gpu::ClusterLists {
+        offsets: &[0],
+        counts: &[n as u32],
+        indices: &indices,
+    };
+    let frame = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        one_cluster,
+    );
+    let result = viewer
+        .renderer
+        .render(&viewer.ctx, &viewer.scene, &frame, &viewer.target.view);
+    match result {
+        Err(GpuError::InvalidInput(message)) => assert!(
+            message
+                .contains("light lists describe 1 offsets and 1 counts for a grid of 8 clusters"),
+            "{message}"
+        ),
+        other => panic!("want the lists' shape refused, got {:?}", other.map(drop)),
+    }
+}
