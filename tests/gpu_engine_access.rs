@@ -16,6 +16,29 @@ fn viewer_after_one_frame(width: u32, height: u32) -> Option<(RenderScene, Viewe
     Some((scene, viewer))
 }
 
+/// An engine's own render target: `size`, `format`, readable back, views of `view_formats` too.
+fn engine_target(
+    ctx: &GpuContext,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    view_formats: &[wgpu::TextureFormat],
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("engine target"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats,
+    })
+}
+
 #[test]
 fn a_device_below_the_required_limits_is_a_device_limits_error() {
     // The adapter's own device is only to see that one exists (or to skip where allowed).
@@ -324,20 +347,7 @@ fn a_unorm_target_gets_the_image_of_an_srgb_target() {
     ] {
         assert_eq!(encodes_srgb(format), !format.is_srgb());
         let mut renderer = Renderer::try_new(ctx, format).unwrap();
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("engine target"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let texture = engine_target(ctx, (width, height), format, &[]);
         let view = texture.create_view(&Default::default());
         let mut pair = Vec::new();
         for heat_map in [false, true] {
@@ -386,22 +396,8 @@ fn one_renderer_draws_into_targets_of_several_formats() {
     // The glass too: the forward pass blends into each format.
     assert!(scene.has_blended());
     let (width, height) = (scene.camera.width, scene.camera.height);
-    let target = |format, view_formats: &[F]| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("engine target"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats,
-        })
-    };
+    let target =
+        |format, view_formats: &[F]| engine_target(ctx, (width, height), format, view_formats);
     let lists = viewer.lists().clone();
     let frame = FrameDesc::clustered(
         &scene.camera,
