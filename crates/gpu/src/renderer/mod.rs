@@ -54,7 +54,8 @@ pub struct FrameDesc<'a> {
     /// The camera; its `width × height` must be the target's size.
     pub camera: &'a Camera,
     /// The grid the lists were built for (its depth range may be fitted, narrower than the
-    /// camera's).
+    /// camera's; pixels beyond its far edge read its last slice, which lists no light lying
+    /// wholly past that edge: see the assignment's `AssignStats::beyond_far` and `reach`).
     pub grid: &'a ClusterGrid,
     /// Which lights each pixel visits.
     pub mode: ShadingMode,
@@ -63,7 +64,8 @@ pub struct FrameDesc<'a> {
     /// This frame's lights, or `None` to keep the last upload (allowed only while the camera
     /// position is unchanged: records are camera-relative).
     pub lights: Option<LightColumns<'a>>,
-    /// This frame's lists, or `None` to keep the last upload. Needed for [`ShadingMode::Lists`].
+    /// This frame's lists, or `None` to keep the last upload (allowed only for the same grid and
+    /// camera as that upload's: lists belong to one view). Needed for [`ShadingMode::Lists`].
     pub lists: Option<ClusterLists<'a>>,
     /// Look settings.
     pub settings: ShadingSettings,
