@@ -4,9 +4,11 @@
 mod cli;
 
 use clap::Parser;
+use std::io::Write;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    exit_2_on_closed_stdout();
     // First in, last out: the session shuts the Tracy client down when `main` returns, by any
     // path (the reason arguments are parsed with `try_parse`: clap's own exit would skip it).
     let _profiler = myriad::profiling::start();
@@ -30,4 +32,26 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// A closed stdout (`myriad check … | head -1`, `… | true`) is a run that could not finish:
+/// exit 2 with one line, as an unwritable `--out` does. `println!` panics there, with std's
+/// "failed printing to stdout: …", which exited 101 with a backtrace from `check`, `info`,
+/// `bench` and `stress` (audit). Every other panic goes to the default hook.
+fn exit_2_on_closed_stdout() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if let Some(problem) = info
+            .payload_as_str()
+            .and_then(|message| message.strip_prefix("failed printing to stdout: "))
+        {
+            // stderr may be closed too: nothing more to say then.
+            let _ = writeln!(
+                std::io::stderr(),
+                "error: cannot write to stdout: {problem}"
+            );
+            std::process::exit(2);
+        }
+        default(info);
+    }));
 }

@@ -278,3 +278,36 @@ fn the_worker_threads_are_started_and_named_before_any_work() {
     );
     assert!(names.iter().any(|n| n == "rayon 0"), "{names:?}");
 }
+
+/// A closed stdout (`myriad bench … | true`) is a run that could not finish: exit 2 and one line
+/// on stderr, as an unwritable `--out` gives. `println!` panicked there: exit 101 and a backtrace
+/// from `check`, `info`, `bench` and `stress` (audit).
+#[test]
+fn a_closed_stdout_exits_2_with_one_line() {
+    let dir = work_dir("a_closed_stdout_exits_2_with_one_line");
+    let scene = write(&dir, "good.json", GOOD_SCENE);
+    let atrium = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/atrium.glb");
+    for args in [
+        vec!["bench", "--methods", "binary", "--runs", "3", "--scene"],
+        vec!["info", "--gltf"],
+    ] {
+        // A pipe whose reading end is closed before the run starts: its first write fails.
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let mut command = Command::new(env!("CARGO_BIN_EXE_myriad"));
+        command.args(&args);
+        command.arg(if args[0] == "info" { &atrium } else { &scene });
+        let out = command
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(
+            err.trim(),
+            "error: cannot write to stdout: Broken pipe (os error 32)",
+            "{args:?}"
+        );
+    }
+}
