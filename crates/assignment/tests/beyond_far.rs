@@ -67,7 +67,13 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
         let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0);
         // 300 lights run as one task; 6000 as several (tasks count their own and are summed).
         for (n, seed) in [(300, 1), (6000, 2)] {
-            let (lights, beyond, reach) = lights_in_view(&camera, n, grid.far(), seed);
+            let (mut lights, beyond, reach) = lights_in_view(&camera, n, grid.far(), seed);
+            // Invalid lights past the grid are rejected, never counted as beyond it (a radius
+            // of 0 or −1 at a finite position passed the camera's cull unless checked).
+            let (_, _, forward) = view_basis(&camera);
+            for r in [0.0, -1.0, f32::NAN] {
+                lights.push(camera.position + forward * 80.0, r);
+            }
             assert!(
                 beyond > n as u32 / 2,
                 "the draw puts most lights past the grid"
@@ -82,6 +88,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                     &mut lists,
                 );
                 let what = format!("{method}, far {far}, {n} lights");
+                assert_eq!(stats.rejected, 3, "{what}");
                 assert_eq!(stats.beyond_far, beyond, "{what}");
                 assert!(stats.culled >= beyond, "{what}: {stats:?}");
                 let got = stats.reach.expect("the camera sees past the grid");
@@ -101,6 +108,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                 );
                 assert_eq!(stats.beyond_far, 0, "{what}: {stats:?}");
                 assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}");
+                assert_eq!(stats.rejected, 3, "{what}: {stats:?}");
                 assert_eq!(
                     stats.reach,
                     Some(got),
