@@ -41,9 +41,14 @@ fn main() -> ExitCode {
 fn exit_2_on_closed_stdout() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        if let Some(problem) = info
-            .payload_as_str()
-            .and_then(|message| message.strip_prefix("failed printing to stdout: "))
+        // (`PanicHookInfo::payload_as_str` would do, from Rust 1.91: newer than the MSRV.)
+        let payload = info.payload();
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied());
+        if let Some(problem) =
+            message.and_then(|message| message.strip_prefix("failed printing to stdout: "))
         {
             // stderr may be closed too: nothing more to say then.
             let _ = writeln!(
