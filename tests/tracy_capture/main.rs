@@ -21,9 +21,19 @@ fn free_port() -> u16 {
         .port()
 }
 
+/// Held by each captured run: one at a time. Two at once (the test harness runs this binary's
+/// tests in parallel) had the other run's llvmpipe threads hold both cores of the 2-vCPU
+/// machine, so that a pool worker sometimes ran no task in any frame (no worker in the capture,
+/// 1 run of 60) and a GPU clock tie waited long enough to put a pass's zone after its frame.
+static ONE_CAPTURE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Runs `myriad` with `args` under a capture, and returns what the capture received and what the
 /// command printed. The command must succeed.
 fn captured_run(args: &[&str]) -> (capture::Capture, String) {
+    // A failed run poisons the lock; the next one still runs alone.
+    let _alone = ONE_CAPTURE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     let port = free_port();
     let child = Command::new(env!("CARGO_BIN_EXE_myriad"))
         .args(args)
@@ -52,10 +62,15 @@ fn captured_run(args: &[&str]) -> (capture::Capture, String) {
 #[test]
 fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
     let frames = 4;
+    // Enough lights that every frame runs its tasks on the pool (pacing runs a frame under
+    // 250 µs of work serially after idle) and outlasts a sleeping worker's wake-up: with 3000,
+    // the calling thread sometimes did every task of all 8 frames itself and no pool worker
+    // appeared in the capture (4 runs of 40).
+    let lights = 20_000;
     let (c, _) = captured_run(&[
         "frames",
         "--lights",
-        "3000",
+        &lights.to_string(),
         "--size",
         "128x64",
         "--frames",
@@ -127,7 +142,7 @@ fn a_profiler_receives_the_frame_loop_named_nested_and_timed() {
     assert!(
         c.plots["visible lights"]
             .iter()
-            .all(|&v| v > 0.0 && v <= 3000.0)
+            .all(|&v| v > 0.0 && v <= lights as f64)
     );
     assert!(c.plots["cluster-light pairs"].iter().all(|&v| v > 0.0));
 
