@@ -167,8 +167,8 @@ impl Renderer {
 
     /// [`Renderer::new`] after checking the device against [`Renderer::required_limits`]
     /// ([`GpuError::DeviceLimits`] naming every limit that is too low) and `output_format` (a
-    /// float colour format the device can render to and blend), where `new` would panic in
-    /// wgpu's validation later.
+    /// float colour format the device can render to and blend): an error now, where `new` gives
+    /// a renderer whose calls return it (or refuse that format's targets).
     pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
         if let Some(short) = limits_shortfall(&ctx.device) {
             return Err(GpuError::DeviceLimits(short));
@@ -274,7 +274,8 @@ impl Renderer {
     /// upload when it keeps them), and the forward pass's when the frame has one (`scene` has
     /// blended geometry, or every feature is forced). Nothing is uploaded or checked, and
     /// `frame.lists` is not read. Returns how many pipelines it built: 0 when they all were
-    /// already; an error only for a context or scene of another device.
+    /// already; an error for a context or scene of another device (and as
+    /// [`Renderer::prepare_for`] says).
     pub fn prepare(
         &mut self,
         ctx: &GpuContext,
