@@ -59,9 +59,10 @@ fn main() {
     let camera = Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 1920, 1080)
         .expect("a centred right-handed perspective");
     // The far plane is infinite; the grid slices depth over a finite range of its own: a
-    // 16×9×24 grid with log slices, first out to 50 m. Lights wholly past its far edge are in
-    // view but in no list (pixels out there read the last slice): the stats count them
-    // (`beyond_far`) and say how far the lights reach, which the next frame's grid follows.
+    // 16×9×24 grid with log slices, first out to 50 m. Pixels past its far edge read its last
+    // slice, which is open (`FarEdge::Open`, the default): it lists the lights out there too, so
+    // none is missing. The stats count them (`beyond_far`) and say how far the lights reach,
+    // which the next frame's grid follows, so its slices cut the lights' whole depth range.
     let mut grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, 50.0);
 
     // 10 000 lights on a deterministic spiral in front of the camera.
@@ -102,8 +103,8 @@ fn main() {
             &mut lists,
         );
         println!(
-            "frame {frame}: {} lights, {} visible, {} culled ({} beyond the grid's far {:.1}) -> {} \
-             cluster-light pairs, {} KiB to upload",
+            "frame {frame}: {} lights, {} visible, {} culled, {} beyond the grid's far {:.1} (in its \
+             last slice) -> {} cluster-light pairs, {} KiB to upload",
             stats.lights,
             stats.visible(),
             stats.culled,
@@ -114,7 +115,7 @@ fn main() {
         );
         // Next frame's grid reaches as far as this frame's lights did (with a little room for
         // them to move), like Bevy's "max light range" far; a light that moves past it anyway is
-        // missing for one frame, and counted.
+        // listed in the open last slice, and counted.
         if let Some(reach) = stats.reach {
             let far = (reach * 1.05).max(camera.near * 2.0);
             grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, far);

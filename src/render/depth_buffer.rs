@@ -11,7 +11,7 @@
 //! (The textbook formula it replaced was 5e-5 off at near 0.1, far 100: over the band.)
 
 use myriad_assignment::ActiveClusters;
-use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing};
+use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing, FarEdge};
 use rayon::prelude::*;
 
 /// Relative widening of the fitted range and of the slice-edge tolerance.
@@ -89,7 +89,8 @@ pub fn fitted_grid(
         return *grid; // Nothing visible: any range will do.
     }
     let near = (lo * (1.0 - DEPTH_TOLERANCE)).max(grid.near());
-    let mut far = (hi * (1.0 + DEPTH_TOLERANCE)).min(grid.far());
+    let deepest = hi * (1.0 + DEPTH_TOLERANCE);
+    let mut far = deepest.min(grid.far());
     if !(far > near) {
         far = (near * (1.0 + DEPTH_TOLERANCE)).max(near.next_up());
     }
@@ -101,7 +102,15 @@ pub fn fitted_grid(
         }
         s => s,
     };
-    ClusterGrid::new(grid.dims(), slicing, near, far)
+    // Where every shaded depth lies inside the fitted range, no pixel reads the last slice from
+    // beyond it: the lights past it need no list (`FarEdge::Closed`). Pixels past a shorter
+    // scene grid keep its far edge.
+    let far_edge = if deepest <= grid.far() {
+        FarEdge::Closed
+    } else {
+        grid.far_edge()
+    };
+    ClusterGrid::new(grid.dims(), slicing, near, far).with_far_edge(far_edge)
 }
 
 /// The grid's slice edges as keys of stored depth-buffer values, each with the band around it
@@ -382,6 +391,15 @@ mod tests {
             (fitted.dims(), fitted.slicing()),
             (grid.dims(), grid.slicing())
         );
+        // No pixel lies past the fitted range: the lights beyond it need no list.
+        assert_eq!(fitted.far_edge(), FarEdge::Closed);
+        // Pixels past a scene grid shorter than the view (to 20, the pixel at 30 beyond it) read
+        // its last slice: the fitted grid keeps that grid's far edge, open or closed.
+        let short = grid.with_depth_range(0.1, 20.0);
+        for edge in [FarEdge::Open, FarEdge::Closed] {
+            let fitted = fitted_grid(&short.with_far_edge(edge), &camera, &depth, &unseen);
+            assert_eq!((fitted.far(), fitted.far_edge()), (20.0, edge));
+        }
         // A pixel exactly at the near plane (stored 1) and one at the far plane (the smallest
         // stored value that is not background): the fitted range is the whole grid, no wider.
         let edges = [0.0, 1.0, f32::from_bits(1), 0.0];

@@ -139,7 +139,8 @@ impl RenderScene {
 
     /// The same scene with a different grid over the same depth range.
     pub fn with_grid(mut self, dims: UVec3, slicing: DepthSlicing) -> Self {
-        self.grid = ClusterGrid::new(dims, slicing, self.grid.near(), self.grid.far());
+        self.grid = ClusterGrid::new(dims, slicing, self.grid.near(), self.grid.far())
+            .with_far_edge(self.grid.far_edge());
         self
     }
 }

@@ -52,7 +52,8 @@ impl Shading {
                 DepthSlicing::Linear,
                 scene_grid.near(),
                 scene_grid.far(),
-            ),
+            )
+            .with_far_edge(scene_grid.far_edge()),
             _ => *scene_grid,
         }
     }

@@ -12,6 +12,8 @@ use crate::search::FramePlanes;
 use crate::{LightInput, LightLists};
 use crossbeam::utils::CachePadded;
 use glam::Vec4;
+#[cfg(doc)]
+use myriad_cluster_math::FarEdge;
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -133,18 +135,22 @@ pub struct AssignStats {
     /// The pairs exceed the budget even on a 1×1×1 grid; the lists were written anyway (one
     /// cluster holding every visible light), because no light is ever dropped.
     pub over_budget: bool,
-    /// Of the [`culled`](Self::culled) lights, those culled only for lying past the grid's far
-    /// edge, in a frame whose camera sees farther (`camera.far` beyond the grid's far, as with an
-    /// engine's infinite projection and a finite grid). The renderer shades pixels beyond the
-    /// grid with its last slice's lights, which do not include these: their light is missing
-    /// there. 0 when the grid reaches the camera's far plane (nothing is computed then). A grid
-    /// whose far is [`reach`](Self::reach) leaves none out. (Lights whose view-space sphere
-    /// overflows f32, near `f32::MAX`, are not counted.)
+    /// In a frame whose camera sees past the grid's far edge (`camera.far` beyond the grid's
+    /// far, as with an engine's infinite projection and a finite grid): the lights in view that
+    /// lie wholly past that edge. The renderer shades the pixels beyond the grid with its last
+    /// slice's lights. Where the grid's last slice is [`FarEdge::Open`] (the default) these
+    /// lights are listed there and nothing is missing; where it is [`FarEdge::Closed`] they are
+    /// culled (and counted in [`culled`](Self::culled)), and their light is missing from those
+    /// pixels. 0 when the grid reaches the camera's far plane (nothing is computed then). A grid
+    /// whose far is [`reach`](Self::reach) has none. (Lights whose view-space sphere overflows
+    /// f32, near `f32::MAX`, are not counted.)
     pub beyond_far: u32,
     /// When the camera sees past the grid's far edge: the farthest view depth the lights in the
     /// camera's view reach (the far side of their padded sphere, a spot's bounding sphere), 0 when
-    /// none is in view; the far of a grid that would have left no light beyond it, for the next
-    /// frame's grid (a light that moves past it is then missing for one frame, and counted in
+    /// none is in view; the far of a grid that would have no light beyond it, for the next
+    /// frame's grid (its slices then cut the lights' whole depth range, instead of one last
+    /// slice holding every light past the grid; a [`FarEdge::Closed`] grid that follows it
+    /// misses a light that moves past it for one frame, counted in
     /// [`beyond_far`](Self::beyond_far)). `None` when the grid reaches the camera's far plane.
     pub reach: Option<f32>,
 }
@@ -239,7 +245,7 @@ pub struct Assigner {
     /// The active mask's prefix count (see `ActiveClusters::view`).
     active_before: Vec<u32>,
     cluster_spheres: Vec<Vec4>,
-    spheres_key: Option<(glam::Vec2, ClusterGrid)>,
+    spheres_key: Option<(glam::Vec2, ClusterGrid, f32)>,
     /// The `cone` method's tile cones (`cone.rs`), kept while the field of view and the tiling
     /// stay the same; empty for grids of more than [`cone::MAX_CACHED_TILES`] tiles.
     tile_cones: Vec<TileCone>,
@@ -493,7 +499,8 @@ impl Assigner {
             return Ok(stats);
         }
         if lights.spot.is_some() && method != Method::Exact {
-            let key = (camera.tan_half_fov(), *grid);
+            // The last slice's spheres follow the camera's far where that slice is open.
+            let key = (camera.tan_half_fov(), *grid, grid.last_slice_end(camera));
             if self.spheres_key != Some(key) {
                 jobs::cluster_bounding_spheres(camera, grid, &mut self.cluster_spheres);
                 self.spheres_key = Some(key);
@@ -613,10 +620,10 @@ struct Frame<'a> {
 }
 
 /// The grid a pair budget falls back to: every dimension halved (rounding down, at least 1),
-/// same depth range and slicing. Repeating it reaches 1×1×1.
+/// same depth range, slicing and [`FarEdge`](myriad_cluster_math::FarEdge). Repeating it reaches 1×1×1.
 pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
     let dims = (grid.dims() / 2).max(glam::UVec3::ONE);
-    ClusterGrid::new(dims, grid.slicing(), grid.near(), grid.far())
+    ClusterGrid::new(dims, grid.slicing(), grid.near(), grid.far()).with_far_edge(grid.far_edge())
 }
 
 /// Splits the clusters into parts of whole depth slices: one part when serial; else one per slice,

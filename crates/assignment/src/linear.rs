@@ -127,7 +127,7 @@ pub(crate) fn assign_linear(
             && dc - r <= far
         {
             reach = reach.max(dc + r);
-            beyond_far += u32::from(z.is_none());
+            beyond_far += u32::from(dc - r > grid.far());
         }
         let Some(z) = z else {
             culled += 1;

@@ -71,15 +71,16 @@ fn clamp_index(t: f32, max: usize) -> usize {
 /// (A throwaway build that trusted every x and y guess unchecked ran `uniform` 100k `binary` in
 /// 38 M instructions a frame instead of 47.5 M: the prize this claims, soundly.) Infinite —
 /// nothing proved — for an axis of 2²² planes or more, where [`clamp_index`] stops being exact.
-fn exact_margin(coordinates: impl ExactSizeIterator<Item = f32>) -> f32 {
-    let planes = coordinates.len();
+fn exact_margin(coordinates: impl Iterator<Item = f32>) -> f32 {
+    let (mut planes, mut stray) = (0usize, 0.0f64);
+    for (i, u) in coordinates.enumerate() {
+        let b = (u as f64 - i as f64).abs();
+        stray = if b > stray || b.is_nan() { b } else { stray };
+        planes = i + 1;
+    }
     if planes >= 1 << 22 {
         return f32::INFINITY;
     }
-    let stray = coordinates
-        .enumerate()
-        .map(|(i, u)| (u as f64 - i as f64).abs())
-        .fold(0.0f64, |a, b| if b > a || b.is_nan() { b } else { a });
     let mut margin = stray as f32;
     if (margin as f64) < stray {
         margin = margin.next_up();
@@ -216,7 +217,7 @@ impl<'a> FramePlanes<'a> {
             let coordinates = sets.y_slopes.iter().map(|&s| planes.row_coordinate(s));
             planes.y_margin = exact_margin(coordinates);
         }
-        planes.z_margin = planes.slice_margin();
+        planes.z_margin = planes.slice_margin(f);
         planes
     }
 
@@ -226,9 +227,16 @@ impl<'a> FramePlanes<'a> {
     /// `E = scale·LOG2_APPROX_ERROR` plus rounding of `T`, which is monotone, at the planes and
     /// at the value alike, so twice that is added to the planes' own stray. A depth below
     /// `start` has coordinate 0, never clear of a plane, so it is always searched.
-    fn slice_margin(&self) -> f32 {
+    ///
+    /// The margin is that of the grid's own edges, the last at the grid's `far`, even where the
+    /// sets' last edge lies beyond it (an open last slice, [`myriad_cluster_math::FarEdge`]):
+    /// for a depth between the two, the guess counts one edge more below it than the sets do,
+    /// and both answers clamp to the last slice alike.
+    fn slice_margin(&self, far: f32) -> f32 {
         let depths = &self.sets.z_depths;
-        let stray = exact_margin(depths.iter().map(|&d| self.slice_coordinate(d)));
+        let edges = depths[..depths.len() - 1].iter().copied();
+        let edges = edges.chain(std::iter::once(far));
+        let stray = exact_margin(edges.map(|d| self.slice_coordinate(d)));
         let ulp = |v: f32| v.next_up() - v;
         let usable = |v: f32| v > 0.0 && v.is_finite();
         match self.slice {

@@ -1,15 +1,16 @@
 //! A camera that sees past the grid's far edge (an engine's infinite projection with a finite
-//! grid): the lights the grid's far plane alone culls are counted (`AssignStats::beyond_far`),
+//! grid): the lights wholly past the grid's far are counted (`AssignStats::beyond_far`),
 //! identically by every method and thread count, and `AssignStats::reach` is the far of a grid
-//! that leaves none of them out. An engine audit found those lights silently missing from the
-//! pixels beyond the grid (which read its last slice).
+//! that has none of them beyond it. An engine audit found those lights silently missing from
+//! the pixels beyond the grid (which read its last slice); a grid's last slice is now open by
+//! default (`FarEdge::Open`) and lists them, and a closed one culls them.
 
 mod common;
 
 use common::*;
 use glam::{UVec3, Vec3};
 use myriad_assignment::{Assigner, LightLists, Method};
-use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, FarEdge};
 use rand::{Rng, SeedableRng};
 
 const METHODS: [Method; 5] = [
@@ -62,9 +63,14 @@ fn camera(far: f32) -> Camera {
 
 #[test]
 fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers_them() {
-    for far in [f32::INFINITY, 400.0] {
+    for (far, edge) in [f32::INFINITY, 400.0]
+        .into_iter()
+        .flat_map(|far| [(far, FarEdge::Open), (far, FarEdge::Closed)])
+    {
         let camera = camera(far);
-        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0);
+        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0)
+            .with_far_edge(edge);
+        let last_slice = grid.dims().x * grid.dims().y * (grid.dims().z - 1);
         // 300 lights run as one task; 6000 as several (tasks count their own and are summed).
         for (n, seed) in [(300, 1), (6000, 2)] {
             let (mut lights, beyond, reach) = lights_in_view(&camera, n, grid.far(), seed);
@@ -87,10 +93,38 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                     &grid,
                     &mut lists,
                 );
-                let what = format!("{method}, far {far}, {n} lights");
+                let what = format!("{method}, far {far}, {edge:?}, {n} lights");
                 assert_eq!(stats.rejected, 3, "{what}");
                 assert_eq!(stats.beyond_far, beyond, "{what}");
-                assert!(stats.culled >= beyond, "{what}: {stats:?}");
+                // Open: every light in view is listed, those past the grid in its last slice
+                // only. Closed: those are culled and listed nowhere.
+                let listed = |l: u32| {
+                    let clusters = (0..grid.cluster_count() as u32)
+                        .filter(|&c| lists.lights_of(c as usize).contains(&l));
+                    clusters.fold(None, |first: Option<u32>, c| {
+                        Some(first.map_or(c, |f| f.min(c)))
+                    })
+                };
+                for l in 0..n {
+                    let p = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
+                    let depth = (p - camera.position).dot(forward);
+                    if depth - lights.radius[l] > grid.far() + 0.01 {
+                        match (edge, listed(l as u32)) {
+                            (FarEdge::Open, Some(first)) => {
+                                assert!(
+                                    first >= last_slice,
+                                    "{what}: light {l} before the last slice"
+                                );
+                            }
+                            (FarEdge::Closed, None) => {}
+                            (_, got) => panic!("{what}: light {l} past the grid listed at {got:?}"),
+                        }
+                    }
+                }
+                match edge {
+                    FarEdge::Open => assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}"),
+                    FarEdge::Closed => assert!(stats.culled >= beyond, "{what}: {stats:?}"),
+                }
                 let got = stats.reach.expect("the camera sees past the grid");
                 // The padded sphere's far side: the exact reach, or a hair beyond it.
                 assert!(
@@ -98,7 +132,8 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                     "{what}: reach {got}, want {reach}"
                 );
                 // A grid out to that reach leaves no light beyond it and lists every light.
-                let covering = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, got);
+                let covering = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, got)
+                    .with_far_edge(edge);
                 let stats = Assigner::new().assign(
                     method,
                     &lights.input(false),

@@ -11,8 +11,13 @@
 //!    depth inside the range — the GPU shader does the same with the uploaded edge table.
 //!
 //! Depths outside the grid's range clamp: below `near` (or NaN) → slice 0, at or beyond `far` →
-//! slice Z−1. The assignment only covers `[near, far]`, so a fitted (dynamic) range must contain
-//! every depth that is shaded.
+//! slice Z−1. So the pixels past `far` read the last slice, and by default ([`FarEdge::Open`])
+//! the last slice reaches on to the camera's far plane for the assignment too: it lists the lights
+//! out there, and no pixel the camera sees misses a light, however short the grid (an engine's
+//! infinite projection with a grid of 50 m). A range fitted to the depth buffer, which no pixel
+//! lies beyond, is [`FarEdge::Closed`]: the lights past it are listed nowhere. The near side
+//! has no such choice: the assignment covers depths from `near` on, so a grid nearer than the
+//! camera's near, or a fitted range, must start at or before every depth that is shaded.
 
 use glam::UVec3;
 use std::ops::Range;
@@ -34,6 +39,25 @@ pub enum DepthSlicing {
     },
 }
 
+/// Where the last slice ends for the assignment, when the camera sees farther than the grid.
+///
+/// Pixels past the grid's far depth clamp to its last slice ([`ClusterGrid::slice_of_depth`],
+/// and the GPU's cluster index alike), so the lights they need must be listed there. Bevy
+/// clamps its lights' slices the same way; the choice here is whether that is wanted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FarEdge {
+    /// The last slice reaches on to the camera's far plane (infinite for an infinite
+    /// projection): a light past the grid's far but in view is listed in the last slice's
+    /// clusters its sphere covers. Never wrong for any pixel; the cost is longer lists in the
+    /// last slice when many lights lie beyond the grid. The default.
+    #[default]
+    Open,
+    /// The last slice ends at the grid's far depth, and lights wholly past it are in no list.
+    /// For a range that holds every shaded depth (fitted to the depth buffer): the lights
+    /// beyond it would only lengthen the last slice's lists.
+    Closed,
+}
+
 /// Why [`ClusterGrid::try_new`] refused a grid.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct InvalidGrid(pub String);
@@ -52,13 +76,15 @@ impl std::error::Error for InvalidGrid {}
 /// (dimensions ≥ 1 whose product fits a u32 cluster id, a first slice inside the range), and a
 /// grid edited field by field (`grid.dims.x = width / 64` on a narrow window) would skip those
 /// checks into empty lists, panics or a 100 GB allocation. A different grid is a new one:
-/// `ClusterGrid::try_new(dims, grid.slicing(), grid.near(), grid.far())`.
+/// `ClusterGrid::try_new(dims, grid.slicing(), grid.near(), grid.far())`, with
+/// `.with_far_edge(grid.far_edge())` to keep its [`FarEdge`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterGrid {
     dims: UVec3,
     slicing: DepthSlicing,
     near: f32,
     far: f32,
+    far_edge: FarEdge,
 }
 
 impl ClusterGrid {
@@ -69,8 +95,8 @@ impl ClusterGrid {
     /// down to it gets the lists of the unscaled one (`crates/assignment/tests/stability.rs`).
     pub const MIN_NEAR: f32 = 1e-12;
 
-    /// A grid over the depth range `[near, far]`. Panics on zero dimensions or an invalid range
-    /// (with [`Self::try_new`]'s message).
+    /// A grid over the depth range `[near, far]`, its last slice [`FarEdge::Open`]. Panics on
+    /// zero dimensions or an invalid range (with [`Self::try_new`]'s message).
     pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
         Self::try_new(dims, slicing, near, far).unwrap_or_else(|e| panic!("{e}"))
     }
@@ -95,7 +121,8 @@ impl ClusterGrid {
                 ""
             } else {
                 " with both finite (a camera with an infinite far plane needs a grid with a \
-                 finite far: where its lights end, see the assignment's `AssignStats::reach`)"
+                 finite far; its open last slice lists the lights beyond, and the assignment's \
+                 `AssignStats::reach` says where they end)"
             };
             return Err(InvalidGrid(format!(
                 "cluster grid depth range must satisfy 0 < near < far{finite}: [{near}, {far}]"
@@ -127,13 +154,36 @@ impl ClusterGrid {
             slicing,
             near,
             far,
+            far_edge: FarEdge::Open,
         })
     }
 
-    /// The same grid over a different depth range (a fitted, dynamic near/far). Panics where
-    /// [`Self::try_with_depth_range`] returns an error.
+    /// The same grid with its last slice ending as `far_edge` says (see [`FarEdge`]).
+    pub fn with_far_edge(self, far_edge: FarEdge) -> Self {
+        Self { far_edge, ..self }
+    }
+
+    /// Where the last slice ends for the assignment: [`FarEdge::Open`] unless set otherwise.
+    pub fn far_edge(&self) -> FarEdge {
+        self.far_edge
+    }
+
+    /// The depth where the assignment's last slice ends, seen through `camera`: the camera's far
+    /// plane (∞ for an infinite projection) where the grid is [`FarEdge::Open`] and the camera
+    /// sees past the grid's `far`, otherwise `far`. Only the assignment and the oracle's last
+    /// cells use it: the slice edges, and so the pixels' clusters, end at `far`.
+    pub fn last_slice_end(&self, camera: &crate::Camera) -> f32 {
+        match self.far_edge {
+            FarEdge::Open if camera.far > self.far => camera.far,
+            _ => self.far,
+        }
+    }
+
+    /// The same grid (its [`FarEdge`] too) over a different depth range (a fitted, dynamic
+    /// near/far). Panics where [`Self::try_with_depth_range`] returns an error.
     pub fn with_depth_range(self, near: f32, far: f32) -> Self {
-        Self::new(self.dims, self.slicing, near, far)
+        self.try_with_depth_range(near, far)
+            .unwrap_or_else(|e| panic!("{e}"))
     }
 
     /// [`Self::with_depth_range`] for ranges measured at run time: an error instead of a panic
@@ -141,7 +191,7 @@ impl ClusterGrid {
     /// no longer hold a `LogWithNearSlice` grid's first slice edge (a depth prepass of a scene
     /// wholly nearer than it; `myriad::render::fitted_grid` then falls back to `Log`).
     pub fn try_with_depth_range(self, near: f32, far: f32) -> Result<Self, InvalidGrid> {
-        Self::try_new(self.dims, self.slicing, near, far)
+        Self::try_new(self.dims, self.slicing, near, far).map(|g| g.with_far_edge(self.far_edge))
     }
 
     /// Tiles across (X), tiles down (Y), depth slices (Z); each ≥ 1, their product ≤ `u32::MAX`.

@@ -2,8 +2,8 @@
 //! (pixel, depth) → cluster id, over every slice edge (±1 and ±2 ulp), every pixel of every
 //! resolution 1..=64 × 1..=64, and a few large resolutions.
 
-use glam::UVec3;
-use myriad_cluster_math::{ClusterGrid, DepthSlicing};
+use glam::{UVec3, Vec3};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 
 fn grids() -> Vec<ClusterGrid> {
     let mut out = Vec::new();
@@ -303,4 +303,54 @@ fn tile_edges_match_design_formula() {
     assert_eq!(near_slice.slice_start_depth(1), 1.0);
     assert!((near_slice.slice_start_depth(2) - 10.0).abs() < 1e-5);
     assert!((near_slice.slice_start_depth(3) - 100.0).abs() < 1e-4);
+}
+
+/// Where the assignment's last slice ends: the camera's far plane (∞ too) for an open grid under
+/// a camera that sees past it, the grid's far otherwise — in `PlaneSets`' last depth and in the
+/// oracle's last cells alike; the pixels' slice edges and clusters stay the grid's.
+#[test]
+fn an_open_last_slice_reaches_the_cameras_far_plane() {
+    use myriad_cluster_math::oracle::Cell;
+    use myriad_cluster_math::{FarEdge, PlaneSets};
+    let grid = ClusterGrid::new(UVec3::new(4, 3, 5), DepthSlicing::Log, 0.1, 40.0);
+    assert_eq!(grid.far_edge(), FarEdge::Open);
+    let closed = grid.with_far_edge(FarEdge::Closed);
+    assert_ne!(grid, closed);
+    // A new depth range or a coarser copy keeps the edge.
+    assert_eq!(
+        closed.with_depth_range(0.2, 30.0).far_edge(),
+        FarEdge::Closed
+    );
+    for (camera_far, open_end) in [
+        (f32::INFINITY, f32::INFINITY),
+        (400.0, 400.0),
+        (40.0, 40.0),
+        (25.0, 40.0),
+    ] {
+        let camera = Camera::new(
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            60.0,
+            640,
+            480,
+            0.1,
+            camera_far,
+        );
+        assert_eq!(grid.last_slice_end(&camera), open_end, "far {camera_far}");
+        assert_eq!(closed.last_slice_end(&camera), 40.0, "far {camera_far}");
+        for (g, end) in [(&grid, open_end), (&closed, 40.0)] {
+            let sets = PlaneSets::new(&camera, g);
+            let mut edges = Vec::new();
+            g.fill_slice_edges(&mut edges);
+            assert_eq!(sets.z_depths[..5], edges[..5], "only the last edge moves");
+            assert_eq!((sets.z_depths[5], edges[5]), (end, 40.0));
+            let last = Cell::of_cluster(&camera, g, 1, 2, 4);
+            assert_eq!(last.depths, [f64::from(edges[4]), f64::from(end)]);
+            let inner = Cell::of_cluster(&camera, g, 1, 2, 3);
+            assert_eq!(inner.depths, [f64::from(edges[3]), f64::from(edges[4])]);
+            // Pixels past the grid read its last slice, open or closed.
+            assert_eq!(g.slice_of_depth(1e6), 4);
+        }
+    }
 }

@@ -11,14 +11,20 @@ pub struct Cell {
     pub x_slopes: [f64; 2],
     /// `[bottom, top]` slopes `y / depth`.
     pub y_slopes: [f64; 2],
-    /// `[near, far]` view depths, `0 < near <= far`.
+    /// `[near, far]` view depths, `0 < near <= far` (`far` may be ∞: an open last slice under an
+    /// infinite projection; the tests against lights cut it to the light's depth first).
     pub depths: [f64; 2],
 }
 
 impl Cell {
-    /// The cell of cluster `(i, j, k)` of `grid` seen through `camera`.
+    /// The cell of cluster `(i, j, k)` of `grid` seen through `camera`. The last slice's cell
+    /// ends at [`ClusterGrid::last_slice_end`]: past the grid's far (perhaps at ∞) where the
+    /// grid is [`crate::FarEdge::Open`] and the camera sees farther.
     pub fn of_cluster(camera: &Camera, grid: &ClusterGrid, i: u32, j: u32, k: u32) -> Self {
-        let (d0, d1) = grid.slice_depth_range(k);
+        let (d0, mut d1) = grid.slice_depth_range(k);
+        if k + 1 == grid.dims().z {
+            d1 = grid.last_slice_end(camera);
+        }
         Self::of_tile(
             camera.tan_half_fov_f64(),
             grid.dims().x,

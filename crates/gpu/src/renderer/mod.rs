@@ -54,8 +54,9 @@ pub struct FrameDesc<'a> {
     /// The camera; its `width × height` must be the target's size.
     pub camera: &'a Camera,
     /// The grid the lists were built for (its depth range may be fitted, narrower than the
-    /// camera's; pixels beyond its far edge read its last slice, which lists no light lying
-    /// wholly past that edge: see the assignment's `AssignStats::beyond_far` and `reach`).
+    /// camera's; pixels beyond its far edge read its last slice, which lists the lights past
+    /// that edge unless the grid is `FarEdge::Closed`: see `myriad_cluster_math::FarEdge` and
+    /// the assignment's `AssignStats::beyond_far` and `reach`).
     pub grid: &'a ClusterGrid,
     /// Which lights each pixel visits.
     pub mode: ShadingMode,
