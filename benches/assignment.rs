@@ -42,7 +42,7 @@ use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, SamplingMode, Throughput, measurement::WallTime,
 };
 use myriad::assignment::{Assigner, LightLists, Method, OutsideCalls};
-use myriad::cluster_math::{ClusterGrid, DepthSlicing, glam::UVec3};
+use myriad::cluster_math::{ClusterGrid, DepthSlicing, FarEdge, glam::UVec3};
 use myriad::scene::{Preset, Scene};
 use std::cell::OnceCell;
 use std::hint::black_box;
@@ -284,7 +284,9 @@ fn targets(c: &mut Criterion) {
 /// `reach`, a pass only in frames whose camera sees past the grid): `uniform` 100k `refined` on
 /// one worker with the preset's grid, under the preset's camera (far 100, the grid's: nothing
 /// counted) and under the same camera with an infinite far plane (an engine's infinite
-/// projection: every light is also tested against it).
+/// projection: every light is also tested against it). Then what an open last slice costs
+/// (`FarEdge`): the preset's grid cut to half the camera's far, open (the lights past it listed
+/// in its last slice) and closed (culled).
 fn far_edge(c: &mut Criterion) {
     let mut group = c.benchmark_group("far_edge");
     let one_thread = rayon::ThreadPoolBuilder::new()
@@ -292,26 +294,52 @@ fn far_edge(c: &mut Criterion) {
         .build()
         .expect("cannot start a rayon pool");
     let scene = OnceCell::new();
-    for (name, far) in [
-        ("uniform/refined-grid-to-camera-far", None),
-        ("uniform/refined-camera-sees-past", Some(f32::INFINITY)),
+    for (name, far, half_grid) in [
+        ("uniform/refined-grid-to-camera-far", None, None),
+        (
+            "uniform/refined-camera-sees-past",
+            Some(f32::INFINITY),
+            None,
+        ),
+        ("uniform/refined-half-grid-open", None, Some(FarEdge::Open)),
+        (
+            "uniform/refined-half-grid-closed",
+            None,
+            Some(FarEdge::Closed),
+        ),
     ] {
         timing(&mut group, Method::Refined, 100_000);
         group.throughput(Throughput::Elements(100_000));
+        let mut told = false;
         group.bench_function(BenchmarkId::new(name, 100_000), |b| {
             let scene: &Scene = scene.get_or_init(|| Preset::Uniform.generate(100_000, SEED));
             let camera = myriad::cluster_math::Camera {
                 far: far.unwrap_or(scene.camera.far),
                 ..scene.camera
             };
+            let grid = match half_grid {
+                Some(edge) => {
+                    let g = scene.grid;
+                    g.with_depth_range(g.near(), camera.far / 2.0)
+                        .with_far_edge(edge)
+                }
+                None => scene.grid,
+            };
             let input = myriad::light_input(&scene.lights);
             let (mut assigner, mut lists) = (Assigner::new(), LightLists::new());
             one_thread.install(|| {
                 let mut run = || {
                     let input = black_box(&input);
-                    assigner.assign(Method::Refined, input, &camera, &scene.grid, &mut lists)
+                    assigner.assign(Method::Refined, input, &camera, &grid, &mut lists)
                 };
-                assert_eq!(run().reach.is_some(), far.is_some());
+                let stats = run();
+                assert_eq!(stats.reach.is_some(), far.is_some() || half_grid.is_some());
+                if !std::mem::replace(&mut told, true) {
+                    eprintln!(
+                        "far_edge/{name}: {} pairs, {} culled, {} beyond the grid",
+                        stats.pairs, stats.culled, stats.beyond_far
+                    );
+                }
                 b.iter(|| black_box(run()));
             });
         });
