@@ -326,7 +326,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             args.runs
         );
         for r in &reports {
-            print_table(r);
+            print!("{}", table(r));
         }
     }
     if !args.json {
@@ -353,16 +353,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_table(r: &SceneReport) {
-    println!(
+/// The table `skips` prints for one scene: a line per saving, then its notes.
+fn table(r: &SceneReport) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
         "\n{} — {} lights (spots: {}, blended geometry: {})",
         r.scene,
         r.lights,
         if r.has_spots { "yes" } else { "no" },
         if r.has_blended { "yes" } else { "no" }
     );
-    println!(
-        "{:<25} {:>19} {:>17} {:>19} {:>19} {:>19} {:>9} {:>6}",
+    let ms = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
+    let header = [
         "saving (before → after)",
         "CPU cull+assign+up ms",
         "pairs",
@@ -370,34 +374,57 @@ fn print_table(r: &SceneReport) {
         "GPU shading ms",
         "G-buffer|prepass ms",
         "mask ms",
-        "Δimage"
-    );
-    let ms = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
-    for row in &r.rows {
+        "Δimage",
+    ]
+    .map(String::from);
+    let cells: Vec<[String; 8]> = r
+        .rows
+        .iter()
+        .map(|row| {
+            let (b, a) = (&row.before, &row.after);
+            [
+                row.saving.to_string(),
+                format!("{:.3} → {:.3}", b.cpu_ms, a.cpu_ms),
+                format!("{} → {}", b.pairs, a.pairs),
+                format!(
+                    "{:.1} → {:.1}",
+                    b.upload_bytes as f64 / 1024.0,
+                    a.upload_bytes as f64 / 1024.0
+                ),
+                format!("{} → {}", ms(b.shading_ms), ms(a.shading_ms)),
+                format!(
+                    "{:.1} → {:.1}",
+                    b.gbuffer_ms,
+                    if a.prepass_ms > 0.0 {
+                        a.prepass_ms
+                    } else {
+                        a.gbuffer_ms
+                    }
+                ),
+                format!("{:.2}", a.mask_ms),
+                a.max_image_difference.to_string(),
+            ]
+        })
+        .collect();
+    // The widths the 1000-light table has, grown where a cell needs more (100k lights' pair
+    // counts), so that two spaces at least part every column.
+    let mut widths = [25, 19, 17, 19, 19, 19, 9, 6];
+    for row in std::iter::once(&header).chain(&cells) {
+        for (w, cell) in widths.iter_mut().zip(row).skip(1) {
+            *w = (*w).max(cell.chars().count() + 1);
+        }
+    }
+    let line = |row: &[String; 8]| {
+        let mut text = format!("{:<w$}", row[0], w = widths[0]);
+        for (cell, &w) in row.iter().zip(&widths).skip(1) {
+            let _ = write!(text, " {cell:>w$}");
+        }
+        text
+    };
+    let _ = writeln!(out, "{}", line(&header));
+    for (row, cells) in r.rows.iter().zip(&cells) {
         let (b, a) = (&row.before, &row.after);
-        println!(
-            "{:<25} {:>19} {:>17} {:>19} {:>19} {:>19} {:>9} {:>6}",
-            row.saving,
-            format!("{:.3} → {:.3}", b.cpu_ms, a.cpu_ms),
-            format!("{} → {}", b.pairs, a.pairs),
-            format!(
-                "{:.1} → {:.1}",
-                b.upload_bytes as f64 / 1024.0,
-                a.upload_bytes as f64 / 1024.0
-            ),
-            format!("{} → {}", ms(b.shading_ms), ms(a.shading_ms)),
-            format!(
-                "{:.1} → {:.1}",
-                b.gbuffer_ms,
-                if a.prepass_ms > 0.0 {
-                    a.prepass_ms
-                } else {
-                    a.gbuffer_ms
-                }
-            ),
-            format!("{:.2}", a.mask_ms),
-            a.max_image_difference,
-        );
+        let _ = writeln!(out, "{}", line(cells));
         let mut notes = Vec::new();
         if a.lights_assigned != b.lights_assigned {
             notes.push(format!(
@@ -415,7 +442,68 @@ fn print_table(r: &SceneReport) {
             notes.push(format!("tuned: {d}"));
         }
         if !notes.is_empty() {
-            println!("{:<25} {}", "", notes.join("; "));
+            let _ = writeln!(out, "{:<25} {}", "", notes.join("; "));
         }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured(pairs: u64, upload_bytes: u64) -> Measured {
+        Measured {
+            cpu_ms: 123.456,
+            prepass_ms: 0.0,
+            mask_ms: 12.5,
+            gbuffer_ms: 1234.5,
+            pairs,
+            lights_assigned: 100_000,
+            upload_bytes,
+            shading_ms: Some(12345.6),
+            max_image_difference: 0,
+        }
+    }
+
+    /// At 100k lights the pair counts filled the column's 17 places and one space parted the
+    /// columns; every column now grows to its widest cell, and the header lines up with the rows.
+    #[test]
+    fn two_spaces_part_every_column_at_100k_lights() {
+        let report = SceneReport {
+            scene: "atrium".into(),
+            lights: 100_000,
+            has_spots: true,
+            has_blended: true,
+            rows: vec![Row {
+                saving: "2. active clusters",
+                before: measured(2_253_398, 13_840_000),
+                after: measured(1_073_768, 9_100_000),
+                active_clusters: Some(696),
+                clusters: 4608,
+                fitted_range: None,
+                prepass_decision: None,
+            }],
+        };
+        let text = table(&report);
+        let lines: Vec<&str> = text.lines().skip(2).collect();
+        let (header, row) = (lines[0], lines[1]);
+        assert!(row.contains("  2253398 → 1073768  "), "{row}");
+        assert_eq!(
+            header.chars().count(),
+            row.chars().count(),
+            "{header}\n{row}"
+        );
+        // Past the first column, each cell ends where its header does.
+        let ends = |line: &str| {
+            let chars: Vec<char> = line.chars().collect();
+            (26..chars.len())
+                .filter(|&i| chars[i] != ' ' && chars.get(i + 1).is_none_or(|&c| c == ' '))
+                .filter(|&i| chars.get(i + 2).is_none_or(|&c| c == ' '))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(ends(header), ends(row), "{header}\n{row}");
+        assert_eq!(ends(row).len(), 7, "{row}");
+        assert!(lines[2].contains("696 of 4608 clusters active"));
     }
 }
