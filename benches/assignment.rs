@@ -42,7 +42,7 @@ use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, SamplingMode, Throughput, measurement::WallTime,
 };
 use myriad::assignment::{Assigner, LightLists, Method, OutsideCalls};
-use myriad::cluster_math::{ClusterGrid, DepthSlicing, FarEdge, glam::UVec3};
+use myriad::cluster_math::{ClusterGrid, DepthSlicing, OuterSlices, glam::UVec3};
 use myriad::scene::{Preset, Scene};
 use std::cell::OnceCell;
 use std::hint::black_box;
@@ -285,7 +285,7 @@ fn targets(c: &mut Criterion) {
 /// one worker with the preset's grid, under the preset's camera (far 100, the grid's: nothing
 /// counted) and under the same camera with an infinite far plane (an engine's infinite
 /// projection: every light is also tested against it). Then what an open last slice costs
-/// (`FarEdge`): the preset's grid cut to half the camera's far, open (the lights past it listed
+/// (`OuterSlices`): the preset's grid cut to half the camera's far, open (the lights past it listed
 /// in its last slice) and closed (culled).
 fn far_edge(c: &mut Criterion) {
     let mut group = c.benchmark_group("far_edge");
@@ -301,11 +301,15 @@ fn far_edge(c: &mut Criterion) {
             Some(f32::INFINITY),
             None,
         ),
-        ("uniform/refined-half-grid-open", None, Some(FarEdge::Open)),
+        (
+            "uniform/refined-half-grid-open",
+            None,
+            Some(OuterSlices::Open),
+        ),
         (
             "uniform/refined-half-grid-closed",
             None,
-            Some(FarEdge::Closed),
+            Some(OuterSlices::Closed),
         ),
     ] {
         timing(&mut group, Method::Refined, 100_000);
@@ -321,7 +325,7 @@ fn far_edge(c: &mut Criterion) {
                 Some(edge) => {
                     let g = scene.grid;
                     g.with_depth_range(g.near(), camera.far / 2.0)
-                        .with_far_edge(edge)
+                        .with_outer_slices(edge)
                 }
                 None => scene.grid,
             };

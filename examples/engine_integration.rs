@@ -60,8 +60,8 @@ fn main() {
         .expect("a centred right-handed perspective");
     // The far plane is infinite; the grid slices depth over a finite range of its own: a
     // 16×9×24 grid with log slices, first out to 50 m. Pixels past its far edge read its last
-    // slice, which is open (`FarEdge::Open`, the default): it lists the lights out there too, so
-    // none is missing. The stats count them (`beyond_far`) and say how far the lights reach,
+    // slice, which is open (`OuterSlices::Open`, the default): it lists the lights out there too,
+    // so none is missing. The stats count them (`beyond_far`) and say how far the lights reach,
     // which the next frame's grid follows, so its slices cut the lights' whole depth range.
     let mut grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, 50.0);
 

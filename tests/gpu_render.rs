@@ -5,7 +5,7 @@ use myriad::assignment::Method;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::GpuContext;
 use myriad::render::{RenderScene, Shading, Viewer};
-use myriad::scene::{ClusterGrid, DepthSlicing, FarEdge};
+use myriad::scene::{ClusterGrid, DepthSlicing, OuterSlices};
 
 fn max_channel_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
     assert_eq!(a.len(), b.len());
@@ -251,12 +251,13 @@ fn an_infinite_far_plane_renders_the_finite_cameras_image() {
     );
 }
 
-/// An engine's infinite projection with a grid that ends halfway into the scene: the pixels past
-/// the grid read its last slice, which lists the lights out there (`FarEdge::Open`, the
-/// default), so clustered shading equals brute force. The same grid closed misses them: an
-/// engine audit measured 186/255 off brute force before the last slice was open.
+/// An engine's infinite projection with a grid that covers only the middle of the scene's depths
+/// (from the drawn pixels' first quartile to their median): the pixels outside the grid read its
+/// outer slices, which list the lights out there (`OuterSlices::Open`, the default), so clustered
+/// shading equals brute force. The same grid closed misses them: an engine audit measured
+/// 186/255 off brute force before the last slice was open.
 #[test]
-fn a_grid_shorter_than_the_view_lights_the_pixels_beyond_it() {
+fn a_grid_shorter_than_the_view_lights_the_pixels_outside_it() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
         return;
     };
@@ -274,7 +275,8 @@ fn a_grid_shorter_than_the_view_lights_the_pixels_beyond_it() {
         .frame(&scene, Shading::BruteForce, Method::Refined, false)
         .unwrap();
     let brute = viewer.image().unwrap();
-    // The grid ends at the median depth of the drawn pixels: half of them lie beyond it.
+    // The grid spans the drawn pixels' second quartile of depth: half of them lie beyond it,
+    // a quarter nearer.
     let depth = viewer.renderer.read_depth(&viewer.ctx).unwrap().unwrap();
     let mut depths: Vec<f32> = depth
         .iter()
@@ -287,38 +289,40 @@ fn a_grid_shorter_than_the_view_lights_the_pixels_beyond_it() {
         depths.len()
     );
     depths.sort_by(f32::total_cmp);
-    let grid_far = depths[depths.len() / 2];
-    let beyond = depths.iter().filter(|&&d| d > grid_far).count();
+    let (grid_near, grid_far) = (depths[depths.len() / 4], depths[depths.len() / 2]);
+    let outside = depths
+        .iter()
+        .filter(|&&d| d < grid_near || d > grid_far)
+        .count();
     eprintln!(
-        "grid far {grid_far}: {beyond} of {} drawn pixels beyond it",
+        "grid [{grid_near}, {grid_far}]: {outside} of {} drawn pixels outside it",
         depths.len()
     );
-    let open = ClusterGrid::new(
-        scene.grid.dims(),
-        scene.grid.slicing(),
-        scene.grid.near(),
-        grid_far,
+    let open = ClusterGrid::new(scene.grid.dims(), scene.grid.slicing(), grid_near, grid_far);
+    assert_eq!(
+        open.outer_slices(),
+        OuterSlices::Open,
+        "open is the default"
     );
-    assert_eq!(open.far_edge(), FarEdge::Open, "open is the default");
-    for (edge, want_equal) in [(FarEdge::Open, true), (FarEdge::Closed, false)] {
-        scene.grid = open.with_far_edge(edge);
+    for (edge, want_equal) in [(OuterSlices::Open, true), (OuterSlices::Closed, false)] {
+        scene.grid = open.with_outer_slices(edge);
         let stats = viewer
             .frame(&scene, Shading::Clustered, Method::Refined, false)
             .unwrap();
         let clustered = viewer.image().unwrap();
         let (worst, differing) = max_channel_difference(&clustered, &brute);
         eprintln!(
-            "{edge:?} last slice: {worst}/255 off brute force in {differing} channels, {stats:?}"
+            "{edge:?} outer slices: {worst}/255 off brute force in {differing} channels, {stats:?}"
         );
         if want_equal {
             assert!(
                 worst <= 1,
-                "open last slice: clustered vs brute force differ by {worst}/255 in {differing} channels"
+                "open outer slices: clustered vs brute force differ by {worst}/255 in {differing} channels"
             );
         } else {
             assert!(
                 worst > 16 && differing > 100,
-                "a closed last slice leaves the lights past the grid out: {worst}/255 in {differing} channels"
+                "closed outer slices leave the lights outside the grid out: {worst}/255 in {differing} channels"
             );
         }
     }

@@ -11,7 +11,7 @@
 //! (The textbook formula it replaced was 5e-5 off at near 0.1, far 100: over the band.)
 
 use myriad_assignment::ActiveClusters;
-use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing, FarEdge};
+use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing, OuterSlices};
 use rayon::prelude::*;
 
 /// Relative widening of the fitted range and of the slice-edge tolerance.
@@ -88,7 +88,8 @@ pub fn fitted_grid(
     if !(lo <= hi) {
         return *grid; // Nothing visible: any range will do.
     }
-    let near = (lo * (1.0 - DEPTH_TOLERANCE)).max(grid.near());
+    let nearest = lo * (1.0 - DEPTH_TOLERANCE);
+    let near = nearest.max(grid.near());
     let deepest = hi * (1.0 + DEPTH_TOLERANCE);
     let mut far = deepest.min(grid.far());
     if !(far > near) {
@@ -102,15 +103,15 @@ pub fn fitted_grid(
         }
         s => s,
     };
-    // Where every shaded depth lies inside the fitted range, no pixel reads the last slice from
-    // beyond it: the lights past it need no list (`FarEdge::Closed`). Pixels past a shorter
-    // scene grid keep its far edge.
-    let far_edge = if deepest <= grid.far() {
-        FarEdge::Closed
+    // Where every shaded depth lies inside the fitted range, no pixel reads an outer slice from
+    // outside it: the lights wholly outside need no list (`OuterSlices::Closed`). Pixels outside
+    // a shorter scene grid keep its outer slices.
+    let outer = if grid.near() <= nearest && deepest <= grid.far() {
+        OuterSlices::Closed
     } else {
-        grid.far_edge()
+        grid.outer_slices()
     };
-    ClusterGrid::new(grid.dims(), slicing, near, far).with_far_edge(far_edge)
+    ClusterGrid::new(grid.dims(), slicing, near, far).with_outer_slices(outer)
 }
 
 /// The grid's slice edges as keys of stored depth-buffer values, each with the band around it
@@ -392,13 +393,19 @@ mod tests {
             (grid.dims(), grid.slicing())
         );
         // No pixel lies past the fitted range: the lights beyond it need no list.
-        assert_eq!(fitted.far_edge(), FarEdge::Closed);
-        // Pixels past a scene grid shorter than the view (to 20, the pixel at 30 beyond it) read
-        // its last slice: the fitted grid keeps that grid's far edge, open or closed.
-        let short = grid.with_depth_range(0.1, 20.0);
-        for edge in [FarEdge::Open, FarEdge::Closed] {
-            let fitted = fitted_grid(&short.with_far_edge(edge), &camera, &depth, &unseen);
-            assert_eq!((fitted.far(), fitted.far_edge()), (20.0, edge));
+        assert_eq!(fitted.outer_slices(), OuterSlices::Closed);
+        // Pixels outside a scene grid shorter than the view (to 20, the pixel at 30 beyond it;
+        // from 3, the pixel at 2 nearer) read its outer slices: the fitted grid keeps that grid's,
+        // open or closed.
+        for short in [
+            grid.with_depth_range(0.1, 20.0),
+            grid.with_depth_range(3.0, 100.0),
+        ] {
+            for outer in [OuterSlices::Open, OuterSlices::Closed] {
+                let short = short.with_outer_slices(outer);
+                let fitted = fitted_grid(&short, &camera, &depth, &unseen);
+                assert_eq!(fitted.outer_slices(), outer, "{short:?}");
+            }
         }
         // A pixel exactly at the near plane (stored 1) and one at the far plane (the smallest
         // stored value that is not background): the fitted range is the whole grid, no wider.

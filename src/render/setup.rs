@@ -140,7 +140,7 @@ impl RenderScene {
     /// The same scene with a different grid over the same depth range.
     pub fn with_grid(mut self, dims: UVec3, slicing: DepthSlicing) -> Self {
         self.grid = ClusterGrid::new(dims, slicing, self.grid.near(), self.grid.far())
-            .with_far_edge(self.grid.far_edge());
+            .with_outer_slices(self.grid.outer_slices());
         self
     }
 }

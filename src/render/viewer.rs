@@ -53,7 +53,7 @@ impl Shading {
                 scene_grid.near(),
                 scene_grid.far(),
             )
-            .with_far_edge(scene_grid.far_edge()),
+            .with_outer_slices(scene_grid.outer_slices()),
             _ => *scene_grid,
         }
     }

@@ -13,7 +13,7 @@ use crate::{LightInput, LightLists};
 use crossbeam::utils::CachePadded;
 use glam::Vec4;
 #[cfg(doc)]
-use myriad_cluster_math::FarEdge;
+use myriad_cluster_math::OuterSlices;
 use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -138,8 +138,8 @@ pub struct AssignStats {
     /// In a frame whose camera sees past the grid's far edge (`camera.far` beyond the grid's
     /// far, as with an engine's infinite projection and a finite grid): the lights in view that
     /// lie wholly past that edge. The renderer shades the pixels beyond the grid with its last
-    /// slice's lights. Where the grid's last slice is [`FarEdge::Open`] (the default) these
-    /// lights are listed there and nothing is missing; where it is [`FarEdge::Closed`] they are
+    /// slice's lights. Where the grid's outer slices are [`OuterSlices::Open`] (the default) these
+    /// lights are listed there and nothing is missing; where they are [`OuterSlices::Closed`] they are
     /// culled (and counted in [`culled`](Self::culled)), and their light is missing from those
     /// pixels. 0 when the grid reaches the camera's far plane (nothing is computed then). A grid
     /// whose far is [`reach`](Self::reach) has none. (Lights whose view-space sphere overflows
@@ -149,7 +149,7 @@ pub struct AssignStats {
     /// camera's view reach (the far side of their padded sphere, a spot's bounding sphere), 0 when
     /// none is in view; the far of a grid that would have no light beyond it, for the next
     /// frame's grid (its slices then cut the lights' whole depth range, instead of one last
-    /// slice holding every light past the grid; a [`FarEdge::Closed`] grid that follows it
+    /// slice holding every light past the grid; a [`OuterSlices::Closed`] grid that follows it
     /// misses a light that moves past it for one frame, counted in
     /// [`beyond_far`](Self::beyond_far)). `None` when the grid reaches the camera's far plane.
     pub reach: Option<f32>,
@@ -245,7 +245,7 @@ pub struct Assigner {
     /// The active mask's prefix count (see `ActiveClusters::view`).
     active_before: Vec<u32>,
     cluster_spheres: Vec<Vec4>,
-    spheres_key: Option<(glam::Vec2, ClusterGrid, f32)>,
+    spheres_key: Option<(glam::Vec2, ClusterGrid, [f32; 2])>,
     /// The `cone` method's tile cones (`cone.rs`), kept while the field of view and the tiling
     /// stay the same; empty for grids of more than [`cone::MAX_CACHED_TILES`] tiles.
     tile_cones: Vec<TileCone>,
@@ -499,8 +499,9 @@ impl Assigner {
             return Ok(stats);
         }
         if lights.spot.is_some() && method != Method::Exact {
-            // The last slice's spheres follow the camera's far where that slice is open.
-            let key = (camera.tan_half_fov(), *grid, grid.last_slice_end(camera));
+            // The outer slices' spheres follow the camera's near and far where they are open.
+            let ends = [grid.first_slice_start(camera), grid.last_slice_end(camera)];
+            let key = (camera.tan_half_fov(), *grid, ends);
             if self.spheres_key != Some(key) {
                 jobs::cluster_bounding_spheres(camera, grid, &mut self.cluster_spheres);
                 self.spheres_key = Some(key);
@@ -620,10 +621,11 @@ struct Frame<'a> {
 }
 
 /// The grid a pair budget falls back to: every dimension halved (rounding down, at least 1),
-/// same depth range, slicing and [`FarEdge`](myriad_cluster_math::FarEdge). Repeating it reaches 1×1×1.
+/// same depth range, slicing and [`OuterSlices`](myriad_cluster_math::OuterSlices). Repeating it reaches 1×1×1.
 pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
     let dims = (grid.dims() / 2).max(glam::UVec3::ONE);
-    ClusterGrid::new(dims, grid.slicing(), grid.near(), grid.far()).with_far_edge(grid.far_edge())
+    ClusterGrid::new(dims, grid.slicing(), grid.near(), grid.far())
+        .with_outer_slices(grid.outer_slices())
 }
 
 /// Splits the clusters into parts of whole depth slices: one part when serial; else one per slice,

@@ -217,7 +217,7 @@ impl<'a> FramePlanes<'a> {
             let coordinates = sets.y_slopes.iter().map(|&s| planes.row_coordinate(s));
             planes.y_margin = exact_margin(coordinates);
         }
-        planes.z_margin = planes.slice_margin(f);
+        planes.z_margin = planes.slice_margin(n, f);
         planes
     }
 
@@ -228,14 +228,16 @@ impl<'a> FramePlanes<'a> {
     /// at the value alike, so twice that is added to the planes' own stray. A depth below
     /// `start` has coordinate 0, never clear of a plane, so it is always searched.
     ///
-    /// The margin is that of the grid's own edges, the last at the grid's `far`, even where the
-    /// sets' last edge lies beyond it (an open last slice, [`myriad_cluster_math::FarEdge`]):
-    /// for a depth between the two, the guess counts one edge more below it than the sets do,
-    /// and both answers clamp to the last slice alike.
-    fn slice_margin(&self, far: f32) -> f32 {
+    /// The margin is that of the grid's own edges, from its `near` to its `far`, even where the
+    /// sets' outer edges lie beyond them (open outer slices, [`myriad_cluster_math::OuterSlices`]):
+    /// for a depth between the two, the guess counts one edge more or fewer below it than the
+    /// sets do, and both answers clamp to the same outer slice.
+    fn slice_margin(&self, near: f32, far: f32) -> f32 {
         let depths = &self.sets.z_depths;
-        let edges = depths[..depths.len() - 1].iter().copied();
-        let edges = edges.chain(std::iter::once(far));
+        let inner = depths[1..depths.len() - 1].iter().copied();
+        let edges = std::iter::once(near)
+            .chain(inner)
+            .chain(std::iter::once(far));
         let stray = exact_margin(edges.map(|d| self.slice_coordinate(d)));
         let ulp = |v: f32| v.next_up() - v;
         let usable = |v: f32| v > 0.0 && v.is_finite();

@@ -3,14 +3,14 @@
 //! identically by every method and thread count, and `AssignStats::reach` is the far of a grid
 //! that has none of them beyond it. An engine audit found those lights silently missing from
 //! the pixels beyond the grid (which read its last slice); a grid's last slice is now open by
-//! default (`FarEdge::Open`) and lists them, and a closed one culls them.
+//! default (`OuterSlices::Open`) and lists them, and a closed one culls them.
 
 mod common;
 
 use common::*;
 use glam::{UVec3, Vec3};
 use myriad_assignment::{Assigner, LightLists, Method};
-use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, FarEdge};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices};
 use rand::{Rng, SeedableRng};
 
 const METHODS: [Method; 5] = [
@@ -65,11 +65,11 @@ fn camera(far: f32) -> Camera {
 fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers_them() {
     for (far, edge) in [f32::INFINITY, 400.0]
         .into_iter()
-        .flat_map(|far| [(far, FarEdge::Open), (far, FarEdge::Closed)])
+        .flat_map(|far| [(far, OuterSlices::Open), (far, OuterSlices::Closed)])
     {
         let camera = camera(far);
         let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0)
-            .with_far_edge(edge);
+            .with_outer_slices(edge);
         let last_slice = grid.dims().x * grid.dims().y * (grid.dims().z - 1);
         // 300 lights run as one task; 6000 as several (tasks count their own and are summed).
         for (n, seed) in [(300, 1), (6000, 2)] {
@@ -110,20 +110,20 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                     let depth = (p - camera.position).dot(forward);
                     if depth - lights.radius[l] > grid.far() + 0.01 {
                         match (edge, listed(l as u32)) {
-                            (FarEdge::Open, Some(first)) => {
+                            (OuterSlices::Open, Some(first)) => {
                                 assert!(
                                     first >= last_slice,
                                     "{what}: light {l} before the last slice"
                                 );
                             }
-                            (FarEdge::Closed, None) => {}
+                            (OuterSlices::Closed, None) => {}
                             (_, got) => panic!("{what}: light {l} past the grid listed at {got:?}"),
                         }
                     }
                 }
                 match edge {
-                    FarEdge::Open => assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}"),
-                    FarEdge::Closed => assert!(stats.culled >= beyond, "{what}: {stats:?}"),
+                    OuterSlices::Open => assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}"),
+                    OuterSlices::Closed => assert!(stats.culled >= beyond, "{what}: {stats:?}"),
                 }
                 let got = stats.reach.expect("the camera sees past the grid");
                 // The padded sphere's far side: the exact reach, or a hair beyond it.
@@ -133,7 +133,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                 );
                 // A grid out to that reach leaves no light beyond it and lists every light.
                 let covering = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, got)
-                    .with_far_edge(edge);
+                    .with_outer_slices(edge);
                 let stats = Assigner::new().assign(
                     method,
                     &lights.input(false),

@@ -8,7 +8,7 @@ mod common;
 use common::*;
 use glam::{UVec3, Vec3};
 use myriad_assignment::{Assigner, LightLists, Method, Parallelism, SERIAL_LIGHTS};
-use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, FarEdge};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices};
 use proptest::prelude::*;
 
 fn check_scene(scene: &Scene, spots: bool, context: &str) {
@@ -136,21 +136,25 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
 
     /// The same hostile scenes under a camera that sees past the grid's far (farther by up to
-    /// 10³, or an infinite projection), with the grid's last slice open or closed
-    /// (`FarEdge`): the oracle's last cells reach the camera's far plane when it is open, so
-    /// the lights past the grid that the pixels beyond it need are proven listed.
+    /// 10³, or an infinite projection) and often nearer than its near (by up to 10³), with the
+    /// grid's outer slices open or closed (`OuterSlices`): the oracle's first and last cells
+    /// reach the camera's near and far planes when they are open, so the lights outside the grid
+    /// that the pixels outside it need are proven listed.
     #[test]
     fn grids_shorter_than_the_view_cover_the_oracle(
         params in hostile_params(UVec3::new(9, 7, 9), 60..61),
         farther_log10 in prop_oneof![0.05f32..3.0, Just(f32::INFINITY)],
+        nearer_log10 in prop_oneof![Just(0.0f32), 0.05f32..3.0],
         open in any::<bool>(),
     ) {
         let mut scene = make_scene(&params);
         scene.camera.far *= 10f32.powf(farther_log10);
+        scene.camera.near /= 10f32.powf(nearer_log10);
         if !open {
-            scene.grid = scene.grid.with_far_edge(FarEdge::Closed);
+            scene.grid = scene.grid.with_outer_slices(OuterSlices::Closed);
         }
-        let context = format!("camera far {}, open {open}: {params:?}", scene.camera.far);
+        let (near, far) = (scene.camera.near, scene.camera.far);
+        let context = format!("camera near {near}, far {far}, open {open}: {params:?}");
         check_scene(&scene, params.spots, &context);
     }
 }

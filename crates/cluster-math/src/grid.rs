@@ -11,13 +11,13 @@
 //!    depth inside the range — the GPU shader does the same with the uploaded edge table.
 //!
 //! Depths outside the grid's range clamp: below `near` (or NaN) → slice 0, at or beyond `far` →
-//! slice Z−1. So the pixels past `far` read the last slice, and by default ([`FarEdge::Open`])
-//! the last slice reaches on to the camera's far plane for the assignment too: it lists the lights
-//! out there, and no pixel the camera sees misses a light, however short the grid (an engine's
-//! infinite projection with a grid of 50 m). A range fitted to the depth buffer, which no pixel
-//! lies beyond, is [`FarEdge::Closed`]: the lights past it are listed nowhere. The near side
-//! has no such choice: the assignment covers depths from `near` on, so a grid nearer than the
-//! camera's near, or a fitted range, must start at or before every depth that is shaded.
+//! slice Z−1. So the pixels nearer than `near` read the first slice and those past `far` the last,
+//! and by default ([`OuterSlices::Open`]) those two slices reach the camera's near and far planes
+//! for the assignment too: they list the lights out there, and no pixel the camera sees misses a
+//! light, however short the grid (an engine's infinite projection with a grid of 50 m, or a grid
+//! starting at 1 m to spend no slices on the first metre). A range fitted to the depth buffer,
+//! which holds every shaded depth, is [`OuterSlices::Closed`]: the lights wholly outside it are
+//! listed nowhere.
 
 use glam::UVec3;
 use std::ops::Range;
@@ -39,22 +39,25 @@ pub enum DepthSlicing {
     },
 }
 
-/// Where the last slice ends for the assignment, when the camera sees farther than the grid.
+/// Where the first slice starts and the last one ends for the assignment, when the camera sees
+/// nearer or farther than the grid.
 ///
-/// Pixels past the grid's far depth clamp to its last slice ([`ClusterGrid::slice_of_depth`],
-/// and the GPU's cluster index alike), so the lights they need must be listed there. Bevy
-/// clamps its lights' slices the same way; the choice here is whether that is wanted.
+/// Pixels nearer than the grid's near depth clamp to its first slice and pixels past its far
+/// depth to its last ([`ClusterGrid::slice_of_depth`], and the GPU's cluster index alike), so the
+/// lights they need must be listed there. Bevy clamps its lights' slices the same way; the
+/// choice here is whether that is wanted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum FarEdge {
-    /// The last slice reaches on to the camera's far plane (infinite for an infinite
-    /// projection): a light past the grid's far but in view is listed in the last slice's
-    /// clusters its sphere covers. Never wrong for any pixel; the cost is longer lists in the
-    /// last slice when many lights lie beyond the grid. The default.
+pub enum OuterSlices {
+    /// The first slice reaches back to the camera's near plane and the last on to its far plane
+    /// (infinite for an infinite projection): a light in view but wholly outside the grid's
+    /// range is listed in the outer slice's clusters its sphere covers. Never wrong for any
+    /// pixel; the cost is longer lists in the outer slices when many lights lie outside the
+    /// grid. The default.
     #[default]
     Open,
-    /// The last slice ends at the grid's far depth, and lights wholly past it are in no list.
-    /// For a range that holds every shaded depth (fitted to the depth buffer): the lights
-    /// beyond it would only lengthen the last slice's lists.
+    /// The outer slices end at the grid's near and far depths, and the lights wholly outside
+    /// them are in no list. For a range that holds every shaded depth (fitted to the depth
+    /// buffer): the lights outside it would only lengthen the outer slices' lists.
     Closed,
 }
 
@@ -77,14 +80,14 @@ impl std::error::Error for InvalidGrid {}
 /// grid edited field by field (`grid.dims.x = width / 64` on a narrow window) would skip those
 /// checks into empty lists, panics or a 100 GB allocation. A different grid is a new one:
 /// `ClusterGrid::try_new(dims, grid.slicing(), grid.near(), grid.far())`, with
-/// `.with_far_edge(grid.far_edge())` to keep its [`FarEdge`].
+/// `.with_outer_slices(grid.outer_slices())` to keep its [`OuterSlices`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterGrid {
     dims: UVec3,
     slicing: DepthSlicing,
     near: f32,
     far: f32,
-    far_edge: FarEdge,
+    outer_slices: OuterSlices,
 }
 
 impl ClusterGrid {
@@ -95,8 +98,8 @@ impl ClusterGrid {
     /// down to it gets the lists of the unscaled one (`crates/assignment/tests/stability.rs`).
     pub const MIN_NEAR: f32 = 1e-12;
 
-    /// A grid over the depth range `[near, far]`, its last slice [`FarEdge::Open`]. Panics on
-    /// zero dimensions or an invalid range (with [`Self::try_new`]'s message).
+    /// A grid over the depth range `[near, far]`, its outer slices [`OuterSlices::Open`]. Panics
+    /// on zero dimensions or an invalid range (with [`Self::try_new`]'s message).
     pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
         Self::try_new(dims, slicing, near, far).unwrap_or_else(|e| panic!("{e}"))
     }
@@ -154,32 +157,49 @@ impl ClusterGrid {
             slicing,
             near,
             far,
-            far_edge: FarEdge::Open,
+            outer_slices: OuterSlices::Open,
         })
     }
 
-    /// The same grid with its last slice ending as `far_edge` says (see [`FarEdge`]).
-    pub fn with_far_edge(self, far_edge: FarEdge) -> Self {
-        Self { far_edge, ..self }
+    /// The same grid with its outer slices as `outer_slices` says (see [`OuterSlices`]).
+    pub fn with_outer_slices(self, outer_slices: OuterSlices) -> Self {
+        Self {
+            outer_slices,
+            ..self
+        }
     }
 
-    /// Where the last slice ends for the assignment: [`FarEdge::Open`] unless set otherwise.
-    pub fn far_edge(&self) -> FarEdge {
-        self.far_edge
+    /// Whether the outer slices reach the camera's near and far planes for the assignment:
+    /// [`OuterSlices::Open`] unless set otherwise.
+    pub fn outer_slices(&self) -> OuterSlices {
+        self.outer_slices
+    }
+
+    /// The depth where the assignment's first slice starts, seen through `camera`: the camera's
+    /// near plane (no nearer than [`Self::MIN_NEAR`], where the f32 assignment stops being
+    /// exact; the renderer refuses such a camera) where the grid is [`OuterSlices::Open`] and
+    /// the camera sees nearer than the grid's `near`, otherwise `near`. Only the assignment and
+    /// the oracle's first cells use it: the slice edges, and so the pixels' clusters, start at
+    /// `near`.
+    pub fn first_slice_start(&self, camera: &crate::Camera) -> f32 {
+        match self.outer_slices {
+            OuterSlices::Open if camera.near < self.near => camera.near.max(Self::MIN_NEAR),
+            _ => self.near,
+        }
     }
 
     /// The depth where the assignment's last slice ends, seen through `camera`: the camera's far
-    /// plane (∞ for an infinite projection) where the grid is [`FarEdge::Open`] and the camera
-    /// sees past the grid's `far`, otherwise `far`. Only the assignment and the oracle's last
-    /// cells use it: the slice edges, and so the pixels' clusters, end at `far`.
+    /// plane (∞ for an infinite projection) where the grid is [`OuterSlices::Open`] and the
+    /// camera sees past the grid's `far`, otherwise `far`. Only the assignment and the oracle's
+    /// last cells use it: the slice edges, and so the pixels' clusters, end at `far`.
     pub fn last_slice_end(&self, camera: &crate::Camera) -> f32 {
-        match self.far_edge {
-            FarEdge::Open if camera.far > self.far => camera.far,
+        match self.outer_slices {
+            OuterSlices::Open if camera.far > self.far => camera.far,
             _ => self.far,
         }
     }
 
-    /// The same grid (its [`FarEdge`] too) over a different depth range (a fitted, dynamic
+    /// The same grid (its [`OuterSlices`] too) over a different depth range (a fitted, dynamic
     /// near/far). Panics where [`Self::try_with_depth_range`] returns an error.
     pub fn with_depth_range(self, near: f32, far: f32) -> Self {
         self.try_with_depth_range(near, far)
@@ -191,7 +211,8 @@ impl ClusterGrid {
     /// no longer hold a `LogWithNearSlice` grid's first slice edge (a depth prepass of a scene
     /// wholly nearer than it; `myriad::render::fitted_grid` then falls back to `Log`).
     pub fn try_with_depth_range(self, near: f32, far: f32) -> Result<Self, InvalidGrid> {
-        Self::try_new(self.dims, self.slicing, near, far).map(|g| g.with_far_edge(self.far_edge))
+        Self::try_new(self.dims, self.slicing, near, far)
+            .map(|g| g.with_outer_slices(self.outer_slices))
     }
 
     /// Tiles across (X), tiles down (Y), depth slices (Z); each ≥ 1, their product ≤ `u32::MAX`.

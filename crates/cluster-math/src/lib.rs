@@ -13,7 +13,7 @@
 //! * [`ClusterGrid`]: X×Y×Z clusters. Tiles are uniform in NDC; depth is cut by [`DepthSlicing`]
 //!   (linear, logarithmic, or logarithmic with a special first slice). The grid's depth range defaults
 //!   to the camera's near/far and may be overridden for fitted (dynamic) ranges; a grid shorter
-//!   than the camera's view lists the lights past it in its last slice ([`FarEdge`]).
+//!   than the camera's view lists the lights outside it in its outer slices ([`OuterSlices`]).
 //! * Mappings, all mutually consistent and exhaustively tested: pixel → tile (integer arithmetic, exact
 //!   for any resolution), view depth → slice (formula estimate corrected against the edge table, so it
 //!   agrees with [`ClusterGrid::slice_start_depth`] to the last bit), slice → depth range, and
@@ -52,7 +52,7 @@ mod planes;
 pub use bounds::{SpotCone, spot_bounding_sphere};
 pub use camera::Camera;
 pub use camera_from_matrices::{CameraMatrixError, ClipSpace};
-pub use grid::{ClusterGrid, DepthSlicing, FarEdge, InvalidGrid};
+pub use grid::{ClusterGrid, DepthSlicing, InvalidGrid, OuterSlices};
 pub use padding::{RADIUS_PAD, pad_radius};
 pub use planes::PlaneSets;
 

@@ -4,9 +4,10 @@
 //! by its *slope* `s = x / depth` (NDC edge × `tan(fov_x/2)`); likewise every y-plane by `y / depth`.
 //! A point `p` (depth `d = −p.z > 0`) lies right of x-plane `i` iff `p.x ≥ s_i·d`. Slopes increase
 //! left → right for x; for y they are stored top → bottom (decreasing), matching tile row order.
-//! z-planes are the slice edges (view depths, near → far), the last one where the assignment's last
-//! slice ends ([`ClusterGrid::last_slice_end`]: past the grid's far for a [`crate::FarEdge::Open`]
-//! grid under a camera that sees farther). [`PlaneSets::x_plane_normal`] and
+//! z-planes are the slice edges (view depths, near → far), the first where the assignment's first
+//! slice starts and the last where its last slice ends ([`ClusterGrid::first_slice_start`],
+//! [`ClusterGrid::last_slice_end`]: beyond the grid's range for a [`crate::OuterSlices::Open`] grid
+//! under a camera that sees nearer or farther). [`PlaneSets::x_plane_normal`] and
 //! friends give the same planes as unit normals for algorithms that want `n·p` distances (the paper's
 //! Algorithm 1).
 
@@ -21,8 +22,9 @@ pub struct PlaneSets {
     pub x_slopes: Vec<f32>,
     /// Y+1 slopes `y/depth` of the tile row edges, top → bottom (decreasing).
     pub y_slopes: Vec<f32>,
-    /// Z+1 view depths of the slice edges, near → far (non-decreasing); the last is
-    /// [`ClusterGrid::last_slice_end`], which may be ∞.
+    /// Z+1 view depths of the slice edges, near → far (non-decreasing); the first is
+    /// [`ClusterGrid::first_slice_start`] and the last [`ClusterGrid::last_slice_end`], which may
+    /// be ∞.
     pub z_depths: Vec<f32>,
 }
 
@@ -44,6 +46,10 @@ impl PlaneSets {
         self.y_slopes
             .extend((0..=grid.dims().y).map(|j| grid.y_edge_ndc(j) * t.y));
         grid.fill_slice_edges(&mut self.z_depths);
+        // The outer slices reach the camera's near and far planes where the grid is open.
+        if let Some(first) = self.z_depths.first_mut() {
+            *first = grid.first_slice_start(camera);
+        }
         if let Some(last) = self.z_depths.last_mut() {
             *last = grid.last_slice_end(camera);
         }

@@ -305,28 +305,38 @@ fn tile_edges_match_design_formula() {
     assert!((near_slice.slice_start_depth(3) - 100.0).abs() < 1e-4);
 }
 
-/// Where the assignment's last slice ends: the camera's far plane (∞ too) for an open grid under
-/// a camera that sees past it, the grid's far otherwise — in `PlaneSets`' last depth and in the
-/// oracle's last cells alike; the pixels' slice edges and clusters stay the grid's.
+/// Where the assignment's outer slices end: the camera's near and far planes (∞ too) for an open
+/// grid under a camera that sees nearer or farther, the grid's near and far otherwise — in
+/// `PlaneSets`' first and last depths and in the oracle's outer cells alike; the pixels' slice
+/// edges and clusters stay the grid's.
 #[test]
-fn an_open_last_slice_reaches_the_cameras_far_plane() {
+fn open_outer_slices_reach_the_cameras_near_and_far_planes() {
     use myriad_cluster_math::oracle::Cell;
-    use myriad_cluster_math::{FarEdge, PlaneSets};
-    let grid = ClusterGrid::new(UVec3::new(4, 3, 5), DepthSlicing::Log, 0.1, 40.0);
-    assert_eq!(grid.far_edge(), FarEdge::Open);
-    let closed = grid.with_far_edge(FarEdge::Closed);
+    use myriad_cluster_math::{OuterSlices, PlaneSets};
+    let grid = ClusterGrid::new(UVec3::new(4, 3, 5), DepthSlicing::Log, 0.5, 40.0);
+    assert_eq!(grid.outer_slices(), OuterSlices::Open);
+    let closed = grid.with_outer_slices(OuterSlices::Closed);
     assert_ne!(grid, closed);
-    // A new depth range or a coarser copy keeps the edge.
+    // A new depth range keeps them.
     assert_eq!(
-        closed.with_depth_range(0.2, 30.0).far_edge(),
-        FarEdge::Closed
+        closed.with_depth_range(0.2, 30.0).outer_slices(),
+        OuterSlices::Closed
     );
-    for (camera_far, open_end) in [
+    let far_cases = [
         (f32::INFINITY, f32::INFINITY),
         (400.0, 400.0),
         (40.0, 40.0),
         (25.0, 40.0),
-    ] {
+    ];
+    // A camera near below `MIN_NEAR` opens the first slice only that far.
+    let near_cases = [
+        (0.1, 0.1),
+        (0.5, 0.5),
+        (0.7, 0.5),
+        (1e-20, ClusterGrid::MIN_NEAR),
+    ];
+    for ((camera_far, open_end), (camera_near, open_start)) in far_cases.into_iter().zip(near_cases)
+    {
         let camera = Camera::new(
             Vec3::ZERO,
             Vec3::NEG_Z,
@@ -334,23 +344,33 @@ fn an_open_last_slice_reaches_the_cameras_far_plane() {
             60.0,
             640,
             480,
-            0.1,
+            camera_near,
             camera_far,
         );
-        assert_eq!(grid.last_slice_end(&camera), open_end, "far {camera_far}");
-        assert_eq!(closed.last_slice_end(&camera), 40.0, "far {camera_far}");
-        for (g, end) in [(&grid, open_end), (&closed, 40.0)] {
+        let what = format!("near {camera_near}, far {camera_far}");
+        assert_eq!(grid.first_slice_start(&camera), open_start, "{what}");
+        assert_eq!(grid.last_slice_end(&camera), open_end, "{what}");
+        assert_eq!(closed.first_slice_start(&camera), 0.5, "{what}");
+        assert_eq!(closed.last_slice_end(&camera), 40.0, "{what}");
+        for (g, start, end) in [(&grid, open_start, open_end), (&closed, 0.5, 40.0)] {
             let sets = PlaneSets::new(&camera, g);
             let mut edges = Vec::new();
             g.fill_slice_edges(&mut edges);
-            assert_eq!(sets.z_depths[..5], edges[..5], "only the last edge moves");
-            assert_eq!((sets.z_depths[5], edges[5]), (end, 40.0));
+            assert_eq!(
+                sets.z_depths[1..5],
+                edges[1..5],
+                "only the outer edges move"
+            );
+            assert_eq!([sets.z_depths[0], sets.z_depths[5]], [start, end], "{what}");
+            assert_eq!([edges[0], edges[5]], [0.5, 40.0]);
+            let first = Cell::of_cluster(&camera, g, 1, 2, 0);
+            assert_eq!(first.depths, [f64::from(start), f64::from(edges[1])]);
             let last = Cell::of_cluster(&camera, g, 1, 2, 4);
             assert_eq!(last.depths, [f64::from(edges[4]), f64::from(end)]);
             let inner = Cell::of_cluster(&camera, g, 1, 2, 3);
             assert_eq!(inner.depths, [f64::from(edges[3]), f64::from(edges[4])]);
-            // Pixels past the grid read its last slice, open or closed.
-            assert_eq!(g.slice_of_depth(1e6), 4);
+            // Pixels outside the grid read its outer slices, open or closed.
+            assert_eq!([g.slice_of_depth(0.01), g.slice_of_depth(1e6)], [0, 4]);
         }
     }
 }

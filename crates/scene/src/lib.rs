@@ -150,7 +150,7 @@ pub use scene_file::{LightPolicy, Scene, SkippedLight};
 pub use validate::{ValidationReport, validate_file, validate_json_slice, validate_json_str};
 
 /// Re-exported: the camera, grid and spot-cone types a [`Scene`] is made of.
-pub use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, FarEdge, SpotCone};
+pub use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices, SpotCone};
 
 /// Re-exported so callers use the same `glam` version as the crate's public types.
 pub use myriad_cluster_math::glam;

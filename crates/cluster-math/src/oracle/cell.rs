@@ -17,11 +17,15 @@ pub struct Cell {
 }
 
 impl Cell {
-    /// The cell of cluster `(i, j, k)` of `grid` seen through `camera`. The last slice's cell
-    /// ends at [`ClusterGrid::last_slice_end`]: past the grid's far (perhaps at ∞) where the
-    /// grid is [`crate::FarEdge::Open`] and the camera sees farther.
+    /// The cell of cluster `(i, j, k)` of `grid` seen through `camera`. The first slice's cell
+    /// starts at [`ClusterGrid::first_slice_start`] and the last slice's ends at
+    /// [`ClusterGrid::last_slice_end`]: beyond the grid's range (perhaps at ∞) where the grid is
+    /// [`crate::OuterSlices::Open`] and the camera sees nearer or farther.
     pub fn of_cluster(camera: &Camera, grid: &ClusterGrid, i: u32, j: u32, k: u32) -> Self {
-        let (d0, mut d1) = grid.slice_depth_range(k);
+        let (mut d0, mut d1) = grid.slice_depth_range(k);
+        if k == 0 {
+            d0 = grid.first_slice_start(camera);
+        }
         if k + 1 == grid.dims().z {
             d1 = grid.last_slice_end(camera);
         }

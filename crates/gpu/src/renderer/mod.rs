@@ -54,9 +54,10 @@ pub struct FrameDesc<'a> {
     /// The camera; its `width × height` must be the target's size.
     pub camera: &'a Camera,
     /// The grid the lists were built for (its depth range may be fitted, narrower than the
-    /// camera's; pixels beyond its far edge read its last slice, which lists the lights past
-    /// that edge unless the grid is `FarEdge::Closed`: see `myriad_cluster_math::FarEdge` and
-    /// the assignment's `AssignStats::beyond_far` and `reach`).
+    /// camera's; pixels nearer than its near read its first slice and pixels beyond its far its
+    /// last, which list the lights out there unless the grid is `OuterSlices::Closed`: see
+    /// `myriad_cluster_math::OuterSlices` and the assignment's `AssignStats::beyond_far` and
+    /// `reach`).
     pub grid: &'a ClusterGrid,
     /// Which lights each pixel visits.
     pub mode: ShadingMode,
