@@ -575,8 +575,8 @@ mod tests {
     /// slices about 0.05, 1, 1e3 and 1e5 deep and out to 1.5e7; corner, edge and inner tiles. And
     /// a field of view of π less one f32 ulp, whose tiles' slopes reach 1e8 to 5e10.
     fn boundary_cells() -> Vec<Vec<Cell>> {
-        use myriad::cluster_math::DepthSlicing;
         use myriad::cluster_math::glam::UVec3;
+        use myriad::cluster_math::{DepthSlicing, OuterSlices};
         let camera = |fov, width, height| {
             Camera::new(
                 Vec3::ZERO,
@@ -594,10 +594,28 @@ mod tests {
             camera(60.0, 1920, 1080),
             camera(150.0, 2560, 1080),
         ];
+        // The grids' own slices, also where they lie outside the camera's range (closed outer
+        // slices: open, the first would reach back to the camera's near plane).
+        let closed = |g: ClusterGrid| g.with_outer_slices(OuterSlices::Closed);
         let grids = [
-            ClusterGrid::new(UVec3::new(16, 9, 16), DepthSlicing::Log, 0.05, 50.0),
-            ClusterGrid::new(UVec3::new(7, 5, 10), DepthSlicing::Log, 1.0, 1e5),
-            ClusterGrid::new(UVec3::new(6, 3, 40), DepthSlicing::Log, 0.5, 1.5e7),
+            closed(ClusterGrid::new(
+                UVec3::new(16, 9, 16),
+                DepthSlicing::Log,
+                0.05,
+                50.0,
+            )),
+            closed(ClusterGrid::new(
+                UVec3::new(7, 5, 10),
+                DepthSlicing::Log,
+                1.0,
+                1e5,
+            )),
+            closed(ClusterGrid::new(
+                UVec3::new(6, 3, 40),
+                DepthSlicing::Log,
+                0.5,
+                1.5e7,
+            )),
         ];
         let mut sets = Vec::new();
         for camera in &cameras {
@@ -618,7 +636,12 @@ mod tests {
                 );
             }
         }
-        let grid = ClusterGrid::new(UVec3::new(2, 1, 4), DepthSlicing::Log, 1.0, 100.0);
+        let grid = closed(ClusterGrid::new(
+            UVec3::new(2, 1, 4),
+            DepthSlicing::Log,
+            1.0,
+            100.0,
+        ));
         for (width, height) in [(1920, 200), (4096, 1)] {
             let camera = Camera {
                 fov_y: f32::from_bits(std::f32::consts::PI.to_bits() - 1),

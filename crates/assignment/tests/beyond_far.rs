@@ -214,3 +214,50 @@ fn spots_and_thread_counts_give_the_same_counts() {
         }
     }
 }
+
+/// A light whose padded sphere ends exactly on the grid's far plane touches the last slice:
+/// a closed grid keeps it, so it is not beyond the grid (`beyond_far` counts lights wholly past
+/// it, the ones a closed grid culls), by every method.
+#[test]
+fn a_light_touching_the_far_plane_is_not_beyond_it() {
+    let camera = Camera::new(
+        Vec3::ZERO,
+        Vec3::NEG_Z,
+        Vec3::Y,
+        60.0,
+        1280,
+        720,
+        0.1,
+        f32::INFINITY,
+    );
+    let far = 40.0;
+    // The radius whose padded sphere's near side lies exactly at `far` (the view transform of
+    // this camera is exact: depth 50 stays 50).
+    let depth = 50.0f32;
+    let near_side = |r: f32| depth - myriad_cluster_math::pad_radius(0.0, 0.0, depth, r);
+    let mut r = 10.0f32;
+    while near_side(r) > far {
+        r = r.next_up();
+    }
+    while near_side(r) < far {
+        r = r.next_down();
+    }
+    assert_eq!(near_side(r), far, "no radius lands exactly on the plane");
+    let mut lights = Columns::default();
+    lights.push(Vec3::new(0.0, 0.0, -depth), r);
+    for outer in [OuterSlices::Open, OuterSlices::Closed] {
+        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, far)
+            .with_outer_slices(outer);
+        for method in METHODS {
+            let stats = Assigner::new().assign(
+                method,
+                &lights.input(false),
+                &camera,
+                &grid,
+                &mut LightLists::new(),
+            );
+            let what = format!("{method}, {outer:?}: {stats:?}");
+            assert_eq!((stats.beyond_far, stats.culled), (0, 0), "{what}");
+        }
+    }
+}

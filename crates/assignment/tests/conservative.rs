@@ -220,6 +220,56 @@ fn extreme_fields_of_view_and_depth_ranges() {
     }
 }
 
+/// A grid of [1, 100] under cameras that see from 1e-6 (or from below `ClusterGrid::MIN_NEAR`,
+/// where the open first slice stops) out to 1e30, `f32::MAX` or ∞, with lights from 1e-5 to
+/// 1e29 deep: the open outer slices' extreme depths against the oracle, and closed alike.
+#[test]
+fn open_outer_slices_at_extreme_depths() {
+    let mut pairs = Vec::new();
+    for (fov, near, far) in [
+        (60.0f32, 1e-6f32, 1e30f32),
+        (120.0, 1e-20, f32::MAX),
+        (2.0, 1e-3, f32::INFINITY),
+    ] {
+        let cam = camera(fov, near, far);
+        let t = cam.tan_half_fov();
+        let mut lights = Vec::new();
+        for step in 0..80 {
+            let f = step as f32 / 79.0;
+            let d = 1e-5 * 1e34f32.powf(f);
+            lights.push((Vec3::new(t.x * d * (f - 0.5), t.y * d * 0.3, -d), d * 0.05));
+            lights.push((Vec3::new(t.x * d * 1.01, 0.0, -d), d * 0.3));
+            // Containing the eye, and just behind it.
+            lights.push((Vec3::new(0.0, 0.0, d * 0.5), d));
+        }
+        let mut columns = Columns::default();
+        for &(p, r) in &lights {
+            columns.push(p, r);
+        }
+        let grid = ClusterGrid::new(UVec3::new(6, 4, 7), DepthSlicing::Log, 1.0, 100.0);
+        for outer in [OuterSlices::Open, OuterSlices::Closed] {
+            let scene = Scene {
+                camera: cam,
+                grid: grid.with_outer_slices(outer),
+                lights: columns.clone(),
+            };
+            let context = format!("fov {fov} near {near} far {far}, {outer:?}");
+            check_scene(&scene, false, &context);
+            pairs.push(
+                brute_force(&scene.lights, false, &cam, &scene.grid)
+                    .concat()
+                    .len(),
+            );
+        }
+    }
+    // Open, the outer slices list the lights nearer and farther than the grid (the truth's
+    // pairs grow in each frame); closed, they do not.
+    assert!(
+        pairs.chunks(2).all(|p| p[0] > p[1] + 20),
+        "pairs open, closed: {pairs:?}"
+    );
+}
+
 #[test]
 fn huge_world_coordinates() {
     let eye = Vec3::new(1.0e6, -3.0e5, 2.0e6);
