@@ -54,8 +54,8 @@ pub(crate) struct FrameContext<'a> {
     pub cull: FrustumCull,
     /// The same cull with the camera's far plane, when the camera sees past the grid's far edge:
     /// lights it keeps that lie wholly past the grid's far are counted as beyond the grid
-    /// ([`crate::AssignStats::beyond_far`]; `cull` keeps them too where the grid's last slice is
-    /// open). `None` otherwise, and nothing is computed.
+    /// ([`crate::AssignStats::beyond_far`]; `cull` keeps them too where the grid's outer slices
+    /// are open). `None` otherwise, and nothing is computed.
     pub far_cull: Option<FrustumCull>,
 }
 
@@ -70,14 +70,15 @@ pub(crate) struct FrustumCull {
     /// `(1, 0, slope)` and `(0, 1, slope)`), so leaving it out changes no test and saves the cull
     /// loop a multiply and an add per plane.
     pub sides: [Vec2; 4],
-    /// The grid's near depth and where its last slice ends (the sets' first and last depth).
+    /// Where the first slice starts and the last one ends (the sets' first and last depth: the
+    /// grid's near and far, or beyond them where its outer slices are open).
     pub near: f32,
     pub far: f32,
 }
 
 impl FrustumCull {
     /// The grid's outer planes (its first and last x- and y-planes) and the sets' first and last
-    /// depth (past the grid's far where its last slice is open).
+    /// depth (beyond the grid's range where its outer slices are open).
     pub fn of_grid(sets: &PlaneSets, grid: &ClusterGrid) -> Self {
         let d = grid.dims();
         let (left, right) = (sets.x_plane_normal(0), sets.x_plane_normal(d.x as usize));
