@@ -12,9 +12,7 @@ use crate::search::FramePlanes;
 use crate::{LightInput, LightLists};
 use crossbeam::utils::CachePadded;
 use glam::Vec4;
-#[cfg(doc)]
-use myriad_cluster_math::OuterSlices;
-use myriad_cluster_math::{Camera, ClusterGrid, PlaneSets};
+use myriad_cluster_math::{Camera, ClusterGrid, OuterSlices, PlaneSets};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -192,6 +190,19 @@ fn frame_problem(
     if let Some(problem) = camera.view_problem() {
         return Some(format!("light assignment needs a valid camera: {problem}"));
     }
+    // Open outer slices reach the camera's near and far planes, so those must be real: a
+    // placeholder far of 0 or NaN closed the last slice silently, and its lights went missing
+    // (engine audit).
+    if grid.outer_slices() == OuterSlices::Open && !(camera.near > 0.0 && camera.near < camera.far)
+    {
+        return Some(format!(
+            "the grid's outer slices are open (OuterSlices::Open, the default), so the \
+             assignment reads the camera's depth range, which must satisfy 0 < near < far (far \
+             may be infinite): got [{}, {}]; give the camera its real near and far planes, or \
+             close the grid's outer slices (OuterSlices::Closed) to slice by its range alone",
+            camera.near, camera.far
+        ));
+    }
     if let Some(problem) = lights.problem() {
         return Some(problem.into());
     }
@@ -314,10 +325,12 @@ impl Assigner {
     ///
     /// On a camera [`Camera::view_problem`] rejects (a NaN field of view, a zero size, …): no
     /// method could place a light in its frustum, so any lists would be wrong. Check it first
-    /// when the camera comes from user input. (The camera's near and far are not used: depth is
-    /// sliced by `grid`'s range, so an infinite far plane is fine.) Also when `lights`' columns
-    /// differ in length, or hold more than `u32::MAX` lights (light indices are u32).
-    /// [`Assigner::try_assign`] returns these as errors.
+    /// when the camera comes from user input. Depth is sliced by `grid`'s range, and where the
+    /// grid's outer slices are [`OuterSlices::Open`] (the default) they reach the camera's near
+    /// and far planes, so the camera's depth range must then satisfy `0 < near < far` (an
+    /// infinite far plane is fine; a placeholder is not); a [`OuterSlices::Closed`] grid reads
+    /// neither. Also when `lights`' columns differ in length, or hold more than `u32::MAX`
+    /// lights (light indices are u32). [`Assigner::try_assign`] returns these as errors.
     pub fn assign(
         &mut self,
         method: Method,
@@ -330,9 +343,9 @@ impl Assigner {
     }
 
     /// [`Assigner::assign`] that returns an error where `assign` panics (a camera
-    /// [`Camera::view_problem`] rejects, columns of different lengths, more than `u32::MAX`
-    /// lights), for engines whose cameras and light counts come from data. `out` is untouched
-    /// on an error.
+    /// [`Camera::view_problem`] rejects, or whose depth range an open grid cannot use, columns
+    /// of different lengths, more than `u32::MAX` lights), for engines whose cameras and light
+    /// counts come from data. `out` is untouched on an error.
     pub fn try_assign(
         &mut self,
         method: Method,

@@ -261,3 +261,80 @@ fn a_light_touching_the_far_plane_is_not_beyond_it() {
         }
     }
 }
+
+/// Open outer slices read the camera's near and far, so a placeholder depth range (an engine that
+/// builds its `Camera` for the assignment alone) is refused instead of silently closing the
+/// last slice: with `far: 0.0` a light past the grid was missing from its pixels with `Ok`
+/// (engine audit). A closed grid reads neither and takes such a camera.
+#[test]
+fn an_open_grid_refuses_a_placeholder_depth_range() {
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 1.0, 50.0);
+    let mut lights = Columns::default();
+    lights.push(Vec3::new(0.0, 0.0, -100.0), 10.0);
+    lights.push(Vec3::new(0.0, 0.0, -20.0), 1.0);
+    let camera = |near, far| {
+        Camera::new(
+            Vec3::ZERO,
+            Vec3::NEG_Z,
+            Vec3::Y,
+            60.0,
+            1920,
+            1080,
+            near,
+            far,
+        )
+    };
+    let past = grid.cluster_of_pixel(960, 540, 100.0, 1920, 1080) as usize;
+    let mut lists = LightLists::new();
+    let good = Assigner::new().try_assign(
+        Method::Refined,
+        &lights.input(false),
+        &camera(0.1, f32::INFINITY),
+        &grid,
+        &mut lists,
+    );
+    assert!(good.is_ok(), "{good:?}");
+    assert_eq!(lists.lights_of(past), &[0]);
+    for (near, far) in [
+        (0.1, 0.0),
+        (0.1, f32::NAN),
+        (f32::NAN, f32::NAN),
+        (0.0, 100.0),
+        (-1.0, 100.0),
+        (60.0, 60.0),
+        (f32::INFINITY, f32::INFINITY),
+    ] {
+        let what = format!("near {near}, far {far}");
+        let mut lists = LightLists::new();
+        let input = lights.input(false);
+        let err = Assigner::new()
+            .try_assign(
+                Method::Refined,
+                &input,
+                &camera(near, far),
+                &grid,
+                &mut lists,
+            )
+            .expect_err(&what);
+        assert!(
+            err.0.contains("OuterSlices::Closed") && err.0.contains(&format!("[{near}, {far}]")),
+            "{what}: {err}"
+        );
+        assert_eq!(lists.cluster_count(), 0, "{what}: the output is untouched");
+        let closed = grid.with_outer_slices(OuterSlices::Closed);
+        let stats = Assigner::new()
+            .try_assign(
+                Method::Refined,
+                &input,
+                &camera(near, far),
+                &closed,
+                &mut lists,
+            )
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!(
+            (stats.visible(), lists.lights_of(past)),
+            (1, &[][..]),
+            "{what}"
+        );
+    }
+}

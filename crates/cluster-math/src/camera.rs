@@ -95,8 +95,9 @@ impl Camera {
     /// or target, a field of view outside (0, π), or a zero width or height. A degenerate `up` or
     /// `target == position` is not a problem: those have the documented fallbacks. The depth
     /// range is not looked at: light assignment slices depth by its grid's range, so a camera with
-    /// an infinite far plane (reversed-Z engines) and a finite grid is fine there, and the
-    /// assignment asserts only this.
+    /// an infinite far plane (reversed-Z engines) and a finite grid is fine there. The assignment
+    /// asserts this, and `0 < near < far` besides where the grid's outer slices are open
+    /// ([`crate::OuterSlices`], the default: they reach the camera's near and far planes).
     pub fn view_problem(&self) -> Option<String> {
         if !(self.position.is_finite() && self.target.is_finite()) {
             return Some(format!(

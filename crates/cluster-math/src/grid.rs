@@ -51,13 +51,17 @@ pub enum OuterSlices {
     /// The first slice reaches back to the camera's near plane and the last on to its far plane
     /// (infinite for an infinite projection): a light in view but wholly outside the grid's
     /// range is listed in the outer slice's clusters its sphere covers. Never wrong for any
-    /// pixel; the cost is longer lists in the outer slices when many lights lie outside the
-    /// grid. The default.
+    /// pixel of a camera the renderer accepts (near at least [`ClusterGrid::MIN_NEAR`]); the
+    /// cost is longer lists in the outer slices when many lights lie outside the grid. The
+    /// assignment then reads the camera's near and far, so they must be its real planes
+    /// (`0 < near < far`, far possibly infinite; a placeholder is refused). The default.
     #[default]
     Open,
     /// The outer slices end at the grid's near and far depths, and the lights wholly outside
-    /// them are in no list. For a range that holds every shaded depth (fitted to the depth
-    /// buffer): the lights outside it would only lengthen the outer slices' lists.
+    /// them are culled (by the bounding sphere the cull tests, which for a wide spot reaches
+    /// past its cone: such a spot may stay listed, a false positive). For a range that holds
+    /// every shaded depth (fitted to the depth buffer): the lights outside it would only
+    /// lengthen the outer slices' lists. The camera's near and far are not read.
     Closed,
 }
 

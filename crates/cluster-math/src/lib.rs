@@ -11,9 +11,9 @@
 //!   *camera-relative* ([`Camera::view_from_world_point`]) so huge world coordinates lose no precision.
 //!   [`Camera::from_matrices`] reads one back from an engine's own view and projection matrices.
 //! * [`ClusterGrid`]: X×Y×Z clusters. Tiles are uniform in NDC; depth is cut by [`DepthSlicing`]
-//!   (linear, logarithmic, or logarithmic with a special first slice). The grid's depth range defaults
-//!   to the camera's near/far and may be overridden for fitted (dynamic) ranges; a grid shorter
-//!   than the camera's view lists the lights outside it in its outer slices ([`OuterSlices`]).
+//!   (linear, logarithmic, or logarithmic with a special first slice). The grid's depth range is
+//!   its own: usually the camera's near/far, or a fitted (dynamic) range; a grid shorter than the
+//!   camera's view lists the lights outside it in its outer slices ([`OuterSlices`]).
 //! * Mappings, all mutually consistent and exhaustively tested: pixel → tile (integer arithmetic, exact
 //!   for any resolution), view depth → slice (formula estimate corrected against the edge table, so it
 //!   agrees with [`ClusterGrid::slice_start_depth`] to the last bit), slice → depth range, and
