@@ -9,7 +9,7 @@ mod common;
 
 use common::*;
 use glam::{UVec3, Vec3};
-use myriad_assignment::{Assigner, LightLists, Method};
+use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices};
 use rand::{Rng, SeedableRng};
 
@@ -61,6 +61,32 @@ fn camera(far: f32) -> Camera {
     )
 }
 
+/// A camera at the origin looking down −Z (its view transform is exact) over `[near, far]`.
+fn axis_camera(near: f32, far: f32) -> Camera {
+    Camera::new(
+        Vec3::ZERO,
+        Vec3::NEG_Z,
+        Vec3::Y,
+        60.0,
+        1920,
+        1080,
+        near,
+        far,
+    )
+}
+
+/// One frame of `method` by a fresh assigner, into `lists`.
+fn assign(
+    method: Method,
+    lights: &Columns,
+    spots: bool,
+    camera: &Camera,
+    grid: &ClusterGrid,
+    lists: &mut LightLists,
+) -> AssignStats {
+    Assigner::new().assign(method, &lights.input(spots), camera, grid, lists)
+}
+
 #[test]
 fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers_them() {
     for (far, edge) in [f32::INFINITY, 400.0]
@@ -86,13 +112,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
             );
             for method in METHODS {
                 let mut lists = LightLists::new();
-                let stats = Assigner::new().assign(
-                    method,
-                    &lights.input(false),
-                    &camera,
-                    &grid,
-                    &mut lists,
-                );
+                let stats = assign(method, &lights, false, &camera, &grid, &mut lists);
                 let what = format!("{method}, far {far}, {edge:?}, {n} lights");
                 assert_eq!(stats.rejected, 3, "{what}");
                 assert_eq!(stats.beyond_far, beyond, "{what}");
@@ -134,13 +154,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                 // A grid out to that reach leaves no light beyond it and lists every light.
                 let covering = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, got)
                     .with_outer_slices(edge);
-                let stats = Assigner::new().assign(
-                    method,
-                    &lights.input(false),
-                    &camera,
-                    &covering,
-                    &mut lists,
-                );
+                let stats = assign(method, &lights, false, &camera, &covering, &mut lists);
                 assert_eq!(stats.beyond_far, 0, "{what}: {stats:?}");
                 assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}");
                 assert_eq!(stats.rejected, 3, "{what}: {stats:?}");
@@ -160,9 +174,10 @@ fn a_grid_that_reaches_the_cameras_far_counts_nothing_beyond_it() {
     let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 60.0);
     let (lights, _, _) = lights_in_view(&camera, 2000, grid.far(), 3);
     for method in METHODS {
-        let stats = Assigner::new().assign(
+        let stats = assign(
             method,
-            &lights.input(false),
+            &lights,
+            false,
             &camera,
             &grid,
             &mut LightLists::new(),
@@ -185,9 +200,10 @@ fn spots_and_thread_counts_give_the_same_counts() {
         (lights.dir_x[i], lights.dir_y[i], lights.dir_z[i]) = (dir.x, dir.y, dir.z);
         lights.angle[i] = rng.random_range(0.1..1.5);
     }
-    let reference = Assigner::new().assign(
+    let reference = assign(
         Method::Linear,
-        &lights.input(true),
+        &lights,
+        true,
         &camera,
         &grid,
         &mut LightLists::new(),
@@ -200,9 +216,10 @@ fn spots_and_thread_counts_give_the_same_counts() {
             .unwrap();
         for method in [Method::Binary, Method::Refined, Method::Cone] {
             let stats = pool.install(|| {
-                Assigner::new().assign(
+                assign(
                     method,
-                    &lights.input(true),
+                    &lights,
+                    true,
                     &camera,
                     &grid,
                     &mut LightLists::new(),
@@ -220,16 +237,7 @@ fn spots_and_thread_counts_give_the_same_counts() {
 /// it, the ones a closed grid culls), by every method.
 #[test]
 fn a_light_touching_the_far_plane_is_not_beyond_it() {
-    let camera = Camera::new(
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        Vec3::Y,
-        60.0,
-        1280,
-        720,
-        0.1,
-        f32::INFINITY,
-    );
+    let camera = axis_camera(0.1, f32::INFINITY);
     let far = 40.0;
     // The radius whose padded sphere's near side lies exactly at `far` (the view transform of
     // this camera is exact: depth 50 stays 50).
@@ -249,9 +257,10 @@ fn a_light_touching_the_far_plane_is_not_beyond_it() {
         let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, far)
             .with_outer_slices(outer);
         for method in METHODS {
-            let stats = Assigner::new().assign(
+            let stats = assign(
                 method,
-                &lights.input(false),
+                &lights,
+                false,
                 &camera,
                 &grid,
                 &mut LightLists::new(),
@@ -272,24 +281,12 @@ fn an_open_grid_refuses_a_placeholder_depth_range() {
     let mut lights = Columns::default();
     lights.push(Vec3::new(0.0, 0.0, -100.0), 10.0);
     lights.push(Vec3::new(0.0, 0.0, -20.0), 1.0);
-    let camera = |near, far| {
-        Camera::new(
-            Vec3::ZERO,
-            Vec3::NEG_Z,
-            Vec3::Y,
-            60.0,
-            1920,
-            1080,
-            near,
-            far,
-        )
-    };
     let past = grid.cluster_of_pixel(960, 540, 100.0, 1920, 1080) as usize;
     let mut lists = LightLists::new();
     let good = Assigner::new().try_assign(
         Method::Refined,
         &lights.input(false),
-        &camera(0.1, f32::INFINITY),
+        &axis_camera(0.1, f32::INFINITY),
         &grid,
         &mut lists,
     );
@@ -311,7 +308,7 @@ fn an_open_grid_refuses_a_placeholder_depth_range() {
             .try_assign(
                 Method::Refined,
                 &input,
-                &camera(near, far),
+                &axis_camera(near, far),
                 &grid,
                 &mut lists,
             )
@@ -326,7 +323,7 @@ fn an_open_grid_refuses_a_placeholder_depth_range() {
             .try_assign(
                 Method::Refined,
                 &input,
-                &camera(near, far),
+                &axis_camera(near, far),
                 &closed,
                 &mut lists,
             )
