@@ -634,7 +634,7 @@ struct Frame<'a> {
 }
 
 /// The grid a pair budget falls back to: every dimension halved (rounding down, at least 1),
-/// same depth range, slicing and [`OuterSlices`](myriad_cluster_math::OuterSlices). Repeating it reaches 1×1×1.
+/// same depth range, slicing and [`OuterSlices`]. Repeating it reaches 1×1×1.
 pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
     let dims = (grid.dims() / 2).max(glam::UVec3::ONE);
     ClusterGrid::new(dims, grid.slicing(), grid.near(), grid.far())
