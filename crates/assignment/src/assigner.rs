@@ -545,7 +545,7 @@ impl Assigner {
         let ctx = FrameContext {
             active: view,
             method,
-            exact: (method == Method::Exact).then(|| jobs::ExactFrame::new(camera)),
+            exact: (method == Method::Exact).then(|| jobs::ExactFrame::new(camera, budget)),
             parts: parts.count,
             slice_shift: parts.slice_shift,
             lights: *lights,
@@ -569,6 +569,12 @@ impl Assigner {
             jobs::run_task(&ctx, begin, end, task);
         };
         for_each_task(&mut self.tasks[..tasks], fan_out, gather);
+        // `exact` stops as soon as its running count passes the budget (see `ExactFrame`).
+        if let Some(exact) = &ctx.exact
+            && exact.over_budget()
+        {
+            return Err(exact.pairs.load(std::sync::atomic::Ordering::Relaxed));
+        }
         let work = &self.tasks[..tasks];
         let pairs = match self.append {
             AppendStrategy::PartitionedByDepth => {

@@ -30,14 +30,14 @@ pub enum GpuError {
     },
     /// A buffer would exceed what the device can bind; nothing is truncated, the frame is refused.
     #[error(
-        "{what} needs {bytes} bytes, more than this device can bind in one storage buffer \
-         ({limit} bytes); {}",
+        "the {what} buffer needs {bytes} bytes, more than this device can bind in one storage \
+         buffer ({limit} bytes); {}",
         if *what == "lights" {
             "fewer lights per frame (cull first), or a device created with a larger \
              max_storage_buffer_binding_size"
         } else {
-            "use a coarser grid or a pair budget, or a device created with a larger \
-             max_storage_buffer_binding_size"
+            "use a coarser grid or a pair budget (`Assigner::with_pair_budget`), or a device \
+             created with a larger max_storage_buffer_binding_size"
         }
     )]
     BufferTooLarge {

@@ -716,3 +716,36 @@ fn cluster_spheres_are_centred_on_their_cells() {
         );
     }
 }
+
+/// `exact` keeps a running count of its pairs and skips its remaining lights once the count
+/// passes the frame's budget (the frame is then retried on a coarser grid), instead of testing
+/// every cluster of every light first: a task of 40 large lights under a budget of 10 pairs
+/// stops after its first light, which passed it.
+#[test]
+fn exact_stops_once_its_pairs_pass_the_budget() {
+    let (camera, grid, sets) = frame();
+    let n = 40;
+    let (x, y, r) = (vec![0.0; n], vec![0.0; n], vec![5.0; n]);
+    let z: Vec<f32> = (0..n).map(|i| -10.0 - i as f32 * 0.5).collect();
+    let run = |lights: usize, budget: u64| {
+        let mut ctx = culling_context(Method::Exact, &camera, &grid, &sets);
+        ctx.lights = LightInput::points(&x, &y, &z, &r);
+        ctx.exact = Some(ExactFrame::new(&camera, budget));
+        let mut out = TaskOutput::default();
+        run_task(&ctx, 0, lights, &mut out);
+        let written: u64 = out.buckets[..ctx.parts].iter().map(|b| b.pairs).sum();
+        let exact = ctx.exact.as_ref().unwrap();
+        assert_eq!(
+            exact.pairs.load(Ordering::Relaxed),
+            written,
+            "budget {budget}"
+        );
+        (written, exact.over_budget())
+    };
+    let (all, over) = run(n, u64::MAX);
+    let (first, _) = run(1, u64::MAX);
+    assert!(!over && first > 10 && all > 5 * first, "{first} of {all}");
+    assert_eq!(run(n, 10), (first, true), "only the first light was tested");
+    // A budget the frame fits is never hit.
+    assert_eq!(run(n, all), (all, false));
+}
