@@ -601,7 +601,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     let mut scene = match (&args.scene, &args.preset) {
         (Some(path), _) => {
             let file = myriad::scene::Scene::load(path, myriad::scene::LightPolicy::SkipInvalid)?;
-            super::source::report_skipped(&file);
+            super::source::report_skipped(path, &file);
             check_memory(&file.grid, file.lights.len())
                 .with_context(|| format!("{}: grid too large here", path.display()))?;
             skipped = file.skipped.len();

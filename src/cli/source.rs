@@ -35,7 +35,7 @@ impl SceneSource {
                     path.display()
                 );
                 let scene = Scene::load(path, LightPolicy::SkipInvalid)?;
-                report_skipped(&scene);
+                report_skipped(path, &scene);
                 check_memory(&scene.grid, scene.lights.len())
                     .with_context(|| format!("{}: grid too large here", path.display()))?;
                 Ok((scene, path.display().to_string()))
@@ -66,12 +66,16 @@ pub fn parse_preset(name: &str) -> Result<Preset> {
     })
 }
 
-/// Says on stderr how many lights of a file were invalid and left out.
-pub fn report_skipped(scene: &Scene) {
+/// Says on stderr how many lights of the file at `path` were invalid and left out.
+pub fn report_skipped(path: &Path, scene: &Scene) {
     if scene.skipped.is_empty() {
         return;
     }
-    eprintln!("warning: {} invalid light(s) skipped:", scene.skipped.len());
+    eprintln!(
+        "warning: {}: {} invalid light(s) skipped:",
+        path.display(),
+        scene.skipped.len()
+    );
     for s in scene.skipped.iter().take(10) {
         eprintln!("  {s}");
     }

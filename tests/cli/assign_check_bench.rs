@@ -734,7 +734,8 @@ fn many_skipped_lights_are_counted_and_the_list_stops_after_ten() {
     assert_mentions(
         &err,
         &[
-            "12 invalid light(s) skipped",
+            // The warning names the file (audit).
+            "bad_12.json: 12 invalid light(s) skipped",
             "light 10 skipped",
             "… and 2 more",
         ],
