@@ -22,9 +22,24 @@ pub struct Args {
     out: PathBuf,
     /// Most cluster–light pairs the lists may hold; past it the grid is halved until they fit
     /// (no light is dropped). The dump then records the coarser grid. Default: what u32 offsets
-    /// hold.
+    /// hold, or fewer where the memory this process may take holds fewer (24 bytes a pair).
     #[arg(long)]
     pair_budget: Option<u64>,
+}
+
+/// What a pair costs `assign` at its peak: the lists' index, the dump's copy of it and the JSON
+/// text, with room. A stress audit measured 12.5 GB (`refined`) and 16.7 GB (`linear`, whose
+/// per-cluster lists come first) for 921.6 M pairs, 13.6 and 18.1 bytes a pair: under the
+/// default budget of what u32 offsets hold such a scene aborted in the allocator (exit 134)
+/// where memory was short, instead of coarsening its grid.
+const PEAK_BYTES_PER_PAIR: u64 = 24;
+
+/// `--pair-budget`, or the default: what u32 offsets hold, capped by the memory available.
+fn pair_budget(requested: Option<u64>) -> Option<u64> {
+    requested.or_else(|| {
+        let memory = super::source::memory_limit_bytes()?;
+        Some((memory / PEAK_BYTES_PER_PAIR).min(u64::from(u32::MAX)))
+    })
 }
 
 /// Parses a method name with a helpful error.
@@ -47,7 +62,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let pool = thread_pool(args.threads)?;
     let mut lists = LightLists::new();
     let mut assigner = Assigner::new();
-    if let Some(pairs) = args.pair_budget {
+    let budget = pair_budget(args.pair_budget);
+    if let Some(pairs) = budget {
         assigner = assigner.with_pair_budget(pairs);
     }
     let stats = pool.install(|| {
@@ -64,7 +80,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if stats.coarsened > 0 {
         let (want, got) = (scene.grid.dims(), grid.dims());
         eprintln!(
-            "warning: {name}: the pairs exceed the budget on the {}x{}x{} grid; the lists were built on the coarser {}x{}x{} grid, which the dump records{}",
+            "warning: {name}: the pairs exceed the budget{} on the {}x{}x{} grid; the lists were built on the coarser {}x{}x{} grid, which the dump records{}",
+            match (args.pair_budget, budget) {
+                (None, Some(pairs)) if pairs < u64::from(u32::MAX) => format!(
+                    " ({pairs} pairs: what the memory available holds at {PEAK_BYTES_PER_PAIR} \
+                     bytes a pair; --pair-budget sets it)"
+                ),
+                _ => String::new(),
+            },
             want.x,
             want.y,
             want.z,

@@ -311,3 +311,48 @@ fn a_closed_stdout_exits_2_with_one_line() {
         );
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn lists_beyond_the_memory_coarsen_the_grid_instead_of_aborting() {
+    // 20 000 lights of radius 10⁴ cover every cluster of the 24×12×16 grid: 92 M pairs, about
+    // 2.2 GB at the peak of `assign`. Under a 1.5 GB cap the default pair budget follows the
+    // memory available, so the grid coarsens (as under an explicit `--pair-budget`) where the
+    // run aborted in its allocator (exit 134, stress audit).
+    let dir = work_dir("memory_budget");
+    let light = r#"{"position": [0, 2, 0], "radius": 10000}"#;
+    let lights = vec![light; 20_000].join(", ");
+    let scene = write(&dir, "huge.json", &scene_with_lights(&lights));
+    let dump = dir.join("huge.dump.json");
+    let out = Command::new("sh")
+        .args([
+            "-c".as_ref(),
+            r#"ulimit -v 1500000 && exec "$0" "$@""#.as_ref(),
+            env!("CARGO_BIN_EXE_myriad").as_ref(),
+            "assign".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--out".as_ref(),
+            dump.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    let text = all_output(&out);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert_mentions(
+        &text,
+        &[
+            "what the memory available holds",
+            "the lists were built on the coarser",
+        ],
+    );
+    // The coarser lists are right: every light in every cluster of the grid the dump records.
+    let check = myriad(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--dump".as_ref(),
+        dump.as_os_str(),
+    ]);
+    assert_eq!(check.status.code(), Some(0), "{}", all_output(&check));
+}
