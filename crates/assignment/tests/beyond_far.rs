@@ -13,14 +13,6 @@ use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices};
 use rand::{Rng, SeedableRng};
 
-const METHODS: [Method; 5] = [
-    Method::Exact,
-    Method::Linear,
-    Method::Binary,
-    Method::Refined,
-    Method::Cone,
-];
-
 /// `n` point lights well inside the view's sides at depths 1..150 (radii 0.3..3), none within
 /// 0.05 of `grid_far` with its sphere's near side, so that the padding cannot move a light
 /// across the grid's far plane. Returns the lights and how many lie wholly past `grid_far`, and
@@ -110,7 +102,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
                 beyond > n as u32 / 2,
                 "the draw puts most lights past the grid"
             );
-            for method in METHODS {
+            for method in Method::ALL {
                 let mut lists = LightLists::new();
                 let stats = assign(method, &lights, false, &camera, &grid, &mut lists);
                 let what = format!("{method}, far {far}, {edge:?}, {n} lights");
@@ -173,7 +165,7 @@ fn a_grid_that_reaches_the_cameras_far_counts_nothing_beyond_it() {
     let camera = camera(60.0);
     let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 60.0);
     let (lights, _, _) = lights_in_view(&camera, 2000, grid.far(), 3);
-    for method in METHODS {
+    for method in Method::ALL {
         let stats = assign(
             method,
             &lights,
@@ -256,7 +248,7 @@ fn a_light_touching_the_far_plane_is_not_beyond_it() {
     for outer in [OuterSlices::Open, OuterSlices::Closed] {
         let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, far)
             .with_outer_slices(outer);
-        for method in METHODS {
+        for method in Method::ALL {
             let stats = assign(
                 method,
                 &lights,
