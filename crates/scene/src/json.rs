@@ -300,6 +300,26 @@ pub(crate) fn to_f32(j: &Json, at: &str, sink: &mut Sink<'_>) -> Option<f32> {
     }
 }
 
+/// [`to_f32`] for a value that must not be zero (a radius): a non-zero number too small for f32
+/// (`1e-46`) is reported as the file wrote it, rather than later as "must be > 0, got 0.0" for a
+/// zero the file never held.
+pub(crate) fn to_f32_nonzero(j: &Json, at: &str, sink: &mut Sink<'_>) -> Option<f32> {
+    let y = to_f32(j, at, sink)?;
+    match j {
+        Json::Number(n) if y == 0.0 && n.to_f64() != 0.0 => {
+            sink.report(
+                at,
+                format!(
+                    "{n} rounds to 0 in f32 (the smallest positive f32 is about 1.4e-45); must be \
+                     > 0"
+                ),
+            );
+            None
+        }
+        _ => Some(y),
+    }
+}
+
 /// An array of exactly three numbers, each rounded to f32.
 pub(crate) fn to_vec3(j: &Json, at: &str, sink: &mut Sink<'_>) -> Option<Vec3> {
     let items = match j {
@@ -450,6 +470,32 @@ mod tests {
                  (e.g. 24), got 24.0",
                 "camera.width: must be at most 4294967295, got 4294967296",
                 "camera.depth: expected a string, got a number",
+            ]
+        );
+    }
+
+    #[test]
+    fn a_radius_too_small_for_f32_is_named_as_written() {
+        let mut problems = Vec::new();
+        let mut sink = Sink::new(&mut problems, Prefix::Light(3));
+        assert!(to_f32_nonzero(&parse("1e-46"), "radius", &mut sink).is_none());
+        assert!(to_f32_nonzero(&parse("-1e-46"), "radius", &mut sink).is_none());
+        // Zero itself, and the smallest f32 subnormal, are left to the range checks.
+        assert_eq!(to_f32_nonzero(&parse("0"), "radius", &mut sink), Some(0.0));
+        assert_eq!(
+            to_f32_nonzero(&parse("1.5e-45"), "radius", &mut sink),
+            Some(f32::from_bits(1))
+        );
+        assert!(to_f32_nonzero(&parse("1e39"), "radius", &mut sink).is_none());
+        let shown: Vec<String> = problems.iter().map(|p| p.to_string()).collect();
+        assert_eq!(
+            shown,
+            [
+                "lights[3].radius: 1e-46 rounds to 0 in f32 (the smallest positive f32 is about \
+                 1.4e-45); must be > 0",
+                "lights[3].radius: -1e-46 rounds to 0 in f32 (the smallest positive f32 is about \
+                 1.4e-45); must be > 0",
+                "lights[3].radius: 1e+39 is out of the f32 range (magnitude at most 3.4028235e38)",
             ]
         );
     }

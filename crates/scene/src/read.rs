@@ -282,7 +282,7 @@ fn read_light(j: &Json, index: u32, parsed: &mut Parsed) {
             .and_then(|j| json::to_vec3(j, "position", &mut sink));
         let radius = obj
             .required("radius", &mut sink)
-            .and_then(|j| json::to_f32(j, "radius", &mut sink));
+            .and_then(|j| json::to_f32_nonzero(j, "radius", &mut sink));
         let color = match obj.optional("color") {
             None => Some(Vec3::ONE),
             Some(j) => json::to_vec3(j, "color", &mut sink),

@@ -463,6 +463,23 @@ mod tests {
     }
 
     #[test]
+    fn a_radius_that_underflows_f32_is_skipped_as_the_file_wrote_it() {
+        // 1e-46 is a positive radius in the file, and 0 once rounded to f32: the reason names
+        // the file's value, not the "got 0.0" of a zero the file never held.
+        let text = scene()
+            .to_json_string()
+            .unwrap()
+            .replace(r#""radius": 0.3"#, r#""radius": 1e-46"#);
+        let s = Scene::from_json_str(&text, "my.json", LightPolicy::SkipInvalid).unwrap();
+        assert_eq!(s.lights.source_index, [0]);
+        assert_eq!(
+            s.skipped[0].to_string(),
+            "light 1 skipped: lights[1].radius: 1e-46 rounds to 0 in f32 (the smallest positive \
+             f32 is about 1.4e-45); must be > 0"
+        );
+    }
+
+    #[test]
     fn strict_fails_on_first_bad_light_and_skip_lists_them() {
         // The writer refuses invalid lights, so break light 1 in the text.
         let text = scene()
