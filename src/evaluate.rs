@@ -151,9 +151,9 @@ impl Timing {
 /// `exact`. With a non-zero [`Idle`] the calling thread waits before each timed call, as an
 /// engine's frames are apart: the pool's other workers go to sleep in between.
 ///
-/// Fails when the lists do not fit u32 offsets on `grid` (past 2³² − 1 pairs the assigner builds
-/// them on a coarser grid, which the exact lists cannot be compared with), or when `exact` is not
-/// for `grid`.
+/// Fails when the lists need more than `max_pairs` pairs on `grid` (past it the assigner builds
+/// them on a coarser grid, which the exact lists cannot be compared with; at most what u32
+/// offsets hold, 2³² − 1, whatever `max_pairs` says), or when `exact` is not for `grid`.
 pub fn measure(
     method: Method,
     lights: &LightInput<'_>,
@@ -161,6 +161,7 @@ pub fn measure(
     grid: &ClusterGrid,
     exact: &LightLists,
     timing: Timing,
+    max_pairs: u64,
 ) -> anyhow::Result<MethodResult> {
     let Timing {
         runs,
@@ -170,13 +171,15 @@ pub fn measure(
     } = timing;
     let mut assigner = Assigner::new()
         .with_parallelism(parallelism)
-        .with_outside_calls(outside_calls);
+        .with_outside_calls(outside_calls)
+        .with_pair_budget(max_pairs);
     let mut lists = LightLists::new();
     let mut stats: AssignStats = assigner.assign(method, lights, camera, grid, &mut lists);
     anyhow::ensure!(
         stats.coarsened == 0,
-        "{method} needs more than 2^32 - 1 pairs (u32 offsets) on the {}x{}x{} grid (it fell back to a coarser one): \
+        "{method} needs more than {} pairs on the {}x{}x{} grid (it fell back to a coarser one): \
          too many to compare; use a coarser grid or fewer lights",
+        max_pairs.min(u64::from(u32::MAX)),
         grid.dims().x,
         grid.dims().y,
         grid.dims().z
@@ -293,11 +296,65 @@ mod tests {
             &scene.grid,
             &exact,
             Timing::back_to_back(5),
+            u64::MAX,
         )
         .unwrap();
         let wall_us = start.elapsed().as_secs_f64() * 1e6;
         assert_eq!((r.runs, r.misses), (5, 0), "{r:?}");
         assert!(r.min_us > 0.1 && r.min_us <= r.median_us, "{r:?}");
         assert!(r.median_us * 3.0 <= wall_us, "{r:?} in {wall_us} µs");
+    }
+
+    /// Lists past `max_pairs` are built on a coarser grid, which the exact lists cannot be
+    /// compared with: refused, naming the method, the limit and the grid. At the limit they pass.
+    #[test]
+    fn lists_past_the_pair_limit_are_refused() {
+        let scene = crate::render::RenderScene::default_scene(1000, 64, 36).unwrap();
+        let input = crate::light_input(&scene.lights);
+        let mut exact = LightLists::new();
+        let (camera, grid) = (&scene.camera, &scene.grid);
+        Assigner::new().assign(Method::Exact, &input, camera, grid, &mut exact);
+        let timing = Timing::back_to_back(1);
+        let refined = measure(
+            Method::Refined,
+            &input,
+            camera,
+            grid,
+            &exact,
+            timing,
+            u64::MAX,
+        )
+        .unwrap()
+        .pairs;
+        let at_limit = measure(
+            Method::Refined,
+            &input,
+            camera,
+            grid,
+            &exact,
+            timing,
+            refined,
+        );
+        assert_eq!(at_limit.unwrap().pairs, refined);
+        let e = measure(
+            Method::Refined,
+            &input,
+            camera,
+            grid,
+            &exact,
+            timing,
+            refined - 1,
+        )
+        .unwrap_err()
+        .to_string();
+        let d = grid.dims();
+        let want = format!(
+            "refined needs more than {} pairs on the {}x{}x{} grid",
+            refined - 1,
+            d.x,
+            d.y,
+            d.z
+        );
+        assert!(e.starts_with(&want), "{e}");
     }
 }

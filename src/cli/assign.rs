@@ -1,5 +1,6 @@
 //! `myriad assign --scene S --method M [--threads T] --out D`: the assignment dump of a scene.
 
+use super::pair_budget::{ASSIGN_BYTES_PER_PAIR, PairBudget};
 use super::source::{SceneSource, thread_pool};
 use anyhow::{Context, Result};
 use myriad::assignment::{Assigner, LightLists, Method};
@@ -27,21 +28,6 @@ pub struct Args {
     pair_budget: Option<u64>,
 }
 
-/// What a pair costs `assign` at its peak: the lists' index, the dump's copy of it and the JSON
-/// text, with room. A stress audit measured 12.5 GB (`refined`) and 16.7 GB (`linear`, whose
-/// per-cluster lists come first) for 921.6 M pairs, 13.6 and 18.1 bytes a pair: under the
-/// default budget of what u32 offsets hold such a scene aborted in the allocator (exit 134)
-/// where memory was short, instead of coarsening its grid.
-const PEAK_BYTES_PER_PAIR: u64 = 24;
-
-/// `--pair-budget`, or the default: what u32 offsets hold, capped by the memory available.
-fn pair_budget(requested: Option<u64>) -> Option<u64> {
-    requested.or_else(|| {
-        let memory = super::source::memory_limit_bytes()?;
-        Some((memory / PEAK_BYTES_PER_PAIR).min(u64::from(u32::MAX)))
-    })
-}
-
 /// Parses a method name with a helpful error.
 pub fn parse_method(name: &str) -> Result<Method> {
     Method::from_name(name).with_context(|| {
@@ -61,11 +47,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let (scene, name) = args.source.load()?;
     let pool = thread_pool(args.threads)?;
     let mut lists = LightLists::new();
-    let mut assigner = Assigner::new();
-    let budget = pair_budget(args.pair_budget);
-    if let Some(pairs) = budget {
-        assigner = assigner.with_pair_budget(pairs);
-    }
+    let budget = PairBudget::new(args.pair_budget, ASSIGN_BYTES_PER_PAIR);
+    let mut assigner = Assigner::new().with_pair_budget(budget.pairs);
     let stats = pool.install(|| {
         assigner.assign(
             method,
@@ -77,29 +60,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     });
     // The dump describes the grid the lists belong to, which the budget may have coarsened.
     let grid = stats.grid_built(&scene.grid);
-    if stats.coarsened > 0 {
-        let (want, got) = (scene.grid.dims(), grid.dims());
-        eprintln!(
-            "warning: {name}: the pairs exceed the budget{} on the {}x{}x{} grid; the lists were built on the coarser {}x{}x{} grid, which the dump records{}",
-            match (args.pair_budget, budget) {
-                (None, Some(pairs)) if pairs < u64::from(u32::MAX) => format!(
-                    " ({pairs} pairs: what the memory available holds at {PEAK_BYTES_PER_PAIR} \
-                     bytes a pair; --pair-budget sets it)"
-                ),
-                _ => String::new(),
-            },
-            want.x,
-            want.y,
-            want.z,
-            got.x,
-            got.y,
-            got.z,
-            if stats.over_budget {
-                " (still over the budget: every visible light in one cluster)"
-            } else {
-                ""
-            }
-        );
+    if let Some(warning) = budget.coarsening_warning(&name, &stats, &scene.grid, "the dump") {
+        eprintln!("{warning}");
     }
     AssignmentDump::new(&grid, &lists, &scene.lights.source_index).save(&args.out)?;
     println!(

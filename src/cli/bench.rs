@@ -3,8 +3,9 @@
 use super::assign::parse_method;
 use super::list_options::refuse_repeats;
 use super::oracle_check::independent_lists;
+use super::pair_budget::{COMPARE_BYTES_PER_PAIR, PairBudget};
 use super::source::{SceneSource, thread_pool};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use myriad::assignment::{Method, OutsideCalls, Parallelism};
 use myriad::core_link::{self, CoreLink, HANDOFF_BYTES};
 use myriad::evaluate::{Idle, MethodResult, Timing, measure};
@@ -134,9 +135,11 @@ fn bench(
     timing: Timing,
 ) -> Result<Report> {
     let input = myriad::light_input(&scene.lights);
+    // Every method's lists must fit the memory beside the oracle's: past it, a clear error.
+    let budget = PairBudget::new(None, COMPARE_BYTES_PER_PAIR);
     let run = || {
         // The reference shares no code with the assignment but the f64 oracle.
-        let exact = independent_lists(&scene.lights, &scene.camera, &scene.grid)?;
+        let exact = independent_lists(&scene.lights, &scene.camera, &scene.grid, &budget)?;
         let before = core_link::measure();
         let methods = methods
             .iter()
@@ -148,7 +151,9 @@ fn bench(
                     timing.runs
                 };
                 let timing = Timing { runs, ..timing };
-                measure(m, &input, &scene.camera, &scene.grid, &exact, timing)
+                let pairs = budget.pairs;
+                measure(m, &input, &scene.camera, &scene.grid, &exact, timing, pairs)
+                    .with_context(|| format!("the pair budget is {}", budget.describe()))
             })
             .collect::<Result<_>>()?;
         let core_link = before

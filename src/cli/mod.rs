@@ -10,6 +10,7 @@ mod info;
 mod list_options;
 mod oracle_check;
 mod outputs;
+mod pair_budget;
 mod paper;
 mod progress;
 mod render;

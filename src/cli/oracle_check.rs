@@ -11,6 +11,7 @@
 //!   too. It shares no code with the assignment but the oracle, so a bug in the shared phases
 //!   cannot hide from it; it is slower (a cluster scans its whole depth window).
 
+use super::pair_budget::PairBudget;
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::{DVec3, Vec3};
 use myriad::cluster_math::oracle::{Cell, LightVolume, OracleView};
@@ -229,13 +230,14 @@ impl OracleLights {
 /// Every cluster's exact list from the independent oracle (ascending column indices): the
 /// reference `bench` and `report` measure misses and false positives against.
 ///
-/// Errs when the lists hold more pairs than u32 offsets can address.
+/// Errs when the lists hold more pairs than `budget` (never more than u32 offsets address).
 pub(crate) fn independent_lists(
     lights: &Lights,
     camera: &Camera,
     grid: &ClusterGrid,
+    budget: &PairBudget,
 ) -> anyhow::Result<LightLists> {
-    independent_lists_up_to(lights, camera, grid, u32::MAX as u64, CLUSTERS_PER_CHUNK)
+    independent_lists_up_to(lights, camera, grid, budget, CLUSTERS_PER_CHUNK)
 }
 
 /// Clusters whose lists are found in parallel before they are appended to the CSR arrays.
@@ -253,9 +255,10 @@ fn independent_lists_up_to(
     lights: &Lights,
     camera: &Camera,
     grid: &ClusterGrid,
-    max_pairs: u64,
+    budget: &PairBudget,
     clusters_per_chunk: u32,
 ) -> anyhow::Result<LightLists> {
+    let max_pairs = budget.pairs.min(u64::from(u32::MAX));
     let oracle = OracleLights::new(lights, camera);
     let clusters = grid.cluster_count() as u32;
     let mut lists = LightLists::new();
@@ -275,12 +278,13 @@ fn independent_lists_up_to(
         anyhow::ensure!(
             pairs <= max_pairs,
             "the oracle finds more than {max_pairs} pairs on the {}x{}x{} grid (the first {} of \
-             its {clusters} clusters hold {pairs}), more than CSR lists with u32 offsets hold; use \
-             a coarser grid or fewer lights",
+             its {clusters} clusters hold {pairs}), past the pair budget of {}; use a coarser grid \
+             or fewer lights",
             grid.dims().x,
             grid.dims().y,
             grid.dims().z,
             chunk_end,
+            budget.describe(),
         );
         for list in chunk {
             lists.offsets.push(lists.indices.len() as u32);
@@ -357,6 +361,7 @@ pub(crate) fn check_clusters(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cli::pair_budget::COMPARE_BYTES_PER_PAIR;
     use myriad::cluster_math::oracle::{SpotVolume, distance_to_cell};
     use myriad::render::RenderScene;
 
@@ -510,7 +515,9 @@ mod tests {
     #[test]
     fn independent_lists_equal_the_exact_methods() {
         let (scene, _) = scene_and_lists(2000);
-        let independent = independent_lists(&scene.lights, &scene.camera, &scene.grid).unwrap();
+        let budget = PairBudget::new(None, COMPARE_BYTES_PER_PAIR);
+        let independent =
+            independent_lists(&scene.lights, &scene.camera, &scene.grid, &budget).unwrap();
         let mut exact = LightLists::new();
         Assigner::new().assign(
             Method::Exact,
@@ -526,11 +533,18 @@ mod tests {
     #[test]
     fn independent_lists_past_the_pair_limit_are_refused() {
         let (scene, _) = scene_and_lists(2000);
-        let lists = independent_lists(&scene.lights, &scene.camera, &scene.grid).unwrap();
+        let lists = independent_lists(
+            &scene.lights,
+            &scene.camera,
+            &scene.grid,
+            &PairBudget::new(None, COMPARE_BYTES_PER_PAIR),
+        )
+        .unwrap();
         let pairs = lists.pair_count() as u64;
         assert!(pairs > 5_000, "{pairs}");
         let build = |max_pairs, chunk| {
-            independent_lists_up_to(&scene.lights, &scene.camera, &scene.grid, max_pairs, chunk)
+            let budget = PairBudget::new(Some(max_pairs), COMPARE_BYTES_PER_PAIR);
+            independent_lists_up_to(&scene.lights, &scene.camera, &scene.grid, &budget, chunk)
         };
         // Chunks of 1000 clusters: the limit is checked part-way, and a chunk ends mid-slice.
         assert!(scene.grid.cluster_count() > 3000, "{:?}", scene.grid.dims());
@@ -539,6 +553,7 @@ mod tests {
         let error = build(pairs - 1, 1000).unwrap_err().to_string();
         assert!(
             error.contains(&format!("more than {} pairs", pairs - 1))
+                && error.contains(&format!("budget of {} pairs (--pair-budget)", pairs - 1))
                 && error.contains("coarser grid"),
             "{error}"
         );

@@ -16,6 +16,7 @@
 use super::grid_options::parse_grid;
 use super::list_options::refuse_repeats;
 use super::oracle_check::independent_lists;
+use super::pair_budget::{COMPARE_BYTES_PER_PAIR, PairBudget};
 use super::source::{check_memory_for, thread_pool};
 use anyhow::{Context, Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
@@ -163,6 +164,8 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Result<Report> {
     let total = Preset::ALL.len() * grids.len();
     let mut rows = Vec::with_capacity(total * Method::ALL.len());
     let mut done = 0;
+    // Every method's lists must fit the memory beside the oracle's: past it, a clear error.
+    let budget = PairBudget::new(None, COMPARE_BYTES_PER_PAIR);
     for preset in Preset::ALL {
         let scene = preset.generate(args.lights, args.seed);
         let input = myriad::light_input(&scene.lights);
@@ -175,7 +178,7 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Result<Report> {
                 scene.grid.far(),
             );
             // The reference shares no code with the assignment but the f64 oracle.
-            let exact = independent_lists(&scene.lights, camera, &grid)?;
+            let exact = independent_lists(&scene.lights, camera, &grid, &budget)?;
             let mut lists = LightLists::new();
             let mut times = Vec::new();
             for method in Method::ALL {
@@ -190,7 +193,9 @@ fn measure_all(args: &Args, grids: &[UVec3]) -> Result<Report> {
                     &grid,
                     &exact,
                     Timing::back_to_back(runs),
-                )?;
+                    budget.pairs,
+                )
+                .with_context(|| format!("the pair budget is {}", budget.describe()))?;
                 // `measure` keeps its lists to itself; one more assignment gives them back for the
                 // shading cost.
                 Assigner::new().assign(method, &input, camera, &grid, &mut lists);

@@ -12,7 +12,9 @@
 //!
 //! 1. **scene generation** — the lights and the geometry they are rendered in;
 //! 2. **assignment** on the CPU with `--method`, twice: the first call allocates the assigner's
-//!    scratch and the lists, the second reuses them (the steady state a frame loop sees);
+//!    scratch and the lists, the second reuses them (the steady state a frame loop sees). Under a
+//!    pair budget (`pair_budget.rs`: `--pair-budget`, or what the memory holds): past it the
+//!    grid is coarsened, a warning says so, and the later stages use that grid;
 //! 3. **GPU setup** — device, geometry upload, and one warm-up frame with the same lights and
 //!    empty lists, so that pipeline compilation and the light buffer's allocation do not land in
 //!    the measured frame;
@@ -48,6 +50,7 @@
 use super::assign::parse_method;
 use super::grid_options::parse_grid;
 use super::oracle_check::{CheckReport, OracleLights, check_all, check_clusters, sample_clusters};
+use super::pair_budget::{PairBudget, STRESS_BYTES_PER_PAIR};
 use super::progress::Progress;
 use super::render::parse_size;
 use super::source::check_memory_for;
@@ -83,6 +86,11 @@ pub struct Args {
     /// Up to this many lights every cluster is checked (exact assignment of all lights).
     #[arg(long, default_value_t = 200_000)]
     exact_up_to: usize,
+    /// Most cluster–light pairs the lists may hold; past it the grid is halved until they fit
+    /// (no light is dropped), and the report gives the coarser grid. Default: what u32 offsets
+    /// hold, or fewer where the memory this process may take holds fewer (24 bytes a pair).
+    #[arg(long)]
+    pair_budget: Option<u64>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -125,7 +133,12 @@ struct Report {
     lights: usize,
     width: u32,
     height: u32,
+    /// The grid the lists were built on: `--grid`, or a coarser one when the pairs exceeded the
+    /// pair budget (then `grid_requested` differs).
     grid: [u32; 3],
+    grid_requested: [u32; 3],
+    /// The pair budget the assignment ran under.
+    pair_budget: u64,
     method: String,
     seed: u64,
     adapter: String,
@@ -185,7 +198,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     // 2. Assignment, cold then warm.
     let input = myriad::light_input(&scene.lights);
-    let mut assigner = Assigner::new();
+    let budget = PairBudget::new(args.pair_budget, STRESS_BYTES_PER_PAIR);
+    let mut assigner = Assigner::new().with_pair_budget(budget.pairs);
     let mut lists = LightLists::new();
     let (_, seconds) = progress.stage("light assignment (first call, allocating)", || {
         Ok(assigner.assign(method, &input, &scene.camera, &scene.grid, &mut lists))
@@ -197,6 +211,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     stages.assign_again_ms = seconds * 1e3;
     drop(assigner);
     let grid = stats.grid_built(&scene.grid);
+    let warning = budget.coarsening_warning(&scene.name, &stats, &scene.grid, "the report");
+    if let Some(warning) = warning {
+        progress.line(warning);
+    }
     let assignment = Assignment {
         pairs: stats.pairs,
         visible: stats.visible(),
@@ -237,7 +255,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let shader_loop_limit = viewer.ctx.shader_loop_limit();
     let max_lights_per_pixel = viewer
         .ctx
-        .max_lights_per_pixel(myriad::gpu::ShadingMode::Lists, scene.grid.dims().z);
+        .max_lights_per_pixel(myriad::gpu::ShadingMode::Lists, grid.dims().z);
 
     // 4. Upload (+ encode and submit) of the measured frame.
     progress.start("upload + encode + submit");
@@ -255,8 +273,17 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .render(&viewer.ctx, &viewer.scene, &frame, &viewer.target.view)
         .map_err(|e| {
             let hint = match e {
-                GpuError::ShaderLoopLimit { .. } => " (a finer --grid gives shorter lists)",
-                _ => "",
+                GpuError::ShaderLoopLimit { .. } => " (a finer --grid gives shorter lists)".into(),
+                // Four bytes an index: the budget under which the grid coarsens until they fit.
+                GpuError::BufferTooLarge {
+                    what: "light indices",
+                    limit,
+                    ..
+                } => format!(
+                    " (--pair-budget {} coarsens the grid until the lists fit this device)",
+                    limit / 4
+                ),
+                _ => String::new(),
             };
             anyhow::Error::new(e).context(format!(
                 "rendering {} lights clustered{hint}",
@@ -322,6 +349,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         width,
         height,
         grid: [d.x, d.y, d.z],
+        grid_requested: dims.to_array(),
+        pair_budget: budget.pairs,
         method: method.name().to_string(),
         seed: args.seed,
         adapter,
@@ -367,8 +396,14 @@ fn peak_memory_bytes() -> Option<u64> {
 
 fn print_table(r: &Report) {
     let [x, y, z] = r.grid;
+    let coarser = if r.grid == r.grid_requested {
+        String::new()
+    } else {
+        let [x, y, z] = r.grid_requested;
+        format!(" (coarser than --grid {x}x{y}x{z}: the pairs exceeded the budget)")
+    };
     println!(
-        "{} — {} lights, {}x{}, grid {x}x{y}x{z}, method {}, seed {}",
+        "{} — {} lights, {}x{}, grid {x}x{y}x{z}{coarser}, method {}, seed {}",
         r.scene, r.lights, r.width, r.height, r.method, r.seed
     );
     println!(

@@ -356,3 +356,39 @@ fn lists_beyond_the_memory_coarsen_the_grid_instead_of_aborting() {
     ]);
     assert_eq!(check.status.code(), Some(0), "{}", all_output(&check));
 }
+
+#[cfg(unix)]
+#[test]
+fn bench_refuses_lists_beyond_the_memory_clearly() {
+    // The scene of the test above: 92 M exact pairs, which `bench` holds beside each method's
+    // (1.22 GB at its peak). Under a 1.2 GB cap the default pair budget follows the memory, and
+    // the oracle's lists stop at it with exit 2 and the reason, where the allocator would abort.
+    let dir = work_dir("bench_memory_budget");
+    let light = r#"{"position": [0, 2, 0], "radius": 10000}"#;
+    let lights = vec![light; 20_000].join(", ");
+    let scene = write(&dir, "huge.json", &scene_with_lights(&lights));
+    let out = Command::new("sh")
+        .args([
+            "-c".as_ref(),
+            r#"ulimit -v 1200000 && exec "$0" "$@""#.as_ref(),
+            env!("CARGO_BIN_EXE_myriad").as_ref(),
+            "bench".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--runs".as_ref(),
+            "1".as_ref(),
+        ])
+        .output()
+        .unwrap();
+    let text = all_output(&out);
+    assert_eq!(out.status.code(), Some(2), "{text}");
+    assert_mentions(
+        &text,
+        &[
+            "error: the oracle finds more than",
+            "on the 24x12x16 grid",
+            "what the memory available holds at 16 bytes a pair",
+            "use a coarser grid or fewer lights",
+        ],
+    );
+}

@@ -748,6 +748,54 @@ fn stress_samples_clusters_above_the_exact_limit() {
 }
 
 #[test]
+fn stress_coarsens_the_grid_past_its_pair_budget() {
+    if !gpu_available() {
+        return;
+    }
+    // The lists are built on the coarser grid the budget allows, warned about, rendered and
+    // checked on that grid; the report gives both grids. Its loop limit is for that grid's slices.
+    let out = myriad_ok(&[
+        "stress",
+        "--json",
+        "--lights",
+        "3000",
+        "--size",
+        "64x36",
+        "--pair-budget",
+        "5000",
+    ]);
+    let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(r["grid_requested"], serde_json::json!([24, 12, 16]));
+    assert_eq!(r["pair_budget"], 5000);
+    let grid: Vec<u64> = r["grid"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert!(grid.len() == 3 && grid[0] < 24 && grid[2] < 16, "{r}");
+    let pairs = u64_field(&r["assignment"], "pairs");
+    assert!(pairs <= 5000, "{pairs}");
+    assert_eq!(r["passed"], true);
+    let check = &r["check"];
+    assert_eq!(check["misses"], 0);
+    assert_eq!(
+        u64_field(check, "clusters_total"),
+        grid.iter().product::<u64>()
+    );
+    assert_eq!(u64_field(check, "reported_pairs"), pairs);
+    assert_mentions(
+        &stderr(&out),
+        &[
+            "warning: default scene (atrium): the pairs exceed the budget of 5000 pairs \
+             (--pair-budget) on the 24x12x16 grid; the lists were built on the coarser",
+            "grid, which the report records",
+        ],
+    );
+    assert_stress_stages(&r);
+}
+
+#[test]
 fn stress_rejects_bad_options_clearly() {
     assert_rejected(&[
         (&["stress", "--lights", "0"], &["--lights", "at least 1"]),

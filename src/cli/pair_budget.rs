@@ -1,0 +1,185 @@
+//! How many cluster–light pairs a command lets its lists hold, and what it says when a frame
+//! needs more.
+//!
+//! Why: the assigner's own limit is what u32 offsets hold (2³² − 1 pairs, 16 GiB of indices),
+//! far past the memory of most machines. Lights big enough to cover the whole grid reach it: a
+//! stress audit's 100k lights of radius 10⁴ on 32×18×16 made 921.6 M pairs, and the commands
+//! aborted in the allocator (exit 134) instead of coarsening the grid (`assign`, `stress`) or
+//! saying the frame is too big to compare (`bench`, `report`). So each command's default budget
+//! is what the memory this process may take holds at that command's peak bytes a pair, capped at
+//! what u32 offsets hold; `--pair-budget` sets it where a command takes one.
+
+use super::source::memory_limit_bytes;
+use myriad::assignment::AssignStats;
+use myriad::cluster_math::ClusterGrid;
+
+/// What a pair costs `assign` at its peak, with room: the lists' index, the dump's copy of it and
+/// the JSON text. A stress audit measured 12.5 GB (`refined`) and 16.7 GB (`linear`, whose
+/// per-cluster lists come first) for 921.6 M pairs: 13.6 and 18.1 bytes a pair.
+pub const ASSIGN_BYTES_PER_PAIR: u64 = 24;
+
+/// What a pair costs `bench` and `report` at their peak, with room: the oracle's lists and one
+/// method's at a time (8 bytes), and `linear`'s per-cluster lists. Measured: 1.22 GB peak
+/// (`/usr/bin/time -v`) for 92.16 M pairs of every method, 13.3 bytes a pair.
+pub const COMPARE_BYTES_PER_PAIR: u64 = 16;
+
+/// What a pair costs `stress` at its peak, with room: the lists (4 bytes), the `exact` method's
+/// for the full check (4), the upload's staging copy and, on a software adapter, the GPU buffer
+/// in the same memory (8). Measured: 3.49 GB peak for 728 M pairs before the upload, 4.8 bytes a
+/// pair.
+pub const STRESS_BYTES_PER_PAIR: u64 = 24;
+
+/// What u32 offsets hold: the assigner's own limit.
+const OFFSET_LIMIT: u64 = u32::MAX as u64;
+
+/// A command's pair budget and where it came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PairBudget {
+    pub pairs: u64,
+    pub source: BudgetSource,
+    /// The command's peak bytes a pair, which the memory's share was divided by.
+    bytes_per_pair: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BudgetSource {
+    /// `--pair-budget`.
+    Requested,
+    /// What the memory available holds at the command's peak bytes a pair.
+    Memory,
+    /// What u32 offsets hold (the memory is unknown, or holds more).
+    Offsets,
+}
+
+impl PairBudget {
+    /// `requested`, or the default: what u32 offsets hold, capped by what the memory available
+    /// holds at `bytes_per_pair` (the command's peak).
+    pub fn new(requested: Option<u64>, bytes_per_pair: u64) -> Self {
+        Self::from_memory(requested, bytes_per_pair, memory_limit_bytes())
+    }
+
+    /// [`PairBudget::new`] with the memory available given (`None`: unknown).
+    fn from_memory(requested: Option<u64>, bytes_per_pair: u64, memory: Option<u64>) -> Self {
+        let (pairs, source) = match (requested, memory.map(|bytes| bytes / bytes_per_pair)) {
+            (Some(pairs), _) => (pairs, BudgetSource::Requested),
+            (None, Some(pairs)) if pairs < OFFSET_LIMIT => (pairs, BudgetSource::Memory),
+            (None, _) => (OFFSET_LIMIT, BudgetSource::Offsets),
+        };
+        Self {
+            pairs,
+            source,
+            bytes_per_pair,
+        }
+    }
+
+    /// The budget and why it is what it is, for a message: "N pairs (what …)".
+    pub fn describe(&self) -> String {
+        let pairs = self.pairs;
+        match self.source {
+            BudgetSource::Requested => format!("{pairs} pairs (--pair-budget)"),
+            BudgetSource::Memory => format!(
+                "{pairs} pairs (what the memory available holds at {} bytes a pair)",
+                self.bytes_per_pair
+            ),
+            BudgetSource::Offsets => format!("{pairs} pairs (what u32 offsets hold)"),
+        }
+    }
+
+    /// The warning for a frame whose lists were built on a coarser grid than `requested`
+    /// ([`AssignStats::grid_built`]); `None` when they were not. `name` is the scene's and
+    /// `built` what the output records ("the dump", "the report"). For commands that take
+    /// `--pair-budget`.
+    pub fn coarsening_warning(
+        &self,
+        name: &str,
+        stats: &AssignStats,
+        requested: &ClusterGrid,
+        built: &str,
+    ) -> Option<String> {
+        if stats.coarsened == 0 {
+            return None;
+        }
+        let (want, got) = (requested.dims(), stats.grid_built(requested).dims());
+        Some(format!(
+            "warning: {name}: the pairs exceed the budget of {} on the {}x{}x{} grid; the \
+             lists were built on the coarser {}x{}x{} grid, which {built} records{}{}",
+            self.describe(),
+            want.x,
+            want.y,
+            want.z,
+            got.x,
+            got.y,
+            got.z,
+            if stats.over_budget {
+                " (still over the budget: every visible light in one cluster)"
+            } else {
+                ""
+            },
+            match self.source {
+                BudgetSource::Requested => "",
+                BudgetSource::Memory | BudgetSource::Offsets => "; --pair-budget sets the budget",
+            }
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use myriad::cluster_math::glam::UVec3;
+    use myriad::scene::DepthSlicing;
+
+    #[test]
+    fn the_default_follows_the_memory_up_to_what_offsets_hold() {
+        let gib = 1u64 << 30;
+        let b = PairBudget::from_memory(None, 24, Some(24 * gib));
+        assert_eq!(b.pairs, gib);
+        assert_eq!(b.source, BudgetSource::Memory);
+        assert_eq!(
+            b.describe(),
+            "1073741824 pairs (what the memory available holds at 24 bytes a pair)"
+        );
+        // A terabyte holds more than u32 offsets: their limit stands.
+        let b = PairBudget::from_memory(None, 16, Some(1 << 40));
+        assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Offsets));
+        let b = PairBudget::from_memory(None, 16, None);
+        assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Offsets));
+        // Asked for, it is taken as it is, whatever the memory.
+        let b = PairBudget::from_memory(Some(7), 24, Some(24));
+        assert_eq!((b.pairs, b.source), (7, BudgetSource::Requested));
+    }
+
+    #[test]
+    fn the_warning_names_both_grids_and_the_budget() {
+        let grid = ClusterGrid::new(UVec3::new(32, 18, 16), DepthSlicing::Log, 0.1, 100.0);
+        let mut stats = AssignStats::default();
+        let budget = PairBudget::from_memory(None, 24, Some(24_000));
+        assert_eq!(
+            budget.coarsening_warning("s.json", &stats, &grid, "the dump"),
+            None
+        );
+        stats.coarsened = 1;
+        let w = budget
+            .coarsening_warning("s.json", &stats, &grid, "the dump")
+            .unwrap();
+        assert_eq!(
+            w,
+            "warning: s.json: the pairs exceed the budget of 1000 pairs (what the memory \
+             available holds at 24 bytes a pair) on the 32x18x16 grid; the lists were built on \
+             the coarser 16x9x8 grid, which the dump records; --pair-budget sets the budget"
+        );
+        stats.over_budget = true;
+        let requested = PairBudget::from_memory(Some(5), 24, None);
+        let w = requested
+            .coarsening_warning("s.json", &stats, &grid, "the report")
+            .unwrap();
+        assert!(
+            w.contains("budget of 5 pairs (--pair-budget) on")
+                && w.ends_with(
+                    "which the report records (still over the budget: every visible \
+                                light in one cluster)"
+                ),
+            "{w}"
+        );
+    }
+}
