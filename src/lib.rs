@@ -16,6 +16,7 @@
 // One `unsafe` call, with the `tracy` feature only: the profiler's shutdown (`profiling.rs`).
 #![cfg_attr(not(feature = "tracy"), forbid(unsafe_code))]
 #![cfg_attr(feature = "tracy", deny(unsafe_code))]
+#![warn(missing_docs)]
 
 pub use myriad_assignment as assignment;
 pub use myriad_cluster_math as cluster_math;

@@ -62,6 +62,8 @@
 //! Invalid lights (non-finite position or radius, radius ≤ 0) are skipped and counted in
 //! [`AssignStats::rejected`], never written.
 
+#![warn(missing_docs)]
+
 mod active;
 mod append;
 mod assigner;
