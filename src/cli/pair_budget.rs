@@ -142,6 +142,14 @@ mod tests {
         // A terabyte holds more than u32 offsets: their limit stands.
         let b = PairBudget::from_memory(None, 16, Some(1 << 40));
         assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Offsets));
+        // Exactly what offsets hold: their limit, as the reason.
+        let b = PairBudget::from_memory(None, 16, Some(16 * OFFSET_LIMIT + 15));
+        assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Offsets));
+        let b = PairBudget::from_memory(None, 16, Some(16 * OFFSET_LIMIT - 1));
+        assert_eq!(
+            (b.pairs, b.source),
+            (OFFSET_LIMIT - 1, BudgetSource::Memory)
+        );
         let b = PairBudget::from_memory(None, 16, None);
         assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Offsets));
         // Asked for, it is taken as it is, whatever the memory.

@@ -272,19 +272,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .renderer
         .render(&viewer.ctx, &viewer.scene, &frame, &viewer.target.view)
         .map_err(|e| {
-            let hint = match e {
-                GpuError::ShaderLoopLimit { .. } => " (a finer --grid gives shorter lists)".into(),
-                // Four bytes an index: the budget under which the grid coarsens until they fit.
-                GpuError::BufferTooLarge {
-                    what: "light indices",
-                    limit,
-                    ..
-                } => format!(
-                    " (--pair-budget {} coarsens the grid until the lists fit this device)",
-                    limit / 4
-                ),
-                _ => String::new(),
-            };
+            let hint = render_hint(&e);
             anyhow::Error::new(e).context(format!(
                 "rendering {} lights clustered{hint}",
                 scene.lights.len()
@@ -378,6 +366,24 @@ pub fn run(args: Args) -> Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// What `stress` can change when the render is refused: the advice after "rendering N lights
+/// clustered", or nothing.
+fn render_hint(e: &GpuError) -> String {
+    match *e {
+        GpuError::ShaderLoopLimit { .. } => " (a finer --grid gives shorter lists)".into(),
+        // Four bytes an index: the budget under which the grid coarsens until they fit.
+        GpuError::BufferTooLarge {
+            what: "light indices",
+            limit,
+            ..
+        } => format!(
+            " (--pair-budget {} coarsens the grid until the lists fit this device)",
+            limit / 4
+        ),
+        _ => String::new(),
+    }
 }
 
 /// Peak resident set size of this process (`VmHWM`), where the OS tells.
@@ -507,5 +513,37 @@ fn print_table(r: &Report) {
         println!("PASS: no light missing from any checked cluster");
     } else {
         println!("FAIL: {} miss(es)", c.misses);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refused_render_says_what_to_change() {
+        let too_large = |what| GpuError::BufferTooLarge {
+            what,
+            bytes: 2_915_456_588,
+            limit: 134_217_728,
+        };
+        // The indices fit 2^25 pairs of four bytes: that budget coarsens the grid until they do.
+        assert_eq!(
+            render_hint(&too_large("light indices")),
+            " (--pair-budget 33554432 coarsens the grid until the lists fit this device)"
+        );
+        // The lights' buffer does not depend on the grid, nor on the pairs.
+        assert_eq!(render_hint(&too_large("lights")), "");
+        let loop_limit = GpuError::ShaderLoopLimit {
+            mode: myriad::gpu::ShadingMode::Lists,
+            lights: 70_000,
+            max_lights: 65_530,
+            adapter: "llvmpipe".into(),
+            limit: 65_535,
+        };
+        assert_eq!(
+            render_hint(&loop_limit),
+            " (a finer --grid gives shorter lists)"
+        );
     }
 }

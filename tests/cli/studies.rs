@@ -793,6 +793,22 @@ fn stress_coarsens_the_grid_past_its_pair_budget() {
         ],
     );
     assert_stress_stages(&r);
+    // The table's heading gives both grids.
+    let table = myriad_ok(&[
+        "stress",
+        "--lights",
+        "3000",
+        "--size",
+        "64x36",
+        "--pair-budget",
+        "5000",
+    ]);
+    let heading = format!(
+        "default scene (atrium) — 3000 lights, 64x36, grid {}x{}x{} (coarser than --grid \
+         24x12x16: the pairs exceeded the budget), method refined, seed 1",
+        grid[0], grid[1], grid[2]
+    );
+    assert_eq!(stdout(&table).lines().next(), Some(heading.as_str()));
 }
 
 #[test]
