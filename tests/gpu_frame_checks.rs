@@ -11,7 +11,9 @@ use myriad::gpu::{
     FrameDesc, GpuContext, GpuError, HEADLESS_FORMAT, HeadlessTarget, Renderer, ShadingMode,
     ShadingSettings, wgpu,
 };
-use myriad::render::{RenderScene, cluster_lists, light_columns};
+use myriad::render::{
+    RenderScene, Shading, Viewer, cluster_lists, light_columns, max_channel_difference,
+};
 use myriad::scene::{Camera, ClusterGrid, DepthSlicing};
 
 /// A brute-force frame of `camera` on `grid` that uploads `lights` (or keeps the last upload).
@@ -29,6 +31,26 @@ fn brute_force<'a>(
         lists: None,
         settings: ShadingSettings::default(),
     }
+}
+
+/// A device whose storage bindings hold at most `limit` bytes, with timestamps where the
+/// adapter has them.
+fn binding_limited(limit: u64) -> GpuContext {
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
+    let timestamps =
+        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+    let descriptor = wgpu::DeviceDescriptor {
+        required_features: adapter.features() & timestamps,
+        required_limits: wgpu::Limits {
+            max_storage_buffer_binding_size: limit,
+            ..Renderer::required_limits()
+        },
+        ..Default::default()
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
+    GpuContext::from_device(device, queue)
 }
 
 /// `scene`'s lists for its own camera and grid.
@@ -222,21 +244,7 @@ fn a_frame_refused_for_its_lights_leaves_the_last_frames_times() {
         return;
     }
     const LIMIT: u64 = 256 << 10;
-    let adapter =
-        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
-            .unwrap();
-    let timestamps =
-        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-    let descriptor = wgpu::DeviceDescriptor {
-        required_features: adapter.features() & timestamps,
-        required_limits: wgpu::Limits {
-            max_storage_buffer_binding_size: LIMIT,
-            ..Renderer::required_limits()
-        },
-        ..Default::default()
-    };
-    let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
-    let ctx = GpuContext::from_device(device, queue);
+    let ctx = binding_limited(LIMIT);
     if ctx.describe().contains("llvmpipe") {
         assert!(ctx.has_timestamps(), "{}", ctx.describe());
     }
@@ -281,4 +289,47 @@ fn a_frame_refused_for_its_lights_leaves_the_last_frames_times() {
     }
     assert_eq!(renderer.upload_generation(), generation);
     assert_eq!(renderer.last_pass_times(&ctx).unwrap(), times);
+}
+
+/// Lists past what the device binds are built on a coarser grid, which the viewer shades with,
+/// instead of the frame being refused after its assignment: the image is brute force's. (A
+/// viewer needs the renderer's limits, 128 MiB of indices, so the lists must pass 2^25 pairs:
+/// 3000 lights eight times their size, on a grid of 37k clusters.)
+#[test]
+fn a_viewer_coarsens_lists_past_what_the_device_binds() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let max_pairs = ctx.max_list_pairs();
+    assert_eq!(
+        max_pairs,
+        ctx.device.limits().max_storage_buffer_binding_size / 4
+    );
+    let mut scene = RenderScene::default_scene(3000, 64, 36)
+        .unwrap()
+        .with_grid(UVec3::new(64, 36, 16), DepthSlicing::Log);
+    for r in &mut scene.lights.radius {
+        *r *= 8.0;
+    }
+    let on_scene_grid = assigned(&scene).pair_count() as u64;
+    assert!(on_scene_grid > max_pairs, "{on_scene_grid} pairs fit");
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let frame = viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    let stats = frame.stats.unwrap();
+    assert!(stats.coarsened > 0 && !stats.over_budget, "{stats:?}");
+    assert!(stats.pairs <= max_pairs, "{stats:?}");
+    assert_eq!(frame.grid, stats.grid_built(&scene.grid));
+    let clustered = viewer.image().unwrap();
+    viewer
+        .frame(&scene, Shading::BruteForce, Method::Refined, false)
+        .unwrap();
+    let brute = viewer.image().unwrap();
+    let lit = clustered.iter().filter(|&&c| c > 0 && c < 255).count();
+    assert!(
+        lit > clustered.len() / 4,
+        "{lit} channels lit: too few to compare"
+    );
+    assert!(max_channel_difference(&clustered, &brute) <= 1);
 }

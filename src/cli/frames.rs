@@ -6,6 +6,7 @@ use super::assign::parse_method;
 use super::render::parse_size;
 use super::source::check_memory_for;
 use anyhow::Result;
+use myriad::assignment::coarser_grid;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer};
 use myriad::render::{DEFAULT_GRID, GpuStage, LoopReport, RenderScene, run_frames};
 use serde::Serialize;
@@ -112,6 +113,23 @@ pub fn run(args: Args) -> Result<ExitCode> {
             !args.no_cull,
             |_, _| Ok(()),
         )?;
+        if let Some(frame) = report.frames.iter().find(|f| f.coarsened > 0) {
+            let coarser = (0..frame.coarsened).fold(scene.grid, |g, _| coarser_grid(&g));
+            let (want, got) = (scene.grid.dims(), coarser.dims());
+            eprintln!(
+                "warning: {}: the lists need more pairs than this device binds in one buffer ({} \
+                 pairs) on the {}x{}x{} grid; frames were built and shaded on coarser grids \
+                 ({}x{}x{} the first time)",
+                scene.name,
+                ctx.max_list_pairs(),
+                want.x,
+                want.y,
+                want.z,
+                got.x,
+                got.y,
+                got.z
+            );
+        }
         results.push(summary(&report));
     }
     if args.json {

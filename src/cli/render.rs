@@ -8,6 +8,7 @@ use super::render_skipping::{self, WithSkips};
 use super::source::{check_memory, check_memory_for};
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
+use myriad::cluster_math::ClusterGrid;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::legend::with_heat_legend;
 use myriad::gpu::{FrameReport, GpuContext, GpuError, PassTimes, encode_png};
@@ -126,6 +127,12 @@ pub(super) struct StrategyResult {
     /// Submit to GPU idle, wall clock.
     pub gpu_frame_wall_ms: f64,
     pub pairs: u64,
+    /// The grid the frames were shaded with: the scene's (its tiles' for tiled), or a coarser
+    /// one where the lists held more pairs than the device binds in one buffer
+    /// (`GpuContext::max_list_pairs`; a warning says so).
+    pub grid: [u32; 3],
+    /// Whether `grid` is coarser than the one asked for.
+    pub grid_coarsened: bool,
     pub pixels: PixelStats,
 }
 
@@ -311,6 +318,7 @@ impl FrameSamples {
         shading: &'static str,
         upload_bytes: u64,
         pairs: u64,
+        [requested, grid]: [&ClusterGrid; 2],
         pixels: PixelStats,
     ) -> StrategyResult {
         let passes = |f: fn(&PassTimes) -> Option<f64>| {
@@ -331,9 +339,38 @@ impl FrameSamples {
             gpu_forward_ms: passes(|p| p.forward_ms),
             gpu_frame_wall_ms: median(self.wall.clone()),
             pairs,
+            grid: grid.dims().to_array(),
+            grid_coarsened: grid.dims() != requested.dims(),
             pixels,
         }
     }
+}
+
+/// The warning for a frame whose lists were built on a coarser grid than `requested` because
+/// they held more pairs than the device binds in one buffer; `None` when they were not.
+pub(super) fn coarsened_warning(
+    scene: &RenderScene,
+    strategy: &str,
+    requested: &ClusterGrid,
+    built: &ClusterGrid,
+    ctx: &GpuContext,
+) -> Option<String> {
+    let (want, got) = (requested.dims(), built.dims());
+    (want != got).then(|| {
+        format!(
+            "warning: {}: {strategy}: the lists need more pairs than this device binds in one \
+             buffer ({} pairs) on the {}x{}x{} grid; they were built and shaded on the coarser \
+             {}x{}x{} grid",
+            scene.name,
+            ctx.max_list_pairs(),
+            want.x,
+            want.y,
+            want.z,
+            got.x,
+            got.y,
+            got.z
+        )
+    })
 }
 
 fn measure(
@@ -355,6 +392,12 @@ fn measure(
     })?;
     samples.drop_warm_ups(warm_ups);
     let frame = last.context("at least one frame")?;
+    let requested = shading.grid(&scene.grid);
+    if let Some(warning) =
+        coarsened_warning(scene, shading.name(), &requested, &frame.grid, &viewer.ctx)
+    {
+        progress.line(warning);
+    }
     let depth = viewer
         .renderer
         .read_depth(&viewer.ctx)?
@@ -377,6 +420,7 @@ fn measure(
         shading.name(),
         frame.report.upload_bytes,
         frame.stats.map_or(0, |s| s.pairs),
+        [&requested, &frame.grid],
         pixels,
     ))
 }
@@ -725,6 +769,14 @@ fn print_table(s: &Stats) {
         format!("{:.2}", r.gpu_frame_wall_ms)
     });
     row("cluster-light pairs", &|r| r.pairs.to_string());
+    if columns.iter().any(|r| r.grid_coarsened) {
+        // Lists past what the device binds were built on a coarser grid (a warning said so).
+        row("grid of the lists (* coarser)", &|r| {
+            let [x, y, z] = r.grid;
+            let coarser = if r.grid_coarsened { "*" } else { "" };
+            format!("{x}x{y}x{z}{coarser}")
+        });
+    }
     row("lights per pixel: mean", &|r| {
         format!("{:.1}", r.pixels.mean_lights)
     });

@@ -116,6 +116,11 @@ pub fn measure(
     mask.drain(..warm_ups);
     let frame = last.context("at least one frame")?;
     let assigned = assigned.context("the first frame assigns")?;
+    if let Some(warning) =
+        super::render::coarsened_warning(scene, SHADING, &scene.grid, &frame.grid, &viewer.ctx)
+    {
+        progress.line(warning);
+    }
     let image = viewer.image()?;
     let max_image_difference = max_channel_difference(clustered_image, &image);
     let depth = viewer
@@ -139,6 +144,7 @@ pub fn measure(
             SHADING,
             assigned.report.upload_bytes,
             assigned.stats.map_or(0, |s| s.pairs),
+            [&scene.grid, &frame.grid],
             pixels,
         ),
         lights_assigned: assigned.lights_assigned,

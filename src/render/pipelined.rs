@@ -62,6 +62,9 @@ pub struct StageTimes {
     pub gpu_passes: Option<PassTimes>,
     /// Cluster–light pairs.
     pub pairs: u64,
+    /// Times the grid was halved for the lists to fit what the device binds in one buffer
+    /// ([`GpuContext::max_list_pairs`]); 0 when they fit the scene's grid.
+    pub coarsened: u32,
 }
 
 impl StageTimes {
@@ -146,13 +149,15 @@ struct CpuStage<'a> {
 }
 
 impl<'a> CpuStage<'a> {
-    fn new(scene: &'a RenderScene, method: Method, cull: bool) -> Self {
+    /// `max_pairs`: the device's [`GpuContext::max_list_pairs`], past which a frame's lists are
+    /// built on a coarser grid.
+    fn new(scene: &'a RenderScene, method: Method, cull: bool, max_pairs: u64) -> Self {
         let center = scene.camera.target;
         let orbits = Orbits::around(center, &scene.lights.x, &scene.lights.z, [0.1, 0.5], 7);
         Self {
             scene,
             orbits,
-            assigner: Assigner::new(),
+            assigner: Assigner::new().with_pair_budget(max_pairs),
             method,
             visibility: cull.then(Visibility::new),
         }
@@ -268,6 +273,7 @@ impl GpuStage<'_> {
             gpu_wait_seconds,
             gpu_passes,
             pairs: work.stats.pairs,
+            coarsened: work.stats.coarsened,
         })
     }
 }
@@ -295,9 +301,10 @@ pub fn run_frames(
         culled: cull,
         ..Default::default()
     };
+    let max_pairs = gpu.ctx.max_list_pairs();
     let start = Instant::now();
     if !pipelined {
-        let mut cpu = CpuStage::new(scene, method, cull);
+        let mut cpu = CpuStage::new(scene, method, cull, max_pairs);
         let mut work = empty_work();
         for index in 0..frames {
             cpu.run(index, &mut work);
@@ -323,7 +330,7 @@ pub fn run_frames(
                 .name("cpu stage".into())
                 .spawn_scoped(s, move || {
                     crate::profiling::name_this_thread("cpu stage");
-                    let mut cpu = CpuStage::new(scene, method, cull);
+                    let mut cpu = CpuStage::new(scene, method, cull, max_pairs);
                     for index in 0..frames {
                         // The renderer hung up (an error): stop.
                         let Ok(mut work) = free_rx.recv() else { return };
@@ -363,7 +370,7 @@ mod tests {
     #[test]
     fn the_cpu_stage_rewrites_only_the_animated_columns() {
         let scene = RenderScene::default_scene(2000, 64, 32).unwrap();
-        let mut cpu = CpuStage::new(&scene, Method::Refined, false);
+        let mut cpu = CpuStage::new(&scene, Method::Refined, false, u64::MAX);
         let mut work = empty_work();
         cpu.run(4, &mut work);
         work.lights.intensity[7] = -1.0;
@@ -385,7 +392,7 @@ mod tests {
     #[test]
     fn lights_keep_moving_past_two_to_the_24_frames() {
         let scene = RenderScene::default_scene(2000, 64, 32).unwrap();
-        let mut cpu = CpuStage::new(&scene, Method::Refined, false);
+        let mut cpu = CpuStage::new(&scene, Method::Refined, false, u64::MAX);
         let (mut a, mut b) = (empty_work(), empty_work());
         let frame = (1 << 24) + 1;
         cpu.run(frame, &mut a);
@@ -401,7 +408,7 @@ mod tests {
     #[test]
     fn frame_sixty_is_one_second_of_orbiting() {
         let scene = RenderScene::default_scene(2000, 64, 32).unwrap();
-        let mut cpu = CpuStage::new(&scene, Method::Refined, false);
+        let mut cpu = CpuStage::new(&scene, Method::Refined, false, u64::MAX);
         let mut work = empty_work();
         cpu.run(60, &mut work);
         let (mut x, mut z) = (scene.lights.x.clone(), scene.lights.z.clone());

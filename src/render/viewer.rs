@@ -155,12 +155,14 @@ impl Viewer {
         let geometry = fitted.as_ref().unwrap_or(&scene.geometry);
         let gpu_scene = renderer.upload_scene(&ctx, geometry)?;
         let target = HeadlessTarget::new(&ctx.device, scene.camera.width, scene.camera.height)?;
+        // Lists past what the device binds are built on a coarser grid rather than refused.
+        let assigner = Assigner::new().with_pair_budget(ctx.max_list_pairs());
         Ok(Self {
             ctx,
             renderer,
             scene: gpu_scene,
             target,
-            assigner: Assigner::new(),
+            assigner,
             lists: LightLists::new(),
             settings: ShadingSettings::default(),
             skip_state: Default::default(),
