@@ -145,12 +145,28 @@ pub const ASSIGNED_BYTES_PER_LIGHT: u64 = 64;
 /// the check under a 1.5 GB cap and abort in its allocator (audit).
 pub const GENERATED_BYTES_PER_LIGHT: u64 = 256;
 
-/// Bytes a frame of a `dims` grid with `lights` lights needs at the least, before a single pair:
-/// per cluster the CSR `offsets` and `counts` plus the assigner's per-cluster scratch (16 bytes),
-/// per light `bytes_per_light` ([`ASSIGNED_BYTES_PER_LIGHT`], [`GENERATED_BYTES_PER_LIGHT`]).
+/// Bytes a frame of a `dims` grid takes per cluster before a single pair, with room: the CSR
+/// `offsets` and `counts`, the assigner's per-cluster scratch, the dump's copy and its JSON text
+/// (`assign`), the oracle's lists beside each method's (`bench`). Measured peaks (`/usr/bin/time`,
+/// 2 lights, 5 M clusters): `assign` 21 bytes a cluster on a 500×100×100 grid, `bench` 40, `check`
+/// 20. 16 bytes let a 1e9×1×1 grid pass the check and take 24 GB before the OS killed it, and a
+/// 2e8×1×1 grid abort in the allocator under a 6 GB cap (hostile-input audit).
+pub const BYTES_PER_CLUSTER: u64 = 48;
+
+/// Bytes a grid takes per plane of each axis, with room: edges, plane sets and their text. On a
+/// grid long in one axis they dominate: 5e6×1×1 measured 52 bytes a cluster for `assign` and
+/// 64 for `bench`, 1×1×5e6 41 and 47.
+pub const BYTES_PER_AXIS_PLANE: u64 = 32;
+
+/// Bytes a frame of a `dims` grid with `lights` lights needs before a single pair:
+/// [`BYTES_PER_CLUSTER`] and [`BYTES_PER_AXIS_PLANE`] for the grid, per light `bytes_per_light`
+/// ([`ASSIGNED_BYTES_PER_LIGHT`], [`GENERATED_BYTES_PER_LIGHT`]).
 pub fn minimum_frame_bytes(dims: UVec3, lights: usize, bytes_per_light: u64) -> u64 {
     let clusters = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
-    (16 * clusters).saturating_add(bytes_per_light.saturating_mul(lights as u64))
+    let planes = u64::from(dims.x) + u64::from(dims.y) + u64::from(dims.z) + 3;
+    (BYTES_PER_CLUSTER * clusters)
+        .saturating_add(BYTES_PER_AXIS_PLANE * planes)
+        .saturating_add(bytes_per_light.saturating_mul(lights as u64))
 }
 
 /// Refuses a grid and light count whose minimum frame does not fit in the memory this process
@@ -247,27 +263,40 @@ mod tests {
     #[test]
     fn a_grid_beyond_any_memory_is_refused_and_a_normal_one_is_not() {
         let grid = |x, y, z| ClusterGrid::new(UVec3::new(x, y, z), DepthSlicing::Log, 0.1, 100.0);
-        // 2^32 - 2^17 + 1 clusters: 64 GiB of offsets and counts before a single pair.
+        // 2^32 - 2^17 + 1 clusters: 192 GiB before a single pair.
         let huge = grid(65_535, 65_535, 1);
         let needed = minimum_frame_bytes(huge.dims(), 10, ASSIGNED_BYTES_PER_LIGHT);
-        assert_eq!(needed, 16 * 65_535 * 65_535 + 640);
+        assert_eq!(
+            needed,
+            48 * 65_535 * 65_535 + 32 * (65_535 * 2 + 1 + 3) + 640
+        );
         match memory_limit_bytes() {
             Some(available) if available < needed => {
                 let e = check_memory(&huge, 10).unwrap_err().to_string();
                 assert!(
-                    e.contains("65535x65535x1") && e.contains("needs at least 64.0 GiB"),
+                    e.contains("65535x65535x1") && e.contains("needs at least 192.0 GiB"),
                     "{e}"
                 );
             }
             _ => check_memory(&huge, 10).unwrap(),
         }
+        // Long in one axis: its planes count too. A 1e9×1×1 grid needs 80 GB (it took 24 GB
+        // before the OS killed it, past a check that asked for 16).
+        let long = UVec3::new(1_000_000_000, 1, 1);
+        assert_eq!(
+            minimum_frame_bytes(long, 2, ASSIGNED_BYTES_PER_LIGHT),
+            48 * 1_000_000_000 + 32 * (1_000_000_002 + 3) + 128
+        );
         check_memory(&grid(32, 18, 48), 100_000).unwrap();
         // A light count alone, before any grid or light exists (`frames`, `stress`, `render`):
         // u32::MAX lights need 1 TiB.
         let lights = u32::MAX as usize;
         let dims = UVec3::new(24, 12, 16);
         let needed = minimum_frame_bytes(dims, lights, GENERATED_BYTES_PER_LIGHT);
-        assert_eq!(needed, 16 * 24 * 12 * 16 + 256 * u64::from(u32::MAX));
+        assert_eq!(
+            needed,
+            48 * 24 * 12 * 16 + 32 * (24 + 12 + 16 + 3) + 256 * u64::from(u32::MAX)
+        );
         if memory_limit_bytes().is_some_and(|a| a < needed) {
             let e = check_memory_for(dims, lights).unwrap_err();
             assert!(e.to_string().contains("needs at least 1024.0 GiB"), "{e}");

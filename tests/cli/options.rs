@@ -392,3 +392,43 @@ fn bench_refuses_lists_beyond_the_memory_clearly() {
         ],
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn grids_long_in_one_axis_are_refused_before_they_exhaust_the_memory() {
+    // 2e8 clusters in one row or one column of slices: the axis' planes and the dump's copy
+    // cost more than the 16 bytes a cluster the check once asked for, and under a 6 GB cap
+    // `assign` and `bench` aborted in the allocator (exit 134, hostile-input audit).
+    let dir = work_dir("long_grids");
+    for (name, grid) in [
+        ("x", r#""x": 200000000, "y": 1, "z": 1"#),
+        ("z", r#""x": 1, "y": 1, "z": 200000000"#),
+    ] {
+        let text = GOOD_SCENE.replace(r#""x": 24, "y": 12, "z": 16"#, grid);
+        assert_ne!(text, GOOD_SCENE);
+        let scene = write(&dir, &format!("{name}.json"), &text);
+        let dump = dir.join("dump.json");
+        let commands: [(&str, &[&std::ffi::OsStr]); 2] = [
+            ("assign", &["--out".as_ref(), dump.as_os_str()]),
+            ("bench", &[]),
+        ];
+        for (command, options) in commands {
+            let out = Command::new("sh")
+                .args([
+                    "-c".as_ref(),
+                    r#"ulimit -v 6000000 && exec "$0" "$@""#.as_ref(),
+                    env!("CARGO_BIN_EXE_myriad").as_ref(),
+                    command.as_ref(),
+                    "--scene".as_ref(),
+                    scene.as_os_str(),
+                ])
+                .args(options)
+                .output()
+                .unwrap();
+            let text = all_output(&out);
+            assert_eq!(out.status.code(), Some(2), "{command} {name}: {text}");
+            assert!(!dump.exists(), "a refused assign wrote its dump");
+            assert_mentions(&text, &["grid too large here", "needs at least 14.9 GiB"]);
+        }
+    }
+}
