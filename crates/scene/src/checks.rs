@@ -365,6 +365,23 @@ pub(crate) fn check_light(
             format!("must be finite and >= 0, got {}", show_f32(i)),
         );
     }
+    // The renderer shades with colour × intensity in f32: an infinite product would show nothing
+    // of the light (it skips it) while the lists hold it (hostile-input audit: such a light
+    // passed `validate` and was dark in `render`).
+    if let (Some(c), Some(i)) = (p.color, p.intensity)
+        && sink.count() == start
+        && !(c * i).is_finite()
+    {
+        sink.report(
+            "intensity",
+            format!(
+                "{} times color {} overflows f32 (at most {} a channel)",
+                show_f32(i),
+                show_vec3(c),
+                show_f32(f32::MAX)
+            ),
+        );
+    }
     let mut spot = None;
     if let Some(s) = &p.spot {
         if let Some(d) = s.direction

@@ -480,6 +480,24 @@ mod tests {
     }
 
     #[test]
+    fn a_light_whose_radiance_overflows_f32_is_skipped() {
+        // Colour and intensity are each finite, their product is not: the renderer would show
+        // nothing of the light while the lists hold it.
+        let written = scene().to_json_string().unwrap();
+        let text = written
+            .replace(r#""intensity": 3.0"#, r#""intensity": 1e38"#)
+            .replace("[0.2, 0.4, 1.0]", "[0, 1e38, 0]");
+        assert_eq!(text.matches("1e38").count(), 2, "{written}");
+        let s = Scene::from_json_str(&text, "my.json", LightPolicy::SkipInvalid).unwrap();
+        assert_eq!(s.lights.source_index, [0]);
+        assert_eq!(
+            s.skipped[0].to_string(),
+            "light 1 skipped: lights[1].intensity: 1e+38 times color [0.0, 1e+38, 0.0] \
+             overflows f32 (at most 3.4028235e+38 a channel)"
+        );
+    }
+
+    #[test]
     fn strict_fails_on_first_bad_light_and_skip_lists_them() {
         // The writer refuses invalid lights, so break light 1 in the text.
         let text = scene()

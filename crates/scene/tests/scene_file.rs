@@ -217,6 +217,13 @@ fn random_scene(rng: &mut Rng, lights: usize, spots: bool) -> Scene {
     let grid = ClusterGrid::new(dims, slicing, near, far);
     let mut l = Lights::new();
     for i in 0..lights {
+        let green = rng.any_finite_f32().abs();
+        // Any finite colour, and an intensity that keeps colour × intensity finite in f32 (an
+        // infinite product is an invalid light: the renderer would show nothing of it).
+        let intensity = match rng.f32_in(0.0, 1e6) {
+            i if (green * i).is_finite() => i,
+            _ => rng.f32_in(0.0, 1.0),
+        };
         let mut light = LightRecord::point(
             Vec3::new(
                 rng.any_finite_f32(),
@@ -225,12 +232,8 @@ fn random_scene(rng: &mut Rng, lights: usize, spots: bool) -> Scene {
             ),
             rng.f32_in(1e-6, 50.0),
         )
-        .with_color(Vec3::new(
-            rng.f32_in(0.0, 1.0),
-            rng.any_finite_f32().abs(),
-            0.0,
-        ))
-        .with_intensity(rng.f32_in(0.0, 1e6))
+        .with_color(Vec3::new(rng.f32_in(0.0, 1.0), green, 0.0))
+        .with_intensity(intensity)
         .with_source_index(i as u32);
         if spots && rng.next().is_multiple_of(2) {
             let d = Vec3::new(

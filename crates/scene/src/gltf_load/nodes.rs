@@ -391,6 +391,15 @@ impl Loader<'_> {
                 light.intensity
             ));
         }
+        // The renderer shades with colour × intensity in f32: an infinite product would show
+        // nothing of the light (it skips it) while the lists hold it.
+        if !(color * light.intensity).is_finite() {
+            return Err(format!(
+                "color {color} times intensity {} overflows f32 (at most {} a channel)",
+                light.intensity,
+                f32::MAX
+            ));
+        }
         let direction = unit_or_zero(world.transform_vector3(Vec3::NEG_Z));
         let kind = match light.type_ {
             Checked::Valid(Type::Directional) => {

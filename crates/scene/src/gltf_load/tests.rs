@@ -152,6 +152,10 @@ fn invalid_lights_are_left_out_counted_and_reported() {
             r#"{"type": "directional", "intensity": -2}"#,
             "intensity -2 must be finite and >= 0",
         ),
+        (
+            r#"{"type": "point", "color": [0, 1e38, 0], "intensity": 1e38, "range": 2}"#,
+            "times intensity 100000000000000000000000000000000000000 overflows f32",
+        ),
     ];
     let lights: Vec<&str> = bad.iter().map(|(light, _)| *light).collect();
     let nodes: Vec<String> = (0..bad.len())
