@@ -89,6 +89,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     );
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
+    super::source::check_image_memory(width, height)?;
     check_memory_for(DEFAULT_GRID, args.lights)?;
     let scene = RenderScene::default_scene(args.lights, width, height)?;
     let ctx = GpuContext::headless()?;

@@ -339,6 +339,7 @@ fn frame_pixels(viewer: &Viewer, scene: &RenderScene, shading: Shading) -> Resul
 
 pub fn run(args: Args) -> Result<ExitCode> {
     let (width, height) = parse_size(&args.size)?;
+    super::source::check_image_memory(width, height)?;
     let method = parse_method(&args.method)?;
     let slicing = parse_slicing(&args.depth)?;
     if args.runs == 0 {

@@ -704,6 +704,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
         check_memory_for(dims, scene.lights.len())?;
         scene = scene.with_grid(dims, slicing);
     }
+    super::source::check_image_memory(scene.camera.width, scene.camera.height)?;
     Ok((scene, skipped))
 }
 

@@ -274,6 +274,7 @@ fn same_files(paths: &[PathBuf]) -> Vec<SameFile<'_>> {
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
+    super::source::check_image_memory(width, height)?;
     refuse_repeats("--gltf", &same_files(&args.gltf), |f| {
         f.spelled.display().to_string()
     })?;

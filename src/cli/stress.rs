@@ -160,6 +160,7 @@ struct Report {
 pub fn run(args: Args) -> Result<ExitCode> {
     let method = parse_method(&args.method)?;
     let (width, height) = parse_size(&args.size)?;
+    super::source::check_image_memory(width, height)?;
     let dims = parse_grid("--grid", &args.grid)?;
     ensure!(args.lights >= 1, "--lights must be at least 1");
     ensure!(

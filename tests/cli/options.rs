@@ -432,3 +432,38 @@ fn grids_long_in_one_axis_are_refused_before_they_exhaust_the_memory() {
         }
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn images_beyond_the_memory_are_refused_before_any_is_allocated() {
+    // 16384×16384 pixels took 11.7 GB at the peak of `render`; under an 8 GB cap it aborted in
+    // the allocator reading the depth back (exit 134, hostile-input audit).
+    let dir = work_dir("big_images");
+    for command in ["render", "stress", "frames", "skips"] {
+        let out = Command::new("sh")
+            .args([
+                "-c",
+                r#"ulimit -v 8000000 && exec "$0" "$@""#,
+                env!("CARGO_BIN_EXE_myriad"),
+                command,
+                "--size",
+                "16384x16384",
+                "--lights",
+                "10",
+            ])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let text = all_output(&out);
+        assert_eq!(out.status.code(), Some(2), "{command}: {text}");
+        assert_mentions(
+            &text,
+            &[
+                "a 16384x16384 image needs at least 16.0 GiB",
+                "use a smaller --size",
+            ],
+        );
+    }
+    // Nothing was written where `render` would have put its images.
+    assert!(!dir.join("out").exists());
+}
