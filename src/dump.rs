@@ -58,6 +58,11 @@ impl AssignmentDump {
     pub fn load(path: &Path) -> Result<Self> {
         let bytes = myriad_scene::read_regular_file(path)
             .with_context(|| format!("cannot read dump {}", path.display()))?;
+        // A leading UTF-8 byte-order mark (an editor's) is skipped, as scene files' is.
+        let bytes = match bytes.strip_prefix(b"\xEF\xBB\xBF") {
+            Some(rest) => rest.to_vec(),
+            None => bytes,
+        };
         let text = String::from_utf8(bytes)
             .with_context(|| format!("{}: not a valid assignment dump", path.display()))?;
         let dump: Self = serde_json::from_str(&text)
@@ -229,6 +234,18 @@ mod tests {
         lists.offsets[6..].fill(1);
         lists.indices = vec![0];
         AssignmentDump::new(&grid(), &lists, &[0])
+    }
+
+    #[test]
+    fn a_dump_saved_by_an_editor_with_a_byte_order_mark_loads() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.json");
+        one_pair().save(&path).unwrap();
+        let text = std::fs::read(&path).unwrap();
+        std::fs::write(&path, [b"\xEF\xBB\xBF".as_slice(), &text].concat()).unwrap();
+        let back = AssignmentDump::load(&path).unwrap();
+        assert_eq!(back.indices, one_pair().indices);
+        assert_eq!(back.offsets, one_pair().offsets);
     }
 
     #[test]

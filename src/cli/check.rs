@@ -53,9 +53,11 @@ struct CheckOutput {
     false_positive_ratio: f64,
     /// The miss in the lowest cluster (lowest light first, as a scene-file index), if any.
     first_miss: Option<oracle_check::Miss>,
-    /// Pairs naming a light the scene file holds but that is invalid (skipped on loading): none
-    /// in a right dump.
+    /// Lights the scene file holds but that are invalid (skipped on loading) which the dump lists
+    /// anyway: none in a right dump.
     invalid_lights_listed: u64,
+    /// The pairs that list them (one such light in 8 clusters is 8 pairs).
+    invalid_pairs: u64,
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
@@ -89,7 +91,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let out = CheckOutput {
         reference: args.reference,
         grid: grid.dims().to_array(),
-        invalid_lights_listed: invalid.count,
+        invalid_lights_listed: invalid.lights,
+        invalid_pairs: invalid.count,
         exact_pairs: report.exact_pairs,
         reported_pairs: report.reported_pairs,
         misses: report.misses,
@@ -133,9 +136,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     if let Some((cluster, light)) = invalid.first {
         eprintln!(
-            "error: the dump lists {} invalid light(s), skipped when the scene was loaded; e.g. \
-             cluster {cluster} lists light {light} (scene-file index)",
-            invalid.count
+            "error: the dump lists {} invalid light(s), skipped when the scene was loaded, in {} \
+             pair(s); e.g. cluster {cluster} lists light {light} (scene-file index)",
+            invalid.lights, invalid.count
         );
     }
     Ok(if out.misses == 0 && invalid.count == 0 {
@@ -145,9 +148,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
     })
 }
 
-/// How many pairs of `lists` (scene-file indices) name a light without a column, and the first.
+/// How many pairs of `lists` (scene-file indices) name a light without a column, how many
+/// lights they name, and the first.
 struct InvalidListed {
+    /// Pairs.
     count: u64,
+    /// Distinct lights (one invalid light listed in 8 clusters is 8 pairs and 1 light).
+    lights: u64,
     /// (cluster, scene-file index) of the first.
     first: Option<(u32, u32)>,
 }
@@ -155,13 +162,18 @@ struct InvalidListed {
 fn invalid_lights_listed(lists: &LightLists, column_of: &[u32]) -> InvalidListed {
     let mut found = InvalidListed {
         count: 0,
+        lights: 0,
         first: None,
     };
+    let mut seen = vec![false; column_of.len()];
     for (cluster, (&offset, &count)) in lists.offsets.iter().zip(&lists.counts).enumerate() {
         let start = offset as usize;
         for &light in &lists.indices[start..start + count as usize] {
             if column_of[light as usize] == u32::MAX {
                 found.count += 1;
+                if !std::mem::replace(&mut seen[light as usize], true) {
+                    found.lights += 1;
+                }
                 found.first.get_or_insert((cluster as u32, light));
             }
         }

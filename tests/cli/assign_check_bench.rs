@@ -260,12 +260,39 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
     assert_eq!(cmp["first_miss"]["light"], 3, "{cmp}");
 
     // Listing the invalid light as well as every right one is no miss, but still wrong: it
-    // passed as a false positive (audit g2). The last cluster gains light 2.
+    // passed as a false positive (audit g2). The last two clusters gain light 2: one light, two
+    // pairs.
     let mut dump = read_json(&exact_dump);
-    let last = dump["counts"].as_array().unwrap().len() - 1;
-    let count = dump["counts"][last].as_u64().unwrap();
-    dump["counts"][last] = (count + 1).into();
-    dump["indices"].as_array_mut().unwrap().push(2.into());
+    let numbers = |key: &str| -> Vec<u64> {
+        dump[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect()
+    };
+    let (offsets, counts, indices) = (numbers("offsets"), numbers("counts"), numbers("indices"));
+    let mut lists: Vec<Vec<u64>> = offsets
+        .iter()
+        .zip(&counts)
+        .map(|(&o, &n)| indices[o as usize..(o + n) as usize].to_vec())
+        .collect();
+    let clusters = lists.len();
+    lists[clusters - 2].push(2);
+    lists[clusters - 1].push(2);
+    let mut flat: Vec<u64> = Vec::new();
+    let mut new_offsets = Vec::new();
+    for list in &lists {
+        new_offsets.push(flat.len() as u64);
+        flat.extend(list);
+    }
+    dump["offsets"] = new_offsets.into();
+    dump["counts"] = lists
+        .iter()
+        .map(|l| l.len() as u64)
+        .collect::<Vec<_>>()
+        .into();
+    dump["indices"] = flat.into();
     let with_invalid = write(&dir, "with_invalid.json", &dump.to_string());
     let out = myriad(&[
         "check".as_ref(),
@@ -279,7 +306,11 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
     let cmp: Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert_eq!(u64_field(&cmp, "misses"), 0, "{cmp}");
     assert_eq!(u64_field(&cmp, "invalid_lights_listed"), 1, "{cmp}");
-    assert_mentions(&stderr(&out), &["1 invalid light", "light 2"]);
+    assert_eq!(u64_field(&cmp, "invalid_pairs"), 2, "{cmp}");
+    assert_mentions(
+        &stderr(&out),
+        &["lists 1 invalid light(s)", "in 2 pair(s)", "light 2"],
+    );
 }
 
 #[test]

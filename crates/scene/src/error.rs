@@ -40,6 +40,15 @@ pub enum Error {
         /// The parser's error, with line and column.
         source: serde_json::Error,
     },
+    /// The text is UTF-16 or UTF-32 (a byte-order mark, or ASCII interleaved with zero bytes),
+    /// which some editors save: said plainly rather than as a JSON syntax error at line 1.
+    #[error("{origin}: the file is {encoding}; scene files are UTF-8 JSON")]
+    Encoding {
+        /// File path or caller-given origin name.
+        origin: String,
+        /// What the file looks like ("UTF-16 (little-endian)", …).
+        encoding: &'static str,
+    },
     /// The JSON parsed but describes an invalid scene. Holds the first problem (in the order camera,
     /// grid, then lights by index); use [`crate::validate_file`] to list them all.
     #[error("{origin}: {problem}{}", more_problems(*more))]

@@ -9,6 +9,7 @@
 //!    the caller decides: fail on the first ([`crate::LightPolicy::Strict`]), skip bad lights
 //!    ([`crate::LightPolicy::SkipInvalid`]), or list them all ([`crate::validate_file`]).
 
+use crate::Error;
 use crate::checks::{self, Angle, CameraParts, GridParts, LightParts, SpotParts};
 use crate::error::Problem;
 use crate::json::{self, Json, Object, Prefix, Sink};
@@ -66,6 +67,37 @@ impl Parsed {
     /// Total number of problems.
     pub(crate) fn problem_count(&self) -> usize {
         self.scene_problems.len() + self.bad_lights.iter().map(|(_, p)| p.len()).sum::<usize>()
+    }
+}
+
+/// [`parse`] with the errors a caller reports: [`Error::Encoding`] for a UTF-16 or UTF-32 file,
+/// [`Error::Json`] when there is no JSON object to read.
+pub(crate) fn parse_scene(bytes: &[u8], origin: &str) -> Result<Parsed, Error> {
+    if let Some(encoding) = wide_encoding(bytes) {
+        return Err(Error::Encoding {
+            origin: origin.to_string(),
+            encoding,
+        });
+    }
+    parse(bytes).map_err(|source| Error::Json {
+        origin: origin.to_string(),
+        source,
+    })
+}
+
+/// Whether `bytes` look like UTF-32 or UTF-16 text: by the byte-order mark, or (without one) by
+/// a first character that is ASCII beside zero bytes, as `{` is in `7B 00` or `00 7B`.
+fn wide_encoding(bytes: &[u8]) -> Option<&'static str> {
+    match bytes {
+        [0xFF, 0xFE, 0, 0, ..] => Some("UTF-32 (little-endian, with a byte-order mark)"),
+        [0, 0, 0xFE, 0xFF, ..] => Some("UTF-32 (big-endian, with a byte-order mark)"),
+        [0xFF, 0xFE, ..] => Some("UTF-16 (little-endian, with a byte-order mark)"),
+        [0xFE, 0xFF, ..] => Some("UTF-16 (big-endian, with a byte-order mark)"),
+        [a, 0, 0, 0, ..] if a.is_ascii() && *a != 0 => Some("UTF-32 (little-endian)"),
+        [0, 0, 0, b, ..] if b.is_ascii() && *b != 0 => Some("UTF-32 (big-endian)"),
+        [a, 0, ..] if a.is_ascii() && *a != 0 => Some("UTF-16 (little-endian)"),
+        [0, b, ..] if b.is_ascii() && *b != 0 => Some("UTF-16 (big-endian)"),
+        _ => None,
     }
 }
 

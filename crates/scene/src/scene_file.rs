@@ -85,10 +85,7 @@ impl Scene {
     /// [`Scene::from_json_str`] for bytes (e.g. a file's contents; invalid UTF-8 is an error, not a
     /// panic).
     pub fn from_json_slice(bytes: &[u8], origin: &str, policy: LightPolicy) -> Result<Self> {
-        let parsed = read::parse(bytes).map_err(|source| Error::Json {
-            origin: origin.to_string(),
-            source,
-        })?;
+        let parsed = read::parse_scene(bytes, origin)?;
         Self::from_parsed(parsed, origin, policy)
     }
 
@@ -477,6 +474,47 @@ mod tests {
             "light 1 skipped: lights[1].radius: 1e-46 rounds to 0 in f32 (the smallest positive \
              f32 is about 1.4e-45); must be > 0"
         );
+    }
+
+    #[test]
+    fn utf16_and_utf32_files_are_named_as_such() {
+        let text = scene().to_json_string().unwrap();
+        let utf16le: Vec<u8> = text.encode_utf16().flat_map(u16::to_le_bytes).collect();
+        let utf16be: Vec<u8> = text.encode_utf16().flat_map(u16::to_be_bytes).collect();
+        let utf32le: Vec<u8> = text
+            .chars()
+            .flat_map(|c| (c as u32).to_le_bytes())
+            .collect();
+        let with_bom = |bom: &[u8], body: &[u8]| [bom, body].concat();
+        let cases = [
+            (
+                with_bom(&[0xFF, 0xFE], &utf16le),
+                "UTF-16 (little-endian, with a byte-order mark)",
+            ),
+            (
+                with_bom(&[0xFE, 0xFF], &utf16be),
+                "UTF-16 (big-endian, with a byte-order mark)",
+            ),
+            (utf16le, "UTF-16 (little-endian)"),
+            (utf16be, "UTF-16 (big-endian)"),
+            (
+                with_bom(&[0xFF, 0xFE, 0, 0], &utf32le),
+                "UTF-32 (little-endian, with a byte-order mark)",
+            ),
+            (utf32le, "UTF-32 (little-endian)"),
+        ];
+        for (bytes, encoding) in cases {
+            let e = Scene::from_json_slice(&bytes, "w.json", LightPolicy::Strict).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                format!("w.json: the file is {encoding}; scene files are UTF-8 JSON")
+            );
+            let e = crate::validate_json_slice(&bytes, "w.json").unwrap_err();
+            assert!(matches!(e, Error::Encoding { .. }), "{e}");
+        }
+        // UTF-8, with or without its byte-order mark, reads.
+        let bom = [b"\xEF\xBB\xBF".as_slice(), text.as_bytes()].concat();
+        Scene::from_json_slice(&bom, "w.json", LightPolicy::Strict).unwrap();
     }
 
     #[test]

@@ -81,10 +81,7 @@ pub fn validate_json_str(text: &str, origin: &str) -> Result<ValidationReport> {
 
 /// [`validate_file`] for JSON bytes.
 pub fn validate_json_slice(bytes: &[u8], origin: &str) -> Result<ValidationReport> {
-    let parsed = read::parse(bytes).map_err(|source| Error::Json {
-        origin: origin.to_string(),
-        source,
-    })?;
+    let parsed = read::parse_scene(bytes, origin)?;
     Ok(ValidationReport::from_parsed(&parsed, origin))
 }
 
