@@ -768,9 +768,20 @@ fn check_consistent(bytes: &[u8]) {
     let strict = Scene::from_json_slice(bytes, "x", LightPolicy::Strict);
     let lenient = Scene::from_json_slice(bytes, "x", LightPolicy::SkipInvalid);
     match validate_json_slice(bytes, "x") {
-        Err(_) => {
-            assert!(matches!(strict, Err(Error::Json { .. })));
-            assert!(matches!(lenient, Err(Error::Json { .. })));
+        Err(e) => {
+            // Not JSON, or JSON in UTF-16/32: the same error every way.
+            assert!(
+                matches!(e, Error::Json { .. } | Error::Encoding { .. }),
+                "{e}"
+            );
+            for load in [strict, lenient] {
+                let other = load.expect_err("validation failed");
+                assert_eq!(
+                    std::mem::discriminant(&other),
+                    std::mem::discriminant(&e),
+                    "{other}"
+                );
+            }
         }
         Ok(report) => {
             assert_eq!(report.is_valid(), strict.is_ok());

@@ -532,6 +532,75 @@ fn spec_violations_are_refused_or_reported() {
         )
     );
 
+    // The chunks, in words the crate does not give: each case rewrites the good GLB's chunks.
+    let json_chunk = &good[20..];
+    let rebuilt = |chunks: &[(u32, &[u8], u32)]| {
+        let mut body = Vec::new();
+        for &(length, bytes, kind) in chunks {
+            body.extend(length.to_le_bytes());
+            body.extend(kind.to_le_bytes());
+            body.extend(bytes);
+        }
+        let mut out = b"glTF".to_vec();
+        out.extend(2u32.to_le_bytes());
+        out.extend((12 + body.len() as u32).to_le_bytes());
+        out.extend(body);
+        out
+    };
+    let (json, bin) = (u32::from_le_bytes(*b"JSON"), u32::from_le_bytes(*b"BIN\0"));
+    let n = json_chunk.len() as u32;
+    let with_bin = rebuilt(&[(n, json_chunk, json), (4, b"\0\0\0\0", bin)]);
+    assert_eq!(load_glb(&with_bin).unwrap().triangle_count(), 1);
+    let mut trailing = rebuilt(&[(n, json_chunk, json)]);
+    trailing.extend([0; 4]);
+    let total = trailing.len() as u32;
+    trailing[8..12].copy_from_slice(&total.to_le_bytes());
+    let chunk_cases = [
+        (
+            rebuilt(&[(n, json_chunk, u32::from_le_bytes(*b"XXXX"))]),
+            "GLB chunk 0 at byte 12 has type \"XXXX\", not JSON".to_string(),
+        ),
+        (
+            rebuilt(&[(n, json_chunk, json), (4, b"abcd", json)]),
+            format!("GLB chunk 1 at byte {} has type \"JSON\", not BIN", 20 + n),
+        ),
+        (
+            rebuilt(&[(n, json_chunk, json), (0, b"", bin), (0, b"", bin)]),
+            format!(
+                "GLB chunk 2 at byte {} has type \"BIN\\x00\", not BIN (a GLB holds a JSON \
+                 chunk and at most one BIN chunk)",
+                28 + n
+            ),
+        ),
+        (
+            rebuilt(&[(n + 8, json_chunk, json)]),
+            format!(
+                "the GLB's JSON chunk (at byte 12) declares {} bytes, but only {n} follow its \
+                 header",
+                n + 8
+            ),
+        ),
+        (
+            rebuilt(&[(n - 3, json_chunk, json)]),
+            format!(
+                "the GLB's JSON chunk declares {} bytes, not a multiple of 4 (chunks are 4-byte \
+                 aligned; the JSON is padded with spaces)",
+                n - 3
+            ),
+        ),
+        (
+            trailing,
+            format!(
+                "GLB chunk 1 at byte {}: 4 bytes left, a chunk header needs 8",
+                20 + n
+            ),
+        ),
+    ];
+    for (bytes, expected) in chunk_cases {
+        let e = load_glb(&bytes).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("t.glb: {expected}")), "{e}");
+    }
+
     // Reported: the file breaks a rule, but one reading is clear and the model stays usable.
     let reported = [
         (
