@@ -163,6 +163,27 @@ pub(super) fn prevalidate_json(json: &[u8]) -> Result<(), String> {
     if let Some(problem) = find_huge(&value, &mut Vec::new()) {
         return Err(problem);
     }
+    // A light type the extension does not define fails the crate's parse of the whole file,
+    // under its internal name for the path ("extensions.khrLightsPunctual.lights[7].type: Invalid
+    // value"): said here in the file's own terms.
+    let lights = value["extensions"]["KHR_lights_punctual"]["lights"]
+        .as_array()
+        .map(Vec::as_slice)
+        .unwrap_or_default();
+    for (i, light) in lights.iter().enumerate() {
+        let Some(kind) = light.get("type") else {
+            return Err(format!(
+                "extensions.KHR_lights_punctual.lights[{i}]: has no type (\"directional\", \
+                 \"point\" or \"spot\")"
+            ));
+        };
+        if !matches!(kind.as_str(), Some("directional" | "point" | "spot")) {
+            return Err(format!(
+                "extensions.KHR_lights_punctual.lights[{i}].type: {kind} is not a type the \
+                 extension defines (\"directional\", \"point\" or \"spot\")"
+            ));
+        }
+    }
     let accessors = value["accessors"].as_array().map_or(0, Vec::len) as u64;
     let meshes = value["meshes"]
         .as_array()

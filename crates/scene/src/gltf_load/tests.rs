@@ -601,6 +601,36 @@ fn spec_violations_are_refused_or_reported() {
         assert!(e.starts_with(&format!("t.glb: {expected}")), "{e}");
     }
 
+    // A light type the extension does not define: the crate cannot read the file, said in the
+    // file's own names (it said "extensions.khrLightsPunctual.lights[1].type: Invalid value").
+    for (kind, shown) in [(r#""area""#, r#""area""#), ("7", "7"), ("null", "null")] {
+        let text = triangle_gltf(
+            [0, 1, 2],
+            &format!(
+                r#", "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "point"}}, {{"type": {kind}}}]}}}}"#
+            ),
+        );
+        let e = load_str(&text).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "t.gltf: extensions.KHR_lights_punctual.lights[1].type: {shown} is not a type \
+                 the extension defines (\"directional\", \"point\" or \"spot\")"
+            )
+        );
+    }
+    let untyped = triangle_gltf(
+        [0, 1, 2],
+        r#", "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [{"color": [1, 1, 1]}]}}"#,
+    );
+    assert_eq!(
+        load_str(&untyped).unwrap_err().to_string(),
+        "t.gltf: extensions.KHR_lights_punctual.lights[0]: has no type (\"directional\", \
+         \"point\" or \"spot\")"
+    );
+
     // Reported: the file breaks a rule, but one reading is clear and the model stays usable.
     let reported = [
         (
