@@ -168,6 +168,61 @@ fn bad_input_exits_2_naming_the_file() {
     }
 }
 
+/// A texture `render` would refuse (missing, or not an image) passes a plain `info`, which only
+/// references images, and fails `info --decode-images`, naming the file and the image.
+#[test]
+fn decoding_images_finds_the_textures_render_would_refuse() {
+    let dir = work_dir("decode_images");
+    std::fs::write(dir.join("broken.png"), b"not a png at all").unwrap();
+    for (name, uri, expected) in [
+        (
+            "missing.gltf",
+            "nowhere.png",
+            "is missing or not a regular file",
+        ),
+        ("broken.gltf", "broken.png", "cannot decode"),
+    ] {
+        let path = dir.join(name);
+        let text = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}}}}}],
+  "textures": [{{"source": 0}}],
+  "images": [{{"uri": "{uri}"}}],
+{TRIANGLE}}}"#
+        );
+        std::fs::write(&path, text).unwrap();
+        let plain = myriad(&["info".as_ref(), "--gltf".as_ref(), path.as_os_str()]);
+        let out = String::from_utf8_lossy(&plain.stdout);
+        assert_eq!(plain.status.code(), Some(0), "{out}");
+        assert!(out.contains("images      1 (not decoded; --decode-images checks them)"));
+        let decoded = myriad(&[
+            "info".as_ref(),
+            "--gltf".as_ref(),
+            path.as_os_str(),
+            "--decode-images".as_ref(),
+        ]);
+        let err = String::from_utf8_lossy(&decoded.stderr);
+        assert_eq!(decoded.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&path.display().to_string()) && err.contains(expected),
+            "{err}"
+        );
+    }
+    // A model whose images all decode reports so.
+    let good = myriad(&[
+        "info".as_ref(),
+        "--gltf".as_ref(),
+        atrium_path().as_os_str(),
+        "--decode-images".as_ref(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(good.status.code(), Some(0));
+    let v: Value = serde_json::from_slice(&good.stdout).unwrap();
+    assert_eq!(v["images_decoded"], true, "{v}");
+}
+
 /// The `accessors`, `bufferViews` and `buffers` of one triangle (positions and u16 indices in
 /// a data URI), for the hand-written glTF files below.
 const TRIANGLE: &str = r#"  "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
