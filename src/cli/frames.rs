@@ -3,10 +3,11 @@
 //! pipelining saves.
 
 use super::assign::parse_method;
+use super::pair_budget::device_coarsened_warning;
 use super::render::parse_size;
 use super::source::check_memory_for;
 use anyhow::Result;
-use myriad::assignment::coarser_grid;
+use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer};
 use myriad::render::{DEFAULT_GRID, GpuStage, LoopReport, RenderScene, run_frames};
 use serde::Serialize;
@@ -49,9 +50,25 @@ struct Summary {
     encode_ms: f64,
     gpu_wait_ms: f64,
     gpu_passes_ms: Option<f64>,
+    /// Frames whose lists were built on a coarser grid than the scene's (more pairs than the
+    /// device binds in one buffer), and the coarsest such grid.
+    coarsened_frames: usize,
+    coarsest_grid: Option<[u32; 3]>,
 }
 
-fn summary(r: &LoopReport) -> Summary {
+/// Clusters of a grid of `dims`.
+fn cluster_count(dims: &[u32; 3]) -> u64 {
+    dims.iter().map(|&d| u64::from(d)).product()
+}
+
+/// `r`'s means; `grid` is the scene's.
+fn summary(r: &LoopReport, grid: [u32; 3]) -> Summary {
+    let coarser: Vec<[u32; 3]> = r
+        .frames
+        .iter()
+        .map(|f| f.grid_dims)
+        .filter(|&g| g != grid)
+        .collect();
     // The first frame builds pipelines and buffers: leave it out of the means.
     let steady = LoopReport {
         pipelined: r.pipelined,
@@ -79,6 +96,8 @@ fn summary(r: &LoopReport) -> Summary {
         gpu_wait_ms: ms(&|f| f.gpu_wait_seconds),
         gpu_passes_ms: (!passes.is_empty())
             .then(|| passes.iter().sum::<f64>() / passes.len() as f64),
+        coarsened_frames: coarser.len(),
+        coarsest_grid: coarser.into_iter().min_by_key(cluster_count),
     }
 }
 
@@ -114,24 +133,22 @@ pub fn run(args: Args) -> Result<ExitCode> {
             !args.no_cull,
             |_, _| Ok(()),
         )?;
-        if let Some(frame) = report.frames.iter().find(|f| f.coarsened > 0) {
-            let coarser = (0..frame.coarsened).fold(scene.grid, |g, _| coarser_grid(&g));
-            let (want, got) = (scene.grid.dims(), coarser.dims());
-            eprintln!(
-                "warning: {}: the lists need more pairs than this device binds in one buffer ({} \
-                 pairs) on the {}x{}x{} grid; frames were built and shaded on coarser grids \
-                 ({}x{}x{} the first time)",
-                scene.name,
-                ctx.max_list_pairs(),
-                want.x,
-                want.y,
-                want.z,
-                got.x,
-                got.y,
-                got.z
-            );
-        }
-        results.push(summary(&report));
+        results.push(summary(&report, scene.grid.dims().to_array()));
+    }
+    // Once for both loops: the coarsest grid any frame was shaded on.
+    let coarsest = results
+        .iter()
+        .flat_map(|r| r.coarsest_grid)
+        .min_by_key(cluster_count);
+    if let Some(warning) = coarsest.and_then(|grid| {
+        device_coarsened_warning(
+            &scene.name,
+            scene.grid.dims(),
+            UVec3::from_array(grid),
+            ctx.max_list_pairs(),
+        )
+    }) {
+        eprintln!("{warning}");
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&results)?);

@@ -12,6 +12,7 @@
 use super::source::memory_limit_bytes;
 use myriad::assignment::AssignStats;
 use myriad::cluster_math::ClusterGrid;
+use myriad::cluster_math::glam::UVec3;
 
 /// What a pair costs `assign` at its peak, with room: the lists' index, the dump's copy of it and
 /// the JSON text. A stress audit measured 12.5 GB (`refined`) and 16.7 GB (`linear`, whose
@@ -61,7 +62,8 @@ impl PairBudget {
     /// [`PairBudget::new`] with the memory available given (`None`: unknown).
     fn from_memory(requested: Option<u64>, bytes_per_pair: u64, memory: Option<u64>) -> Self {
         let (pairs, source) = match (requested, memory.map(|bytes| bytes / bytes_per_pair)) {
-            (Some(pairs), _) => (pairs, BudgetSource::Requested),
+            // The assigner holds at most what u32 offsets do, whatever is asked.
+            (Some(pairs), _) => (pairs.min(OFFSET_LIMIT), BudgetSource::Requested),
             (None, Some(pairs)) if pairs < OFFSET_LIMIT => (pairs, BudgetSource::Memory),
             (None, _) => (OFFSET_LIMIT, BudgetSource::Offsets),
         };
@@ -87,46 +89,73 @@ impl PairBudget {
 
     /// The warning for a frame whose lists were built on a coarser grid than `requested`
     /// ([`AssignStats::grid_built`]); `None` when they were not. `name` is the scene's and
-    /// `built` what the output records ("the dump", "the report"). For commands that take
-    /// `--pair-budget`.
+    /// `recorded_by` what the output records the grid in ("the dump", "the report"). For
+    /// commands that take `--pair-budget`.
     pub fn coarsening_warning(
         &self,
         name: &str,
         stats: &AssignStats,
         requested: &ClusterGrid,
-        built: &str,
+        recorded_by: &str,
     ) -> Option<String> {
-        if stats.coarsened == 0 {
-            return None;
-        }
-        let (want, got) = (requested.dims(), stats.grid_built(requested).dims());
-        Some(format!(
-            "warning: {name}: the pairs exceed the budget of {} on the {}x{}x{} grid; the \
-             lists were built on the coarser {}x{}x{} grid, which {built} records{}{}",
-            self.describe(),
-            want.x,
-            want.y,
-            want.z,
-            got.x,
-            got.y,
-            got.z,
-            if stats.over_budget {
-                " (still over the budget: every visible light in one cluster)"
-            } else {
-                ""
-            },
-            match self.source {
-                BudgetSource::Requested => "",
-                BudgetSource::Memory | BudgetSource::Offsets => "; --pair-budget sets the budget",
-            }
-        ))
+        let over = if stats.over_budget {
+            " (still over the budget: every visible light in one cluster)"
+        } else {
+            ""
+        };
+        let hint = match self.source {
+            BudgetSource::Memory => "; --pair-budget sets the budget",
+            BudgetSource::Requested | BudgetSource::Offsets => "",
+        };
+        coarsened_warning(
+            name,
+            requested.dims(),
+            stats.grid_built(requested).dims(),
+            &format!("the budget of {}", self.describe()),
+            &format!(", which {recorded_by} records{over}{hint}"),
+        )
     }
+}
+
+/// The one warning every command gives when lists were built on a coarser grid than the one
+/// asked for: "warning: NAME: the lists need more pairs than LIMIT on the A grid; they were built
+/// on the coarser B grid" and `tail`. `None` when `built` is `requested`.
+pub fn coarsened_warning(
+    name: &str,
+    requested: UVec3,
+    built: UVec3,
+    limit: &str,
+    tail: &str,
+) -> Option<String> {
+    (requested != built).then(|| {
+        format!(
+            "warning: {name}: the lists need more pairs than {limit} on the {}x{}x{} grid; they \
+             were built on the coarser {}x{}x{} grid{tail}",
+            requested.x, requested.y, requested.z, built.x, built.y, built.z
+        )
+    })
+}
+
+/// [`coarsened_warning`] for lists past what the device binds in one buffer
+/// (`GpuContext::max_list_pairs`), which the viewer and the frame loop coarsen to fit.
+pub fn device_coarsened_warning(
+    name: &str,
+    requested: UVec3,
+    built: UVec3,
+    max_pairs: u64,
+) -> Option<String> {
+    coarsened_warning(
+        name,
+        requested,
+        built,
+        &format!("this device binds in one buffer ({max_pairs} pairs)"),
+        " and shaded on it",
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use myriad::cluster_math::glam::UVec3;
     use myriad::scene::DepthSlicing;
 
     #[test]
@@ -152,9 +181,21 @@ mod tests {
         );
         let b = PairBudget::from_memory(None, 16, None);
         assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Offsets));
-        // Asked for, it is taken as it is, whatever the memory.
+        // Asked for, it is taken as it is, whatever the memory, up to what offsets hold.
         let b = PairBudget::from_memory(Some(7), 24, Some(24));
         assert_eq!((b.pairs, b.source), (7, BudgetSource::Requested));
+        let b = PairBudget::from_memory(Some(5_000_000_000), 24, None);
+        assert_eq!((b.pairs, b.source), (OFFSET_LIMIT, BudgetSource::Requested));
+        // Past what offsets hold no budget helps: no hint to raise it.
+        let grid = ClusterGrid::new(UVec3::new(2, 2, 2), DepthSlicing::Log, 0.1, 100.0);
+        let stats = AssignStats {
+            coarsened: 1,
+            ..AssignStats::default()
+        };
+        let w = PairBudget::from_memory(None, 24, None)
+            .coarsening_warning("s", &stats, &grid, "the dump")
+            .unwrap();
+        assert!(w.ends_with("which the dump records"), "{w}");
     }
 
     #[test]
@@ -172,9 +213,10 @@ mod tests {
             .unwrap();
         assert_eq!(
             w,
-            "warning: s.json: the pairs exceed the budget of 1000 pairs (what the memory \
-             available holds at 24 bytes a pair) on the 32x18x16 grid; the lists were built on \
-             the coarser 16x9x8 grid, which the dump records; --pair-budget sets the budget"
+            "warning: s.json: the lists need more pairs than the budget of 1000 pairs (what \
+             the memory available holds at 24 bytes a pair) on the 32x18x16 grid; they were \
+             built on the coarser 16x9x8 grid, which the dump records; --pair-budget sets the \
+             budget"
         );
         stats.over_budget = true;
         let requested = PairBudget::from_memory(Some(5), 24, None);
@@ -182,12 +224,24 @@ mod tests {
             .coarsening_warning("s.json", &stats, &grid, "the report")
             .unwrap();
         assert!(
-            w.contains("budget of 5 pairs (--pair-budget) on")
+            w.contains("than the budget of 5 pairs (--pair-budget) on")
                 && w.ends_with(
                     "which the report records (still over the budget: every visible \
                                 light in one cluster)"
                 ),
             "{w}"
+        );
+    }
+
+    #[test]
+    fn the_device_warning_names_its_limit() {
+        let (want, got) = (UVec3::new(96, 48, 64), UVec3::new(48, 24, 32));
+        assert_eq!(device_coarsened_warning("a", want, want, 9), None);
+        assert_eq!(
+            device_coarsened_warning("a", want, got, 33_554_432).unwrap(),
+            "warning: a: the lists need more pairs than this device binds in one buffer \
+             (33554432 pairs) on the 96x48x64 grid; they were built on the coarser 48x24x32 grid \
+             and shaded on it"
         );
     }
 }

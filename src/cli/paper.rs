@@ -22,10 +22,12 @@
 
 use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_slicing};
+use super::pair_budget::device_coarsened_warning;
 use super::progress::Progress;
 use super::render::parse_size;
 use anyhow::{Context, Result, bail};
 use myriad::assignment::Method;
+use myriad::cluster_math::ClusterGrid;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::layout::GpuLight;
 use myriad::gpu::legend::with_heat_legend;
@@ -251,6 +253,9 @@ struct Timed {
     assign_ms: f64,
     gbuffer_ms: Option<f64>,
     pairs: u64,
+    /// The grid the last frame's lists were built on (the scene's, or coarser past what the
+    /// device binds).
+    grid: ClusterGrid,
 }
 
 /// A frame's "shading" column from its pass times: the shading pass plus the forward pass of
@@ -292,13 +297,14 @@ fn time_frames(
                 shade.extend(shading_column(&p));
             }
         }
-        let pairs = frame.stats.map_or(0, |s| s.pairs);
+        let pairs = (frame.stats.map_or(0, |s| s.pairs), frame.grid);
         let timed = frame_index;
         frame_index += 1;
         if timing_done(timed, runs, frame_seconds) {
             break pairs;
         }
     };
+    let (pairs, grid) = pairs;
     let frames = wall.len();
     // Timestamps only count when every timed frame had them.
     let (shading_ms, shading_source, gbuffer_ms) = if shade.len() == frames {
@@ -313,27 +319,28 @@ fn time_frames(
         assign_ms: median(assign).context("no timed frame")?,
         gbuffer_ms,
         pairs,
+        grid,
     })
 }
 
-/// Lights per pixel of the frame just rendered (depth read back; every light for brute force).
-fn frame_pixels(viewer: &Viewer, scene: &RenderScene, shading: Shading) -> Result<PixelStats> {
+/// Lights per pixel of the frame just rendered on `grid` (depth read back; every light for brute
+/// force).
+fn frame_pixels(
+    viewer: &Viewer,
+    scene: &RenderScene,
+    grid: &ClusterGrid,
+    shading: Shading,
+) -> Result<PixelStats> {
     let depth = viewer
         .renderer
         .read_depth(&viewer.ctx)?
         .context("a frame was rendered")?;
     let lights = scene.lights.len();
     Ok(if shading == Shading::BruteForce {
-        let all = vec![lights as u32; scene.grid.cluster_count()];
-        pixel_stats(&depth, &scene.camera, &scene.grid, &all, lights)
+        let all = vec![lights as u32; grid.cluster_count()];
+        pixel_stats(&depth, &scene.camera, grid, &all, lights)
     } else {
-        pixel_stats(
-            &depth,
-            &scene.camera,
-            &scene.grid,
-            &viewer.lists().counts,
-            lights,
-        )
+        pixel_stats(&depth, &scene.camera, grid, &viewer.lists().counts, lights)
     })
 }
 
@@ -411,7 +418,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 rows.len() + 1
             ));
             let t = time_frames(&mut viewer, &scene, shading, method, args.runs)?;
-            let pixels = frame_pixels(&viewer, &scene, shading)?;
+            if let Some(warning) = device_coarsened_warning(
+                &format!("{}: {name}", scene.name),
+                scene.grid.dims(),
+                t.grid.dims(),
+                viewer.ctx.max_list_pairs(),
+            ) {
+                progress.line(warning);
+            }
+            let pixels = frame_pixels(&viewer, &scene, &t.grid, shading)?;
             let clustered = shading == Shading::Clustered;
             let list_bytes = if clustered {
                 viewer.lists().byte_size() as u64
@@ -422,7 +437,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 table,
                 lights,
                 config: name,
-                grid: clustered.then(|| scene.grid.dims().to_array()),
+                grid: clustered.then(|| t.grid.dims().to_array()),
                 frames: t.frames,
                 shading_ms: t.shading_ms,
                 shading_source: t.shading_source,
@@ -505,7 +520,7 @@ fn render_heat_map(
     viewer.settings.heat_max = Some(scale_max);
     let frame = viewer.frame(scene, Shading::Clustered, method, true);
     viewer.settings = saved;
-    frame?;
+    let grid = frame?.grid;
     viewer.ctx.wait_idle()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (image, legend_h) = with_heat_legend(&viewer.image()?, w, h, scale_max);
@@ -514,7 +529,7 @@ fn render_heat_map(
     let described = HeatMap {
         path: path.display().to_string(),
         lights: scene.lights.len(),
-        grid: scene.grid.dims().to_array(),
+        grid: grid.dims().to_array(),
         scale_max,
         max_lights_per_pixel: pixels.max_lights,
         mean_lights_per_pixel: pixels.mean_lights,

@@ -3,6 +3,7 @@
 
 use super::assign::parse_method;
 use super::grid_options::{check_slicing, parse_grid, parse_slicing};
+use super::pair_budget::device_coarsened_warning;
 use super::progress::Progress;
 use super::render_skipping::{self, WithSkips};
 use super::source::{check_memory, check_memory_for};
@@ -346,33 +347,6 @@ impl FrameSamples {
     }
 }
 
-/// The warning for a frame whose lists were built on a coarser grid than `requested` because
-/// they held more pairs than the device binds in one buffer; `None` when they were not.
-pub(super) fn coarsened_warning(
-    scene: &RenderScene,
-    strategy: &str,
-    requested: &ClusterGrid,
-    built: &ClusterGrid,
-    ctx: &GpuContext,
-) -> Option<String> {
-    let (want, got) = (requested.dims(), built.dims());
-    (want != got).then(|| {
-        format!(
-            "warning: {}: {strategy}: the lists need more pairs than this device binds in one \
-             buffer ({} pairs) on the {}x{}x{} grid; they were built and shaded on the coarser \
-             {}x{}x{} grid",
-            scene.name,
-            ctx.max_list_pairs(),
-            want.x,
-            want.y,
-            want.z,
-            got.x,
-            got.y,
-            got.z
-        )
-    })
-}
-
 fn measure(
     viewer: &mut Viewer,
     scene: &RenderScene,
@@ -393,9 +367,12 @@ fn measure(
     samples.drop_warm_ups(warm_ups);
     let frame = last.context("at least one frame")?;
     let requested = shading.grid(&scene.grid);
-    if let Some(warning) =
-        coarsened_warning(scene, shading.name(), &requested, &frame.grid, &viewer.ctx)
-    {
+    if let Some(warning) = device_coarsened_warning(
+        &format!("{}: {}", scene.name, shading.name()),
+        requested.dims(),
+        frame.grid.dims(),
+        viewer.ctx.max_list_pairs(),
+    ) {
         progress.line(warning);
     }
     let depth = viewer

@@ -116,9 +116,12 @@ pub fn measure(
     mask.drain(..warm_ups);
     let frame = last.context("at least one frame")?;
     let assigned = assigned.context("the first frame assigns")?;
-    if let Some(warning) =
-        super::render::coarsened_warning(scene, SHADING, &scene.grid, &frame.grid, &viewer.ctx)
-    {
+    if let Some(warning) = super::pair_budget::device_coarsened_warning(
+        &format!("{}: {SHADING}", scene.name),
+        scene.grid.dims(),
+        frame.grid.dims(),
+        viewer.ctx.max_list_pairs(),
+    ) {
         progress.line(warning);
     }
     let image = viewer.image()?;

@@ -111,6 +111,16 @@ impl Samples {
     ) -> Result<()> {
         let frame = viewer.frame_with_skips(scene, method, skips)?;
         viewer.ctx.wait_idle()?;
+        // Once a run: every configuration would coarsen alike.
+        static COARSENED: std::sync::Once = std::sync::Once::new();
+        if let Some(warning) = super::pair_budget::device_coarsened_warning(
+            &scene.name,
+            scene.grid.dims(),
+            frame.grid.dims(),
+            viewer.ctx.max_list_pairs(),
+        ) {
+            COARSENED.call_once(|| eprintln!("{warning}"));
+        }
         if timed {
             self.cpu.push(
                 (frame.cull_seconds + frame.assign_seconds + frame.report.upload_seconds) * 1e3,

@@ -273,7 +273,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .renderer
         .render(&viewer.ctx, &viewer.scene, &frame, &viewer.target.view)
         .map_err(|e| {
-            let hint = render_hint(&e);
+            let hint = render_hint(&e, grid.dims() != scene.grid.dims());
             anyhow::Error::new(e).context(format!(
                 "rendering {} lights clustered{hint}",
                 scene.lights.len()
@@ -370,18 +370,23 @@ pub fn run(args: Args) -> Result<ExitCode> {
 }
 
 /// What `stress` can change when the render is refused: the advice after "rendering N lights
-/// clustered", or nothing.
-fn render_hint(e: &GpuError) -> String {
+/// clustered", or nothing. `coarsened`: the pair budget already coarsened the grid, so a finer
+/// `--grid` alone would be coarsened again.
+fn render_hint(e: &GpuError, coarsened: bool) -> String {
     match *e {
+        GpuError::ShaderLoopLimit { .. } if coarsened => {
+            " (a larger --pair-budget keeps a finer grid, with shorter lists; or fewer lights)"
+                .into()
+        }
         GpuError::ShaderLoopLimit { .. } => " (a finer --grid gives shorter lists)".into(),
-        // Four bytes an index: the budget under which the grid coarsens until they fit.
+        // The budget under which the grid coarsens until the indices fit.
         GpuError::BufferTooLarge {
             what: "light indices",
             limit,
             ..
         } => format!(
             " (--pair-budget {} coarsens the grid until the lists fit this device)",
-            limit / 4
+            GpuContext::list_pairs_in(limit)
         ),
         _ => String::new(),
     }
@@ -530,11 +535,11 @@ mod tests {
         };
         // The indices fit 2^25 pairs of four bytes: that budget coarsens the grid until they do.
         assert_eq!(
-            render_hint(&too_large("light indices")),
+            render_hint(&too_large("light indices"), false),
             " (--pair-budget 33554432 coarsens the grid until the lists fit this device)"
         );
         // The lights' buffer does not depend on the grid, nor on the pairs.
-        assert_eq!(render_hint(&too_large("lights")), "");
+        assert_eq!(render_hint(&too_large("lights"), false), "");
         let loop_limit = GpuError::ShaderLoopLimit {
             mode: myriad::gpu::ShadingMode::Lists,
             lights: 70_000,
@@ -543,8 +548,13 @@ mod tests {
             limit: 65_535,
         };
         assert_eq!(
-            render_hint(&loop_limit),
+            render_hint(&loop_limit, false),
             " (a finer --grid gives shorter lists)"
+        );
+        // Under a budget that coarsened the grid, a finer --grid would be coarsened again.
+        assert_eq!(
+            render_hint(&loop_limit, true),
+            " (a larger --pair-budget keeps a finer grid, with shorter lists; or fewer lights)"
         );
     }
 }

@@ -62,9 +62,9 @@ pub struct StageTimes {
     pub gpu_passes: Option<PassTimes>,
     /// Cluster–light pairs.
     pub pairs: u64,
-    /// Times the grid was halved for the lists to fit what the device binds in one buffer
-    /// ([`GpuContext::max_list_pairs`]); 0 when they fit the scene's grid.
-    pub coarsened: u32,
+    /// The grid the lists were built and shaded on: the scene's, or a coarser one where they
+    /// held more pairs than the device binds in one buffer ([`GpuContext::max_list_pairs`]).
+    pub grid_dims: [u32; 3],
 }
 
 impl StageTimes {
@@ -273,14 +273,16 @@ impl GpuStage<'_> {
             gpu_wait_seconds,
             gpu_passes,
             pairs: work.stats.pairs,
-            coarsened: work.stats.coarsened,
+            grid_dims: grid.dims().to_array(),
         })
     }
 }
 
 /// Runs `frames` frames of `scene` with its lights orbiting the camera's target, frustum-culled
 /// before assignment and upload when `cull`. `on_frame` sees each finished frame's index (the
-/// target holds its image), e.g. to read it back.
+/// target holds its image), e.g. to read it back. As [`Viewer::frame`](super::Viewer::frame),
+/// lists past what the device binds in one buffer are built and shaded on a coarser grid
+/// ([`StageTimes::grid_dims`]).
 ///
 /// The sequential loop assigns on the rayon pool current where it is called. The pipelined
 /// loop's CPU stage runs on its own thread, whose assignment uses rayon's **global** pool: rayon

@@ -186,6 +186,9 @@ impl Viewer {
     }
 
     /// Assigns (unless brute force), uploads and submits one frame; does not wait for the GPU.
+    /// Lists past what the device binds in one buffer ([`GpuContext::max_list_pairs`]) are built
+    /// on a coarser grid (`coarser_grid`, until they fit; no light is dropped), which the frame
+    /// is shaded with: [`ViewerFrame::grid`] is that grid and `stats` says how often it halved.
     pub fn frame(
         &mut self,
         scene: &RenderScene,

@@ -343,7 +343,7 @@ fn lists_beyond_the_memory_coarsen_the_grid_instead_of_aborting() {
         &text,
         &[
             "what the memory available holds",
-            "the lists were built on the coarser",
+            "they were built on the coarser",
         ],
     );
     // The coarser lists are right: every light in every cluster of the grid the dump records.

@@ -332,6 +332,76 @@ fn render_with_fewer_lights_than_the_model_has_keeps_its_first_and_says_so() {
     }
 }
 
+/// A grid whose lists pass what the device binds in one buffer is rendered on a coarser grid,
+/// warned about, and reported: the table's `grid of the lists` row and `stats.json`'s `grid` and
+/// `grid_coarsened`. (100k lights on 96x48x64 make about 73 M pairs; llvmpipe binds 2^25.)
+#[test]
+fn render_coarsens_lists_past_what_the_device_binds_and_says_so() {
+    let Some(ctx) = myriad::gpu::GpuContext::headless_for_tests() else {
+        assert!(!gpu_available());
+        return;
+    };
+    let out_dir = work_dir("render_coarsened").join("out");
+    let out = myriad_ok(&[
+        "render",
+        "--lights",
+        "100000",
+        "--grid",
+        "96x48x64",
+        "--size",
+        "64x36",
+        "--runs",
+        "1",
+        "--skips",
+        "none",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stats = read_json(&out_dir.join("stats.json"));
+    let clustered = &stats["strategies"][0];
+    assert_eq!(clustered["shading"], "clustered");
+    let coarsened = clustered["grid_coarsened"].as_bool().unwrap();
+    // The tiles (96x48x1) hold fewer pairs and fit.
+    let tiled = &stats["strategies"][1];
+    assert_eq!(tiled["grid"], serde_json::json!([96, 48, 1]), "{tiled}");
+    assert_eq!(tiled["grid_coarsened"], false);
+    if ctx.max_list_pairs() > 80_000_000 {
+        // A real GPU binds them all.
+        assert!(!coarsened, "{clustered}");
+        return;
+    }
+    assert!(coarsened, "{clustered}");
+    assert_eq!(
+        clustered["grid"],
+        serde_json::json!([48, 24, 32]),
+        "{clustered}"
+    );
+    assert!(u64_field(clustered, "pairs") <= ctx.max_list_pairs());
+    assert_mentions(
+        &stderr(&out),
+        &[&format!(
+            "warning: default scene (atrium): clustered: the lists need more pairs than this \
+             device binds in one buffer ({} pairs) on the 96x48x64 grid; they were built on the \
+             coarser 48x24x32 grid and shaded on it",
+            ctx.max_list_pairs()
+        )],
+    );
+    let row = stdout(&out)
+        .lines()
+        .find(|l| l.starts_with("grid of the lists (* coarser)"))
+        .map(str::to_string);
+    let cells: Vec<String> = row
+        .expect("the row")
+        .split_whitespace()
+        .skip(6)
+        .map(str::to_string)
+        .collect();
+    assert_eq!(cells, ["48x24x32*", "96x48x1"]);
+    // (That the coarser lists shade the same image as brute force is `gpu_frame_checks.rs`'
+    // `a_viewer_coarsens_lists_past_what_the_device_binds`: here brute force is past llvmpipe's
+    // loop limit.)
+}
+
 /// The headless device follows wgpu's environment variables: with `WGPU_BACKEND` naming only a
 /// backend this platform lacks there is no adapter, and the error says which variable chose that.
 #[test]

@@ -787,12 +787,29 @@ fn stress_coarsens_the_grid_past_its_pair_budget() {
     assert_mentions(
         &stderr(&out),
         &[
-            "warning: default scene (atrium): the pairs exceed the budget of 5000 pairs \
-             (--pair-budget) on the 24x12x16 grid; the lists were built on the coarser",
+            "warning: default scene (atrium): the lists need more pairs than the budget of 5000 \
+             pairs (--pair-budget) on the 24x12x16 grid; they were built on the coarser",
             "grid, which the report records",
         ],
     );
     assert_stress_stages(&r);
+    // The loop limit's share is for the slices the lists were built on, not --grid's 16.
+    if let Some(limit) = r["shader_loop_limit"].as_u64() {
+        let want = myriad::gpu::loop_budget::max_lights_per_pixel(
+            limit,
+            myriad::gpu::ShadingMode::Lists,
+            grid[2] as u32,
+        );
+        assert_eq!(u64_field(&r, "max_lights_per_pixel"), want, "{r}");
+        assert_ne!(
+            want,
+            myriad::gpu::loop_budget::max_lights_per_pixel(
+                limit,
+                myriad::gpu::ShadingMode::Lists,
+                16
+            )
+        );
+    }
     // The table's heading gives both grids.
     let table = myriad_ok(&[
         "stress",

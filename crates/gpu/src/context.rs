@@ -97,7 +97,12 @@ impl GpuContext {
     /// grid, which the renderer takes, instead of being refused with
     /// [`GpuError::BufferTooLarge`] after the assignment (128 MiB on llvmpipe: 33.5 M pairs).
     pub fn max_list_pairs(&self) -> u64 {
-        self.device.limits().max_storage_buffer_binding_size / 4
+        Self::list_pairs_in(self.device.limits().max_storage_buffer_binding_size)
+    }
+
+    /// The cluster–light pairs whose indices (u32) fit in a storage binding of `bytes`.
+    pub fn list_pairs_in(bytes: u64) -> u64 {
+        bytes / std::mem::size_of::<u32>() as u64
     }
 
     /// Whether passes can be timed with timestamp queries.

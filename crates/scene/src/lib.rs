@@ -44,7 +44,9 @@
 //! same checks, and [`Scene::to_json_string`] refuses to write a scene that would not read back.
 //!
 //! ## Reading, step by step
-//! 1. **Syntax.** serde_json parses the bytes (its recursion limit of 128 bounds the stack). The
+//! 1. **Syntax.** A leading UTF-8 byte-order mark is skipped; a UTF-16 or UTF-32 file (by its
+//!    byte-order mark, or ASCII beside zero bytes) is [`Error::Encoding`], named as such rather
+//!    than as a syntax error at line 1. serde_json parses the bytes (its recursion limit of 128 bounds the stack). The
 //!    `lights` array is streamed: each light is checked and appended to the columns before the
 //!    next is parsed. A syntax error, invalid UTF-8, a number beyond the f64 range (`1e999`) or a
 //!    top level that is not an object is [`Error::Json`], with line and column.
@@ -58,8 +60,10 @@
 //!    parallel to `target − position` (the roll would be the camera's fallback, a guess),
 //!    `fov_y_deg` in (0, 180), `width, height >= 1`, `1e-12 <= near < far` (compared after rounding
 //!    to f32; `ClusterGrid::MIN_NEAR` is the floor); grid dimensions `>= 1` with `x·y·z <= u32::MAX` (cluster ids are u32); light
-//!    `radius > 0`, colour and `intensity >= 0`, spot direction non-zero, spot `angle_deg` in
-//!    (0, 180]. Every problem is collected, never only the first.
+//!    `radius > 0` (a non-zero radius that rounds to 0 in f32, `1e-46`, is named as written),
+//!    colour and `intensity >= 0` with colour × intensity finite in f32 (the renderer's radiance),
+//!    spot direction non-zero, spot `angle_deg` in (0, 180]. Every problem is collected, never
+//!    only the first.
 //! 4. **Policy.** Problems with the root, camera or grid are always errors. Invalid lights are an
 //!    error with [`LightPolicy::Strict`], or are left out and listed in [`Scene::skipped`] with
 //!    [`LightPolicy::SkipInvalid`] — never dropped silently. Kept lights carry their index in the

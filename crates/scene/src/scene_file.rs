@@ -485,6 +485,10 @@ mod tests {
             .chars()
             .flat_map(|c| (c as u32).to_le_bytes())
             .collect();
+        let utf32be: Vec<u8> = text
+            .chars()
+            .flat_map(|c| (c as u32).to_be_bytes())
+            .collect();
         let with_bom = |bom: &[u8], body: &[u8]| [bom, body].concat();
         let cases = [
             (
@@ -502,6 +506,11 @@ mod tests {
                 "UTF-32 (little-endian, with a byte-order mark)",
             ),
             (utf32le, "UTF-32 (little-endian)"),
+            (
+                with_bom(&[0, 0, 0xFE, 0xFF], &utf32be),
+                "UTF-32 (big-endian, with a byte-order mark)",
+            ),
+            (utf32be, "UTF-32 (big-endian)"),
         ];
         for (bytes, encoding) in cases {
             let e = Scene::from_json_slice(&bytes, "w.json", LightPolicy::Strict).unwrap_err();

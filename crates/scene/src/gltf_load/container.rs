@@ -32,60 +32,65 @@ pub(super) fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
     check_glb_chunks(bytes)
 }
 
-/// The chunks after the 12-byte header: a JSON chunk, then at most one BIN chunk, each a length
-/// and a type, inside the file; the JSON chunk's length a multiple of 4, so the next chunk starts
-/// aligned (its padding is spaces). The `gltf` crate refuses the same files in words that name
-/// nothing ("unknown chunk type" for a JSON length one off, "JSON chunk length exceeds that of
-/// slice"; hostile-input audit).
+/// The first two chunks after the 12-byte header: a JSON chunk, its length inside the file (and a
+/// multiple of 4 when another chunk follows, which must start aligned; the JSON is padded with
+/// spaces), then optionally a BIN chunk inside the file. Chunks after those are ignored, as the
+/// spec tells loaders (extensions may add them). The `gltf` crate refuses these files in words
+/// that name nothing: "unknown chunk type" for a JSON length one off, "JSON chunk length exceeds
+/// that of slice" (hostile-input audit).
 fn check_glb_chunks(bytes: &[u8]) -> Result<(), String> {
     const JSON: u32 = u32::from_le_bytes(*b"JSON");
     const BIN: u32 = u32::from_le_bytes(*b"BIN\0");
     let word =
         |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
-    let mut at = 12;
-    for index in 0.. {
-        if at == bytes.len() {
-            return Ok(());
-        }
-        let left = bytes.len() - at;
-        if left < 8 {
-            return Err(format!(
-                "GLB chunk {index} at byte {at}: {left} bytes left, a chunk header needs 8"
-            ));
-        }
-        let (length, kind) = (word(at) as usize, word(at + 4));
-        let name = match (index, kind) {
-            (0, JSON) => "JSON",
-            (1, BIN) => "BIN",
-            _ => {
-                let want = if index == 0 { "JSON" } else { "BIN" };
-                return Err(format!(
-                    "GLB chunk {index} at byte {at} has type \"{}\", not {want}{}",
-                    kind.to_le_bytes().escape_ascii(),
-                    if index > 1 {
-                        " (a GLB holds a JSON chunk and at most one BIN chunk)"
-                    } else {
-                        ""
-                    }
-                ));
-            }
-        };
-        if length > left - 8 {
-            return Err(format!(
-                "the GLB's {name} chunk (at byte {at}) declares {length} bytes, but only {} \
-                 follow its header",
-                left - 8
-            ));
-        }
-        if name == "JSON" && !length.is_multiple_of(4) {
-            return Err(format!(
-                "the GLB's JSON chunk declares {length} bytes, not a multiple of 4 (chunks are \
-                 4-byte aligned; the JSON is padded with spaces)"
-            ));
-        }
-        at += 8 + length;
+    let shown = |kind: u32| kind.to_le_bytes().escape_ascii().to_string();
+    // The header check saw at least 20 bytes: the JSON chunk's header is there.
+    let (json_length, kind) = (word(12) as usize, word(16));
+    if kind != JSON {
+        return Err(format!(
+            "GLB chunk 0 at byte 12 has type \"{}\", not JSON",
+            shown(kind)
+        ));
     }
-    unreachable!("the loop returns")
+    let after_json = bytes.len() - 20;
+    if json_length > after_json {
+        return Err(format!(
+            "the GLB's JSON chunk (at byte 12) declares {json_length} bytes, but only \
+             {after_json} follow its header"
+        ));
+    }
+    let at = 20 + json_length;
+    if at == bytes.len() {
+        return Ok(());
+    }
+    if !json_length.is_multiple_of(4) {
+        return Err(format!(
+            "the GLB's JSON chunk declares {json_length} bytes, not a multiple of 4, so the chunk \
+             after it (at byte {at}) is misaligned (chunks are 4-byte aligned; the JSON is padded \
+             with spaces)"
+        ));
+    }
+    let left = bytes.len() - at;
+    if left < 8 {
+        return Err(format!(
+            "GLB chunk 1 at byte {at}: {left} bytes left, a chunk header needs 8"
+        ));
+    }
+    let (bin_length, kind) = (word(at) as usize, word(at + 4));
+    if kind != BIN {
+        return Err(format!(
+            "GLB chunk 1 at byte {at} has type \"{}\", not BIN",
+            shown(kind)
+        ));
+    }
+    if bin_length > left - 8 {
+        return Err(format!(
+            "the GLB's BIN chunk (at byte {at}) declares {bin_length} bytes, but only {} follow \
+             its header",
+            left - 8
+        ));
+    }
+    Ok(())
 }
 
 /// The spec's rule for loaders: an asset whose major `version` is not 2, or whose `minVersion` is

@@ -13,7 +13,11 @@
 //!
 //! ## Loading, step by step
 //! 1. **Container.** A file starting with `glTF` is GLB: its header is checked (version 2, a
-//!    declared length equal to the file's) before the `gltf` crate splits the chunks. Then
+//!    declared length equal to the file's), and its first two chunks (a JSON chunk, then an
+//!    optional BIN chunk, each inside the file; the JSON's length a multiple of 4 when a chunk
+//!    follows; later chunks are ignored, as the spec says), before the `gltf` crate splits them.
+//!    A `KHR_lights_punctual` light without a type the extension defines is named here (the
+//!    crate fails the whole file on it, under an internal path). Then
 //!    `gltf::Gltf::from_slice` parses and validates the JSON (unknown required extensions,
 //!    bad enum values and out-of-range indices are errors there), and `asset.version` and
 //!    `asset.minVersion` are checked (the crate does not).
@@ -47,7 +51,8 @@
 //! * **Invalid lights are left out, counted and reported, never fatal** — the scene file's
 //!   [`LightPolicy::SkipInvalid`](crate::LightPolicy::SkipInvalid), which every command uses.
 //!   A light whose values cannot make a light (`range` not finite and > 0, a colour or
-//!   intensity that is negative or not finite in f32, an `outerConeAngle` outside (0, π], zero
+//!   intensity that is negative or not finite in f32, or whose product is not, an
+//!   `outerConeAngle` outside (0, π], zero
 //!   intensity without a `range`) or whose node gives it no direction (a spot or directional
 //!   light under a zero scale) is left out of [`Model::lights`] /
 //!   [`Model::directional_lights`], listed in
@@ -78,7 +83,9 @@
 //!     a loader must not load an asset of a major version, or a minVersion, it does not
 //!     support; a later 2.x loads);
 //!   - a GLB header `length` other than the file's size (longer: truncated; shorter: bytes that
-//!     are not part of the GLB);
+//!     are not part of the GLB), or a first chunk that is not JSON, a second that is not BIN, a
+//!     chunk longer than the bytes after it, a JSON chunk of a length not a multiple of 4 with
+//!     a chunk after it (misaligned);
 //!   - a buffer view reaching past its buffer's `byteLength`, even where the data behind it
 //!     holds more bytes;
 //!   - a node `matrix` whose last row is not exactly (0, 0, 0, 1): the spec requires a matrix

@@ -395,9 +395,10 @@ impl Loader<'_> {
         // nothing of the light (it skips it) while the lists hold it.
         if !(color * light.intensity).is_finite() {
             return Err(format!(
-                "color {color} times intensity {} overflows f32 (at most {} a channel)",
-                light.intensity,
-                f32::MAX
+                "color {} times intensity {} overflows f32 (at most {} a channel)",
+                crate::json::show_vec3(color),
+                crate::json::show_f32(light.intensity),
+                crate::json::show_f32(f32::MAX)
             ));
         }
         let direction = unit_or_zero(world.transform_vector3(Vec3::NEG_Z));

@@ -154,7 +154,8 @@ fn invalid_lights_are_left_out_counted_and_reported() {
         ),
         (
             r#"{"type": "point", "color": [0, 1e38, 0], "intensity": 1e38, "range": 2}"#,
-            "times intensity 100000000000000000000000000000000000000 overflows f32",
+            "color [0.0, 1e+38, 0.0] times intensity 1e+38 overflows f32 (at most \
+             3.4028235e+38 a channel)",
         ),
     ];
     let lights: Vec<&str> = bad.iter().map(|(light, _)| *light).collect();
@@ -551,6 +552,13 @@ fn spec_violations_are_refused_or_reported() {
     let n = json_chunk.len() as u32;
     let with_bin = rebuilt(&[(n, json_chunk, json), (4, b"\0\0\0\0", bin)]);
     assert_eq!(load_glb(&with_bin).unwrap().triangle_count(), 1);
+    // A last JSON chunk of unaligned length misaligns nothing: read (the crate reads it too).
+    assert_eq!(json_chunk.last(), Some(&b' '), "padded");
+    let unpadded = rebuilt(&[(n - 1, &json_chunk[..n as usize - 1], json)]);
+    assert_eq!(load_glb(&unpadded).unwrap().triangle_count(), 1);
+    // Chunks after the first two are ignored, as the spec tells loaders (an extension's).
+    let extra = rebuilt(&[(n, json_chunk, json), (0, b"", bin), (4, b"more", 7)]);
+    assert_eq!(load_glb(&extra).unwrap().triangle_count(), 1);
     let mut trailing = rebuilt(&[(n, json_chunk, json)]);
     trailing.extend([0; 4]);
     let total = trailing.len() as u32;
@@ -565,11 +573,10 @@ fn spec_violations_are_refused_or_reported() {
             format!("GLB chunk 1 at byte {} has type \"JSON\", not BIN", 20 + n),
         ),
         (
-            rebuilt(&[(n, json_chunk, json), (0, b"", bin), (0, b"", bin)]),
+            rebuilt(&[(n, json_chunk, json), (8, b"abcd", bin)]),
             format!(
-                "GLB chunk 2 at byte {} has type \"BIN\\x00\", not BIN (a GLB holds a JSON \
-                 chunk and at most one BIN chunk)",
-                28 + n
+                "the GLB's BIN chunk (at byte {}) declares 8 bytes, but only 4 follow its header",
+                20 + n
             ),
         ),
         (
@@ -583,9 +590,10 @@ fn spec_violations_are_refused_or_reported() {
         (
             rebuilt(&[(n - 3, json_chunk, json)]),
             format!(
-                "the GLB's JSON chunk declares {} bytes, not a multiple of 4 (chunks are 4-byte \
-                 aligned; the JSON is padded with spaces)",
-                n - 3
+                "the GLB's JSON chunk declares {} bytes, not a multiple of 4, so the chunk after \
+                 it (at byte {}) is misaligned",
+                n - 3,
+                17 + n
             ),
         ),
         (
