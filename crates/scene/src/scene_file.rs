@@ -521,6 +521,11 @@ mod tests {
             let e = crate::validate_json_slice(&bytes, "w.json").unwrap_err();
             assert!(matches!(e, Error::Encoding { .. }), "{e}");
         }
+        // Zero bytes alone, or a non-ASCII byte beside them, name no encoding: not JSON.
+        for bytes in [vec![0u8; 16], [0xC3, 0, 0, 0, 0xC3, 0].to_vec()] {
+            let e = Scene::from_json_slice(&bytes, "z.json", LightPolicy::Strict).unwrap_err();
+            assert!(matches!(e, Error::Json { .. }), "{e}");
+        }
         // UTF-8, with or without its byte-order mark, reads.
         let bom = [b"\xEF\xBB\xBF".as_slice(), text.as_bytes()].concat();
         Scene::from_json_slice(&bom, "w.json", LightPolicy::Strict).unwrap();

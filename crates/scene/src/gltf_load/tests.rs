@@ -552,6 +552,9 @@ fn spec_violations_are_refused_or_reported() {
     let n = json_chunk.len() as u32;
     let with_bin = rebuilt(&[(n, json_chunk, json), (4, b"\0\0\0\0", bin)]);
     assert_eq!(load_glb(&with_bin).unwrap().triangle_count(), 1);
+    // An empty BIN chunk is its header alone, the last 8 bytes of the file.
+    let empty_bin = rebuilt(&[(n, json_chunk, json), (0, b"", bin)]);
+    assert_eq!(load_glb(&empty_bin).unwrap().triangle_count(), 1);
     // A last JSON chunk of unaligned length misaligns nothing: read (the crate reads it too).
     assert_eq!(json_chunk.last(), Some(&b' '), "padded");
     let unpadded = rebuilt(&[(n - 1, &json_chunk[..n as usize - 1], json)]);
