@@ -335,8 +335,9 @@ mod tests {
             let e = check_image_memory(u32::MAX, u32::MAX)
                 .unwrap_err()
                 .to_string();
+            // Saturated at u64::MAX bytes: 2^34 GiB.
             assert!(
-                e.contains("a 4294967295x4294967295 image needs at least"),
+                e.contains("a 4294967295x4294967295 image needs at least 17179869184.0 GiB"),
                 "{e}"
             );
             // 2^31 a side wraps to exactly 0 unsaturated.
