@@ -314,39 +314,21 @@ mod tests {
         let mut exact = LightLists::new();
         let (camera, grid) = (&scene.camera, &scene.grid);
         Assigner::new().assign(Method::Exact, &input, camera, grid, &mut exact);
-        let timing = Timing::back_to_back(1);
-        let refined = measure(
-            Method::Refined,
-            &input,
-            camera,
-            grid,
-            &exact,
-            timing,
-            u64::MAX,
-        )
-        .unwrap()
-        .pairs;
-        let at_limit = measure(
-            Method::Refined,
-            &input,
-            camera,
-            grid,
-            &exact,
-            timing,
-            refined,
-        );
-        assert_eq!(at_limit.unwrap().pairs, refined);
-        let e = measure(
-            Method::Refined,
-            &input,
-            camera,
-            grid,
-            &exact,
-            timing,
-            refined - 1,
-        )
-        .unwrap_err()
-        .to_string();
+        let refined_under = |max_pairs| {
+            let timing = Timing::back_to_back(1);
+            measure(
+                Method::Refined,
+                &input,
+                camera,
+                grid,
+                &exact,
+                timing,
+                max_pairs,
+            )
+        };
+        let refined = refined_under(u64::MAX).unwrap().pairs;
+        assert_eq!(refined_under(refined).unwrap().pairs, refined);
+        let e = refined_under(refined - 1).unwrap_err().to_string();
         let d = grid.dims();
         let want = format!(
             "refined needs more than {} pairs on the {}x{}x{} grid",

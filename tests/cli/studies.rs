@@ -754,16 +754,16 @@ fn stress_coarsens_the_grid_past_its_pair_budget() {
     }
     // The lists are built on the coarser grid the budget allows, warned about, rendered and
     // checked on that grid; the report gives both grids. Its loop limit is for that grid's slices.
-    let out = myriad_ok(&[
+    let run = [
         "stress",
-        "--json",
         "--lights",
         "3000",
         "--size",
         "64x36",
         "--pair-budget",
         "5000",
-    ]);
+    ];
+    let out = myriad_ok(&[&run[..], &["--json"]].concat());
     let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert_eq!(r["grid_requested"], serde_json::json!([24, 12, 16]));
     assert_eq!(r["pair_budget"], 5000);
@@ -811,15 +811,7 @@ fn stress_coarsens_the_grid_past_its_pair_budget() {
         );
     }
     // The table's heading gives both grids.
-    let table = myriad_ok(&[
-        "stress",
-        "--lights",
-        "3000",
-        "--size",
-        "64x36",
-        "--pair-budget",
-        "5000",
-    ]);
+    let table = myriad_ok(&run);
     let heading = format!(
         "default scene (atrium) — 3000 lights, 64x36, grid {}x{}x{} (coarser than --grid \
          24x12x16: the pairs exceeded the budget), method refined, seed 1",
