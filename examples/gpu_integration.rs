@@ -187,13 +187,16 @@ fn frame_with(
 ) -> Result<(FrameReport, u64, Vec<u8>), GpuError> {
     let (camera, grid) = view();
     let mut lists = LightLists::new();
-    let pairs = if mode == ShadingMode::Lists {
+    let (pairs, grid) = if mode == ShadingMode::Lists {
         let input = LightInput::points(&lights.x, &lights.y, &lights.z, &lights.radius);
-        Assigner::new()
-            .assign(Method::Refined, &input, &camera, &grid, &mut lists)
-            .pairs
+        // Lists past what the device binds are built on a coarser grid, which the frame must
+        // then be drawn with, rather than refused by the renderer after the assignment.
+        let stats = Assigner::new()
+            .with_pair_budget(engine.ctx.max_list_pairs())
+            .assign(Method::Refined, &input, &camera, &grid, &mut lists);
+        (stats.pairs, stats.grid_built(&grid))
     } else {
-        0
+        (0, grid)
     };
     let report = renderer.render(
         &engine.ctx,
