@@ -296,30 +296,18 @@ fn an_open_grid_refuses_a_placeholder_depth_range() {
         let what = format!("near {near}, far {far}");
         let mut lists = LightLists::new();
         let input = lights.input(false);
-        let err = Assigner::new()
-            .try_assign(
-                Method::Refined,
-                &input,
-                &axis_camera(near, far),
-                &grid,
-                &mut lists,
-            )
-            .expect_err(&what);
+        let camera = axis_camera(near, far);
+        let assign_on = |grid: &ClusterGrid, lists: &mut LightLists| {
+            Assigner::new().try_assign(Method::Refined, &input, &camera, grid, lists)
+        };
+        let err = assign_on(&grid, &mut lists).expect_err(&what);
         assert!(
             err.0.contains("OuterSlices::Closed") && err.0.contains(&format!("[{near}, {far}]")),
             "{what}: {err}"
         );
         assert_eq!(lists.cluster_count(), 0, "{what}: the output is untouched");
         let closed = grid.with_outer_slices(OuterSlices::Closed);
-        let stats = Assigner::new()
-            .try_assign(
-                Method::Refined,
-                &input,
-                &axis_camera(near, far),
-                &closed,
-                &mut lists,
-            )
-            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let stats = assign_on(&closed, &mut lists).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(
             (stats.visible(), lists.lights_of(past)),
             (1, &[][..]),
