@@ -1,6 +1,6 @@
 //! # The frame pipeline: animate → cull → assign on a worker, upload → render on the GPU
 //!
-//! DESIGN.md's "frame pipeline" bench. Times `myriad::render::run_frames` — the loop of
+//! The design brief's "frame pipeline" bench (the brief is not in this repository). Times `myriad::render::run_frames` — the loop of
 //! `myriad frames` — over [`FRAMES`] frames of the default scene (the atrium, its lights orbiting
 //! the camera's target, frustum-culled before assignment and upload) at 64×32, `refined`, for
 //! 1k, 10k and 100k lights, as two loops of the same frames:

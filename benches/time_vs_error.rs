@@ -1,6 +1,7 @@
 //! # Time against error: every assignment method's speed beside its accuracy
 //!
-//! DESIGN.md's "time against error" as a criterion bench. For each scene — the three
+//! The design brief's "time against error" (the brief is not in this repository) as a criterion
+//! bench. For each scene — the three
 //! presets with their own grids: `paper` 1000 lights, `uniform` 10 000, `sphere` 100 000 — every
 //! method first runs once and is compared pair by pair with `exact` (`myriad::evaluate::compare`,
 //! the comparison behind `myriad bench`). A method that misses a pair is not timed: the bench

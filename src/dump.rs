@@ -1,7 +1,7 @@
 //! The assignment dump: the JSON file `myriad assign` writes and `myriad check` reads
 //! (format in the README, "`myriad assign`": `grid`, the plane edges and the CSR lists).
 //!
-//! The reader is strict where DESIGN.md is silent, by decision: an unknown key is an error (a
+//! The reader is strict where the format's description is silent, by decision: an unknown key is an error (a
 //! misspelt `offests` would otherwise leave the lists unchecked behind a default), and counts and
 //! indices must be JSON integers (`4.0` is refused: a fractional index has no meaning, and
 //! accepting some floats invites `4.5`). Key order is free, as in any JSON object.

@@ -34,7 +34,8 @@ fn main() -> ExitCode {
     }
 }
 
-/// A closed stdout (`myriad check … | head -1`, `… | true`) is a run that could not finish:
+/// A write to a closed stdout (`myriad check … | true`; `| head -1` only when a write comes after
+/// `head` has exited) is a run that could not finish:
 /// exit 2 with one line, as an unwritable `--out` does. `println!` panics there, with std's
 /// "failed printing to stdout: …", which exited 101 with a backtrace from `check`, `info`,
 /// `bench` and `stress` (audit). Every other panic goes to the default hook.

@@ -15,7 +15,8 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     /// Decode every image, as `render` does: a missing, corrupt or oversized texture is then an
-    /// error here too (exit 2), not first when rendering. Slower (seconds for Sponza).
+    /// error here too (exit 2), not first when rendering. Slower (Sponza: 0.4 s, against 0.03 s
+    /// without).
     #[arg(long)]
     decode_images: bool,
 }

@@ -20,7 +20,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// A scene in the DESIGN.md format, written by hand: four valid lights, one of them a spot.
+/// A scene in the scene-file format (README, "Scene files"), written by hand: four valid lights, one of them a spot.
 const GOOD_SCENE: &str = r#"{
   "camera": {"position": [0, 2, 10], "target": [0, 2, 0], "up": [0, 1, 0], "fov_y_deg": 60,
              "width": 1536, "height": 768, "near": 0.1, "far": 100},

@@ -1,4 +1,4 @@
-//! Scene files end to end: the hand-written file from DESIGN.md, bit-exact round trips, every
+//! Scene files end to end: a hand-written file in the documented format (the crate's docs), bit-exact round trips, every
 //! documented error, and a sweep of malformed inputs that must never panic.
 
 use myriad_scene::glam::{UVec3, Vec3};
@@ -168,7 +168,7 @@ fn hand_written_file_round_trips_bit_for_bit_through_a_file() {
         back.to_json_string().unwrap(),
         std::fs::read_to_string(&out).unwrap()
     );
-    // And it is still the DESIGN.md format: plain serde_json sees the documented keys.
+    // And it is still the documented format: plain serde_json sees the documented keys.
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["grid"]["depth"], "log");
