@@ -9,10 +9,11 @@ use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::layout::GpuLight;
 use myriad::gpu::{
     FrameDesc, GpuContext, GpuError, HEADLESS_FORMAT, HeadlessTarget, Renderer, ShadingMode,
-    ShadingSettings, wgpu,
+    ShadingSettings, read_rgba8, wgpu,
 };
 use myriad::render::{
-    RenderScene, Shading, Viewer, cluster_lists, light_columns, max_channel_difference,
+    GpuStage, RenderScene, Shading, Viewer, cluster_lists, light_columns, max_channel_difference,
+    run_frames,
 };
 use myriad::scene::{Camera, ClusterGrid, DepthSlicing};
 
@@ -331,4 +332,71 @@ fn a_viewer_coarsens_lists_past_what_the_device_binds() {
         "{lit} channels lit: too few to compare"
     );
     assert!(max_channel_difference(&clustered, &brute) <= 1);
+}
+
+/// The frame loop (`myriad frames`) coarsens as the viewer does: on the same device and scene,
+/// every frame of the sequential and of the pipelined loop is built on a coarser grid within
+/// the device's binding, says so in its `grid_dims`, and the first frame (its lights not yet
+/// moved) is brute force's image.
+#[test]
+fn the_frame_loop_coarsens_lists_past_what_the_device_binds() {
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    let ctx = binding_limited(128 << 20);
+    let max_pairs = ctx.max_list_pairs();
+    let mut scene = RenderScene::default_scene(3000, 64, 36)
+        .unwrap()
+        .with_grid(UVec3::new(64, 36, 16), DepthSlicing::Log);
+    for r in &mut scene.lights.radius {
+        *r *= 8.0;
+    }
+    assert!(assigned(&scene).pair_count() as u64 > max_pairs);
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::BruteForce, Method::Refined, false)
+        .unwrap();
+    let brute = viewer.image().unwrap();
+    let mut images = [Vec::new(), Vec::new()];
+    for (pipelined, images) in [false, true].into_iter().zip(&mut images) {
+        let mut stage = GpuStage {
+            ctx: &viewer.ctx,
+            renderer: &mut viewer.renderer,
+            scene: &viewer.scene,
+            target: &viewer.target,
+            settings: viewer.settings,
+        };
+        let report = run_frames(
+            &mut stage,
+            &scene,
+            Method::Refined,
+            2,
+            pipelined,
+            false,
+            |_, gpu| {
+                images.push(read_rgba8(gpu.ctx, &gpu.target.texture)?);
+                Ok(())
+            },
+        )
+        .unwrap();
+        for (n, frame) in report.frames.iter().enumerate() {
+            let built = UVec3::from_array(frame.grid_dims);
+            assert!(
+                built.cmplt(scene.grid.dims()).all() && frame.pairs <= max_pairs,
+                "pipelined {pipelined}, frame {n}: {} pairs on {built}",
+                frame.pairs
+            );
+        }
+    }
+    assert!(images[0] == images[1], "the loops rendered other images");
+    let lit = brute.iter().filter(|&&c| c > 0 && c < 255).count();
+    assert!(
+        lit > brute.len() / 4,
+        "{lit} channels lit: too few to compare"
+    );
+    let d = max_channel_difference(&images[0][0], &brute);
+    assert!(
+        d <= 1,
+        "the first frame differs from brute force by {d}/255"
+    );
 }
