@@ -292,19 +292,12 @@ fn a_frame_refused_for_its_lights_leaves_the_last_frames_times() {
     assert_eq!(renderer.last_pass_times(&ctx).unwrap(), times);
 }
 
-/// Lists past what the device binds are built on a coarser grid, which the viewer shades with,
-/// instead of the frame being refused after its assignment: the image is brute force's. (A
-/// viewer needs the renderer's limits, 128 MiB of indices, so the lists must pass 2^25 pairs:
-/// 3000 lights eight times their size, on a grid of 37k clusters. The device is made with exactly
-/// that limit, as llvmpipe has it: a real GPU's is gigabytes.)
-#[test]
-fn a_viewer_coarsens_lists_past_what_the_device_binds() {
-    if GpuContext::headless_for_tests().is_none() {
-        return;
-    }
+/// A device that binds 128 MiB of light indices (2^25 pairs) and a scene whose lists on its own
+/// grid pass that: 3000 lights eight times their size, on a grid of 37k clusters. (The renderer's
+/// limits need 128 MiB; llvmpipe has exactly that, a real GPU gigabytes.)
+fn past_the_binding() -> (GpuContext, RenderScene) {
     let ctx = binding_limited(128 << 20);
-    let max_pairs = ctx.max_list_pairs();
-    assert_eq!(max_pairs, 1 << 25);
+    assert_eq!(ctx.max_list_pairs(), 1 << 25);
     let mut scene = RenderScene::default_scene(3000, 64, 36)
         .unwrap()
         .with_grid(UVec3::new(64, 36, 16), DepthSlicing::Log);
@@ -312,7 +305,20 @@ fn a_viewer_coarsens_lists_past_what_the_device_binds() {
         *r *= 8.0;
     }
     let on_scene_grid = assigned(&scene).pair_count() as u64;
-    assert!(on_scene_grid > max_pairs, "{on_scene_grid} pairs fit");
+    assert!(on_scene_grid > 1 << 25, "{on_scene_grid} pairs fit");
+    (ctx, scene)
+}
+
+/// Lists past what the device binds are built on a coarser grid, which the viewer shades with,
+/// instead of the frame being refused after its assignment: the image is brute force's
+/// ([`past_the_binding`]).
+#[test]
+fn a_viewer_coarsens_lists_past_what_the_device_binds() {
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    let (ctx, scene) = past_the_binding();
+    let max_pairs = ctx.max_list_pairs();
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
     let frame = viewer
         .frame(&scene, Shading::Clustered, Method::Refined, false)
@@ -343,15 +349,8 @@ fn the_frame_loop_coarsens_lists_past_what_the_device_binds() {
     if GpuContext::headless_for_tests().is_none() {
         return;
     }
-    let ctx = binding_limited(128 << 20);
+    let (ctx, scene) = past_the_binding();
     let max_pairs = ctx.max_list_pairs();
-    let mut scene = RenderScene::default_scene(3000, 64, 36)
-        .unwrap()
-        .with_grid(UVec3::new(64, 36, 16), DepthSlicing::Log);
-    for r in &mut scene.lights.radius {
-        *r *= 8.0;
-    }
-    assert!(assigned(&scene).pair_count() as u64 > max_pairs);
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
     viewer
         .frame(&scene, Shading::BruteForce, Method::Refined, false)

@@ -22,54 +22,67 @@ use myriad::render::{LoopReport, PrepassTuner, RenderScene, Skips, StageTimes, V
 use myriad::scene::{Error, LightField, Lights, Model, Preset, Scene, ValidationReport};
 use static_assertions::assert_impl_all;
 
-// Frame state an engine keeps per view and hands to its job threads.
-assert_impl_all!(Assigner: Send, Sync);
-assert_impl_all!(LightLists: Send, Sync);
-assert_impl_all!(ActiveClusters: Send, Sync);
-assert_impl_all!(LightInput<'static>: Send, Sync, Copy);
-assert_impl_all!(SpotInput<'static>: Send, Sync, Copy);
-assert_impl_all!(AssignStats: Send, Sync);
-assert_impl_all!(Method: Send, Sync, Copy);
-assert_impl_all!(AppendStrategy: Send, Sync, Copy);
-assert_impl_all!(OutsideCalls: Send, Sync, Copy);
-assert_impl_all!(PacingLimits: Send, Sync);
-assert_impl_all!(Parallelism: Send, Sync);
-// The geometry every thread reads.
-assert_impl_all!(Camera: Send, Sync, Copy);
-assert_impl_all!(ClusterGrid: Send, Sync);
-assert_impl_all!(PlaneSets: Send, Sync);
-assert_impl_all!(DepthSlicing: Send, Sync, Copy);
-assert_impl_all!(OuterSlices: Send, Sync, Copy);
-assert_impl_all!(SpotCone: Send, Sync, Copy);
+/// Each type is `Send + Sync`, or this file does not build.
+macro_rules! send_and_sync {
+    ($($t:ty),* $(,)?) => { $(assert_impl_all!($t: Send, Sync);)* };
+}
+
+// Frame state an engine keeps per view and hands to its job threads, and its settings.
+send_and_sync!(
+    Assigner,
+    LightLists,
+    ActiveClusters,
+    AssignStats,
+    Method,
+    AppendStrategy
+);
+send_and_sync!(OutsideCalls, PacingLimits, Parallelism);
+// The inputs every thread reads: borrowed columns and the geometry, passed by value.
+send_and_sync!(
+    LightInput<'static>,
+    SpotInput<'static>,
+    Camera,
+    ClusterGrid,
+    PlaneSets
+);
+send_and_sync!(DepthSlicing, OuterSlices, SpotCone);
+assert_impl_all!(LightInput<'static>: Copy);
+assert_impl_all!(SpotInput<'static>: Copy);
+assert_impl_all!(Camera: Copy);
 // Scenes loaded on a streaming thread and handed to the frame.
-assert_impl_all!(Scene: Send, Sync);
-assert_impl_all!(Lights: Send, Sync);
-assert_impl_all!(Model: Send, Sync);
-assert_impl_all!(LightField: Send, Sync);
-assert_impl_all!(Preset: Send, Sync, Copy);
-assert_impl_all!(ValidationReport: Send, Sync);
+send_and_sync!(Scene, Lights, Model, LightField, Preset, ValidationReport);
 // The renderer and its resources, made on a loading thread and used on the render thread.
-assert_impl_all!(GpuContext: Send, Sync);
-assert_impl_all!(Renderer: Send, Sync);
-assert_impl_all!(GpuScene: Send, Sync);
-assert_impl_all!(SceneGeometry: Send, Sync);
-assert_impl_all!(GBuffer: Send, Sync);
-assert_impl_all!(HeadlessTarget: Send, Sync);
-assert_impl_all!(PassTimes: Send, Sync);
-assert_impl_all!(ShadingMode: Send, Sync, Copy);
+send_and_sync!(
+    GpuContext,
+    Renderer,
+    GpuScene,
+    SceneGeometry,
+    GBuffer,
+    HeadlessTarget
+);
+send_and_sync!(PassTimes, ShadingMode);
 // The facade's frame drivers.
-assert_impl_all!(Viewer: Send, Sync);
-assert_impl_all!(Skips: Send, Sync);
-assert_impl_all!(PrepassTuner: Send, Sync);
-assert_impl_all!(RenderScene: Send, Sync);
-assert_impl_all!(StageTimes: Send, Sync);
-assert_impl_all!(LoopReport: Send, Sync);
+send_and_sync!(
+    Viewer,
+    Skips,
+    PrepassTuner,
+    RenderScene,
+    StageTimes,
+    LoopReport
+);
 // Errors: `anyhow` and `Box<dyn Error + Send + Sync>` take only these.
-assert_impl_all!(Error: Send, Sync, std::error::Error);
-assert_impl_all!(GpuError: Send, Sync, std::error::Error);
-assert_impl_all!(InvalidFrame: Send, Sync, std::error::Error);
-assert_impl_all!(InvalidGrid: Send, Sync, std::error::Error);
-assert_impl_all!(CameraMatrixError: Send, Sync, std::error::Error);
+send_and_sync!(
+    Error,
+    GpuError,
+    InvalidFrame,
+    InvalidGrid,
+    CameraMatrixError
+);
+assert_impl_all!(Error: std::error::Error);
+assert_impl_all!(GpuError: std::error::Error);
+assert_impl_all!(InvalidFrame: std::error::Error);
+assert_impl_all!(InvalidGrid: std::error::Error);
+assert_impl_all!(CameraMatrixError: std::error::Error);
 
 /// Four engine threads (plain OS threads, outside any rayon pool, as a job system's are) each
 /// assign the same shared frame with an assigner of their own, three frames in a row, every
@@ -114,35 +127,30 @@ fn assigners_on_several_engine_threads_list_what_one_lists() {
 }
 
 /// An assigner and its lists built on one thread and moved to another carry on there: the
-/// second thread's frame reuses the first's storage and lists what a fresh assigner lists.
+/// second thread's frame reuses the first's storage and lists what the first thread's did.
 #[test]
 fn an_assigner_moved_to_another_thread_keeps_working() {
     let scene = Preset::Paper.generate(1000, 2);
     let input = myriad::light_input(&scene.lights);
+    let frame = |assigner: &mut Assigner, lists: &mut LightLists| {
+        assigner.assign(Method::Refined, &input, &scene.camera, &scene.grid, lists)
+    };
     let (mut assigner, mut lists) = (Assigner::new(), LightLists::new());
-    assigner.assign(
-        Method::Refined,
-        &input,
-        &scene.camera,
-        &scene.grid,
-        &mut lists,
-    );
-    let first = lists.clone();
-    let (assigner, lists) = std::thread::scope(|threads| {
+    frame(&mut assigner, &mut lists);
+    let (first, storage) = (lists.clone(), lists.indices.as_ptr());
+    let moved = std::thread::scope(|threads| {
         threads
             .spawn(move || {
-                assigner.assign(
-                    Method::Refined,
-                    &input,
-                    &scene.camera,
-                    &scene.grid,
-                    &mut lists,
-                );
-                (assigner, lists)
+                frame(&mut assigner, &mut lists);
+                lists
             })
             .join()
             .unwrap()
     });
-    drop(assigner);
-    assert!(lists == first, "the moved assigner listed other lists");
+    assert!(moved == first, "the moved assigner listed other lists");
+    assert_eq!(
+        moved.indices.as_ptr(),
+        storage,
+        "the lists were reallocated"
+    );
 }
