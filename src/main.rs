@@ -1,6 +1,8 @@
 //! The `myriad` command-line tool. Run without arguments for the main job; `myriad --help` lists
 //! the subcommands.
 
+#![forbid(unsafe_code)]
+
 mod cli;
 
 use clap::Parser;

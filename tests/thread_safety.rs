@@ -19,8 +19,11 @@ use myriad::gpu::{
     ShadingMode,
 };
 use myriad::render::{LoopReport, PrepassTuner, RenderScene, Skips, StageTimes, Viewer};
-use myriad::scene::{Error, LightField, Lights, Model, Preset, Scene, ValidationReport};
+use myriad::scene::{
+    Error, LightField, Lights, Model, Preset, ReplaceFilesError, Scene, ValidationReport,
+};
 use static_assertions::assert_impl_all;
+use std::sync::Barrier;
 
 /// Each type is `Send + Sync`, or this file does not build.
 macro_rules! send_and_sync {
@@ -73,20 +76,23 @@ send_and_sync!(
 // Errors: `anyhow` and `Box<dyn Error + Send + Sync>` take only these.
 send_and_sync!(
     Error,
+    ReplaceFilesError,
     GpuError,
     InvalidFrame,
     InvalidGrid,
     CameraMatrixError
 );
 assert_impl_all!(Error: std::error::Error);
+assert_impl_all!(ReplaceFilesError: std::error::Error);
 assert_impl_all!(GpuError: std::error::Error);
 assert_impl_all!(InvalidFrame: std::error::Error);
 assert_impl_all!(InvalidGrid: std::error::Error);
 assert_impl_all!(CameraMatrixError: std::error::Error);
 
-/// Four engine threads (plain OS threads, outside any rayon pool, as a job system's are) each
-/// assign the same shared frame with an assigner of their own, three frames in a row, every
-/// method that splits its work: each frame's lists equal one assigner's on the calling thread.
+/// Four engine threads (plain OS threads, outside any rayon pool, as a job system's are), let go
+/// together, each assign the same shared frame with an assigner of their own, three frames in a
+/// row, with each fast method (`exact` splits its work too, but is too slow for this): each
+/// frame's lists equal one assigner's on the calling thread.
 #[test]
 fn assigners_on_several_engine_threads_list_what_one_lists() {
     let scene = Preset::Uniform.generate(20_000, 5);
@@ -100,11 +106,13 @@ fn assigners_on_several_engine_threads_list_what_one_lists() {
             "{method:?}: the frame must be busy enough to interleave: {} pairs",
             stats.pairs
         );
+        let start = Barrier::new(4);
         std::thread::scope(|threads| {
             let runs: Vec<_> = (0..4)
                 .map(|_| {
                     threads.spawn(|| {
                         let (mut assigner, mut lists) = (Assigner::new(), LightLists::new());
+                        start.wait();
                         (0..3)
                             .map(|_| {
                                 assigner.assign(method, &input, camera, grid, &mut lists);
@@ -127,7 +135,7 @@ fn assigners_on_several_engine_threads_list_what_one_lists() {
 }
 
 /// An assigner and its lists built on one thread and moved to another carry on there: the
-/// second thread's frame reuses the first's storage and lists what the first thread's did.
+/// second thread's frame lists what the first thread's did, into the lists' same buffer.
 #[test]
 fn an_assigner_moved_to_another_thread_keeps_working() {
     let scene = Preset::Paper.generate(1000, 2);

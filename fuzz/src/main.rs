@@ -24,6 +24,8 @@
 //!   in 64 is a split frame instead: 512–1511 lights, grid ≤ 16×9×16, tasks on a three-worker
 //!   pool, spans bucketed by depth parts.
 
+#![forbid(unsafe_code)]
+
 #[path = "../../crates/assignment/tests/common/mod.rs"]
 mod common;
 

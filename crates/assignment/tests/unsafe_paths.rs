@@ -1,16 +1,23 @@
-//! Whole frames through the crate's two `unsafe` blocks, small enough for Miri: the atomic
-//! counters' shared index writes (`append.rs`, `SharedIndices`) and the type-erased region that
-//! calls from outside any pool share with their helper jobs (`fan_out.rs`, `ErasedRegion`).
+//! Whole frames through the crate's two `unsafe` abstractions, small enough for Miri: the atomic
+//! counters' shared index writes (`append.rs`, `SharedIndices`, reached by tasks filling in
+//! parallel on a pool: handed off or inside one) and the type-erased region that a call from
+//! outside any pool shares with its helper jobs (`fan_out.rs`, `ErasedRegion`, reached only by
+//! the default append joined from outside).
 //!
 //! Natively these frames take milliseconds and only repeat what `determinism.rs` and
 //! `outside_calls.rs` check at larger sizes. Their point is the interpreter, which checks every
-//! pointer use of those blocks for undefined behaviour and every cross-thread access for data
-//! races (a few minutes; README, "Reliability"):
+//! pointer use of those abstractions for undefined behaviour and every cross-thread access for
+//! data races (minutes; README, "Reliability"). Whether a helper job enters a region here is up
+//! to the scheduler; `fan_out`'s unit test `a_panicking_item_panics_the_caller` makes one take an
+//! item in every run, so run those too:
 //!
 //! ```text
-//! MIRIFLAGS="-Zmiri-tree-borrows -Zmiri-permissive-provenance -Zmiri-ignore-leaks" \
-//!     cargo +nightly miri test -p myriad-assignment --test unsafe_paths
+//! export MIRIFLAGS="-Zmiri-tree-borrows -Zmiri-permissive-provenance -Zmiri-ignore-leaks"
+//! cargo +nightly miri test -p myriad-assignment --test unsafe_paths   # 274 s
+//! cargo +nightly miri test -p myriad-assignment --lib fan_out          # 5 s
 //! ```
+//!
+//! (Times on the 2-core machine, 2026-11-30, after Miri's first build of the dependencies.)
 //!
 //! (Tree borrows and permissive provenance for crossbeam-epoch, which rayon's deques use and
 //! which breaks the stricter stacked-borrows model on its own; leaks because rayon's global pool
@@ -48,15 +55,17 @@ fn frame(
     lists
 }
 
-/// 700 points and spots on an 8×6×8 grid, split into tasks: with either append strategy, called
-/// from outside any pool (the caller beside its helpers, or handed off) and from inside a
-/// three-thread pool, the lists equal one thread's.
+/// 700 points and spots on an 8×6×8 grid, split into tasks, each frame's lists equal one
+/// thread's: the default append called from outside any pool (the caller beside its helpers, or
+/// handed off) and from inside a three-thread pool; the atomic counters handed off and inside
+/// the pool (from outside they are always handed off).
 #[test]
 fn split_frames_through_the_unsafe_blocks_list_what_one_thread_lists() {
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(3)
         .build_global();
-    // Under Miri just past the one-task limit (512 lights), on a small grid: 349 s as it is, where
+    assert_eq!(rayon::current_num_threads(), 3);
+    // Under Miri just past the one-task limit (512 lights), on a small grid: 274 s as it is, where
     // a release build takes milliseconds.
     let (lights, dims) = if cfg!(miri) {
         (520, UVec3::new(4, 3, 4))
@@ -89,23 +98,26 @@ fn split_frames_through_the_unsafe_blocks_list_what_one_thread_lists() {
             );
             lists
         });
-        for strategy in [
-            AppendStrategy::PartitionedByDepth,
-            AppendStrategy::AtomicCounters,
-        ] {
-            let join = frame(&scene, method, strategy, OutsideCalls::Join);
-            let hand_off = frame(&scene, method, strategy, OutsideCalls::HandOff);
-            let pooled = three.install(|| frame(&scene, method, strategy, OutsideCalls::Join));
-            for (how, lists) in [
-                ("joined", join),
-                ("handed off", hand_off),
-                ("pooled", pooled),
-            ] {
-                assert!(
-                    lists == reference,
-                    "{method}, {strategy:?}, {how}: the lists differ from one thread's"
-                );
-            }
+        let runs = [
+            (AppendStrategy::PartitionedByDepth, Some(OutsideCalls::Join)),
+            (
+                AppendStrategy::PartitionedByDepth,
+                Some(OutsideCalls::HandOff),
+            ),
+            (AppendStrategy::PartitionedByDepth, None),
+            (AppendStrategy::AtomicCounters, Some(OutsideCalls::HandOff)),
+            (AppendStrategy::AtomicCounters, None),
+        ];
+        for (strategy, outside) in runs {
+            let lists = match outside {
+                Some(calls) => frame(&scene, method, strategy, calls),
+                None => three.install(|| frame(&scene, method, strategy, OutsideCalls::Join)),
+            };
+            assert!(
+                lists == reference,
+                "{method}, {strategy:?}, {outside:?} (None: in a pool): the lists differ from one \
+                 thread's"
+            );
         }
     }
 }
