@@ -151,6 +151,17 @@ pub struct AssignStats {
     /// misses a light that moves past it for one frame, counted in
     /// [`beyond_far`](Self::beyond_far)). `None` when the grid reaches the camera's far plane.
     pub reach: Option<f32>,
+    /// In a frame whose camera sees nearer than the grid's near edge (`camera.near` below the
+    /// grid's near, as with a range fitted to the depth buffer): the lights in view that lie
+    /// wholly nearer than that edge, the near-side twin of [`beyond_far`](Self::beyond_far).
+    /// Pixels nearer than the grid's near read its first slice. Where the grid's outer slices
+    /// are [`OuterSlices::Open`] (the default) these lights are listed there and nothing is
+    /// missing; where they are [`OuterSlices::Closed`] they are culled (and counted in
+    /// [`culled`](Self::culled)), and their light is missing from any pixel nearer than the
+    /// grid, which a range fitted to the depth buffer has none of. 0 when the grid starts at the
+    /// camera's near plane (nothing is computed then). (Lights whose view-space sphere overflows
+    /// f32 are not counted.)
+    pub before_near: u32,
 }
 
 impl AssignStats {
@@ -506,6 +517,7 @@ impl Assigner {
             stats.rejected = counts.rejected;
             stats.culled = counts.culled;
             stats.beyond_far = counts.beyond_far;
+            stats.before_near = counts.before_near;
             stats.reach = counts.reach;
             stats.pairs = out.indices.len() as u64;
             stats.tasks = 1;
@@ -561,7 +573,7 @@ impl Assigner {
             },
             tan_half_fov,
             cull,
-            far_cull: sees_past(camera, grid).then(|| cull.with_far(camera.far)),
+            outside_cull: sees_outside(camera, grid).map(|(near, far)| cull.with_depths(near, far)),
         };
         let fan_out = if tasks > 1 { fan_out } else { FanOut::Serial };
         let gather = |(t, task): (usize, &mut CachePadded<TaskOutput>)| {
@@ -611,8 +623,9 @@ impl Assigner {
             stats.rejected += task.rejected;
             stats.culled += task.culled;
             stats.beyond_far += task.beyond_far;
+            stats.before_near += task.before_near;
         }
-        if ctx.far_cull.is_some() {
+        if sees_past(camera, grid) {
             stats.reach = Some(work.iter().map(|t| t.reach).fold(0.0, f32::max));
         }
         stats.pairs = pairs as u64;
@@ -626,6 +639,30 @@ impl Assigner {
 /// view: [`AssignStats::beyond_far`]).
 pub(crate) fn sees_past(camera: &Camera, grid: &ClusterGrid) -> bool {
     camera.far > grid.far()
+}
+
+/// Whether `camera` sees nearer than the near edge of `grid` (then lights can lie before the
+/// grid yet in view: [`AssignStats::before_near`]). A camera near that is not a positive number
+/// (a placeholder, which only a closed grid accepts) sees nothing there.
+pub(crate) fn sees_before(camera: &Camera, grid: &ClusterGrid) -> bool {
+    camera.near > 0.0 && camera.near < grid.near()
+}
+
+/// Where the camera sees past either depth edge of `grid`: the near and far of its view there,
+/// for the cull that counts the lights outside the grid ([`AssignStats::before_near`],
+/// [`AssignStats::beyond_far`]). Each side that the grid covers keeps the grid's own depth. The
+/// near is clamped as an open first slice's start is ([`ClusterGrid::first_slice_start`]), so
+/// that what an open grid lists before its near and what is counted there are the same lights.
+pub(crate) fn sees_outside(camera: &Camera, grid: &ClusterGrid) -> Option<(f32, f32)> {
+    let (before, past) = (sees_before(camera, grid), sees_past(camera, grid));
+    (before || past).then(|| {
+        let near = if before {
+            camera.near.max(ClusterGrid::MIN_NEAR)
+        } else {
+            grid.near()
+        };
+        (near, if past { camera.far } else { grid.far() })
+    })
 }
 
 /// One frame's inputs, as [`Assigner::assign_active`] received them (the grid by value: a pair

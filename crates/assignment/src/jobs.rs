@@ -53,11 +53,12 @@ pub(crate) struct FrameContext<'a> {
     pub slice_shift: u32,
     /// The cheap early cull's six planes.
     pub cull: FrustumCull,
-    /// The same cull with the camera's far plane, when the camera sees past the grid's far edge:
-    /// lights it keeps that lie wholly past the grid's far are counted as beyond the grid
-    /// ([`crate::AssignStats::beyond_far`]; `cull` keeps them too where the grid's outer slices
+    /// The same cull with the camera's own near and far plane, when the camera sees nearer or
+    /// farther than the grid's depth edges: lights it keeps that lie wholly past the grid's far
+    /// or before its near are counted ([`crate::AssignStats::beyond_far`],
+    /// [`crate::AssignStats::before_near`]; `cull` keeps them too where the grid's outer slices
     /// are open). `None` otherwise, and nothing is computed.
-    pub far_cull: Option<FrustumCull>,
+    pub outside_cull: Option<FrustumCull>,
 }
 
 /// The frustum's six planes as plain numbers, for the early cull: copied into each task so the
@@ -97,9 +98,9 @@ impl FrustumCull {
         }
     }
 
-    /// This cull with its far plane at `far` instead of the grid's.
-    pub fn with_far(self, far: f32) -> Self {
-        Self { far, ..self }
+    /// This cull with its near and far planes at `near` and `far` instead of the grid's.
+    pub fn with_depths(self, near: f32, far: f32) -> Self {
+        Self { near, far, ..self }
     }
 
     /// Whether the padded sphere may touch the frustum: the six plane tests of the paper's
@@ -181,9 +182,12 @@ pub(crate) struct TaskOutput {
     cone_columns: Vec<ConeColumn>,
     pub rejected: u32,
     pub culled: u32,
-    /// Culled lights the camera's far plane would keep (counted when `far_cull` is set).
+    /// Lights `outside_cull` keeps that lie wholly past the grid's far (counted when it is set).
     pub beyond_far: u32,
-    /// The farthest depth (padded sphere's far side) of the lights `far_cull` keeps; 0 for none.
+    /// Lights `outside_cull` keeps that lie wholly before the grid's near.
+    pub before_near: u32,
+    /// The farthest depth (padded sphere's far side) of the lights `outside_cull` keeps; 0 for
+    /// none.
     pub reach: f32,
 }
 
@@ -199,6 +203,7 @@ impl TaskOutput {
         self.rejected = 0;
         self.culled = 0;
         self.beyond_far = 0;
+        self.before_near = 0;
         self.reach = 0.0;
         self.gaps
             .resize(geometry::refine_scratch_len(ctx.grid.dims()), 0.0);
@@ -355,11 +360,12 @@ fn run_blocks<const B: usize>(
                 sound += fine as u32;
             }
         }
-        // Where the camera sees past the grid, which lights the grid's far plane alone culls, and
-        // how far the lights in view reach: a pass of its own, branch-free, only in such frames.
-        if let Some(wide) = &ctx.far_cull {
-            let grid_far = ctx.grid.far();
-            count_beyond_far(wide, grid_far, &ok[..n], [&vx, &vy, &vd, &vr], n, out);
+        // Where the camera sees past the grid's depth edges, which lights the grid's near or far
+        // plane alone culls, and how far the lights in view reach: a pass of its own,
+        // branch-free, only in such frames.
+        if let Some(wide) = &ctx.outside_cull {
+            let edges = (ctx.grid.near(), ctx.grid.far());
+            count_outside_grid(wide, edges, &ok[..n], [&vx, &vy, &vd, &vr], n, out);
         }
         // Phase 0c, only for a block with a light that failed the test above: an invalid light is
         // rejected (counted); a valid one whose view-space sphere overflowed f32 (coordinates and
@@ -481,17 +487,17 @@ fn run_blocks<const B: usize>(
     }
 }
 
-/// The lights of a block that `wide` (the cull with the camera's far plane) keeps and that lie
-/// wholly past `grid_far` (the lights a closed grid's cull drops), and how far the ones it keeps
-/// reach, into `out`. A function of its
+/// The lights of a block that `wide` (the cull with the camera's near and far planes) keeps and
+/// that lie wholly past `grid_far` or wholly before `grid_near` (the lights a closed grid's cull
+/// drops), and how far the ones it keeps reach, into `out`. A function of its
 /// own, never inlined: written in `run_blocks`, the frames that never run it (a grid out to the
 /// camera's far) ran 3.5% slower on `uniform` 100k (`myriad bench --threads 1`, interleaved).
 /// Where it runs it costs 0–5% of a `uniform` 100k frame on one thread (`cargo bench --bench
 /// assignment -- far_edge`, two runs).
 #[inline(never)]
-fn count_beyond_far<const B: usize>(
+fn count_outside_grid<const B: usize>(
     wide: &FrustumCull,
-    grid_far: f32,
+    (grid_near, grid_far): (f32, f32),
     ok: &[bool],
     [vx, vy, vd, vr]: [&[f32; B]; 4],
     n: usize,
@@ -500,7 +506,7 @@ fn count_beyond_far<const B: usize>(
     // The reach as the bits of a float that is never negative (a kept light's far side is past
     // the near plane): their order is the floats' own, and an integer maximum vectorises where
     // `f32::max` (NaN-aware) does not.
-    let (mut beyond, mut reach) = (0u32, out.reach.to_bits());
+    let (mut beyond, mut before, mut reach) = (0u32, 0u32, out.reach.to_bits());
     let spheres = vx[..n]
         .iter()
         .zip(&vy[..n])
@@ -508,9 +514,11 @@ fn count_beyond_far<const B: usize>(
     for (&ok, ((&x, &y), (&d, &r))) in ok.iter().zip(spheres) {
         let seen = ok & wide.may_touch(x, y, d, r);
         beyond += (seen & (d - r > grid_far)) as u32;
+        before += (seen & (d + r < grid_near)) as u32;
         reach = reach.max(if seen { (d + r).to_bits() } else { 0 });
     }
     out.beyond_far += beyond;
+    out.before_near += before;
     out.reach = f32::from_bits(reach);
 }
 

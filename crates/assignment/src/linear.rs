@@ -29,6 +29,7 @@ pub(crate) struct LinearCounts {
     pub rejected: u32,
     pub culled: u32,
     pub beyond_far: u32,
+    pub before_near: u32,
     pub reach: Option<f32>,
 }
 
@@ -67,10 +68,11 @@ pub(crate) fn assign_linear(
     let (xn, yn) = (&scratch.x_normals, &scratch.y_normals);
     let (nx, ny) = (grid.dims().x, grid.dims().y);
     let (mut rejected, mut culled) = (0, 0);
-    // Where the camera sees past the grid: lights its far plane alone culls, and the lights'
-    // reach (see `AssignStats::beyond_far`), with the same padded spheres as the tasks' cull.
-    let camera_far = crate::assigner::sees_past(camera, grid).then_some(camera.far);
-    let (mut beyond_far, mut reach) = (0, 0f32);
+    // Where the camera sees past the grid's depth edges: lights its near or far plane alone
+    // culls, and the lights' reach (see `AssignStats::beyond_far`), with the same padded spheres
+    // as the tasks' cull.
+    let camera_depths = crate::assigner::sees_outside(camera, grid);
+    let (mut beyond_far, mut before_near, mut reach) = (0, 0, 0f32);
     for g in 0..lights.len() {
         let p = Vec3::new(lights.x[g], lights.y[g], lights.z[g]);
         let r = lights.radius[g];
@@ -116,18 +118,19 @@ pub(crate) fn assign_linear(
             continue;
         }
         // Outer frustum: all six planes.
-        let outside = xn[0].dot(c) < -r
+        let sideways = xn[0].dot(c) < -r
             || xn[nx as usize].dot(c) > r
             || yn[0].dot(c) > r
             || yn[ny as usize].dot(c) < -r;
-        let z = linear_z(dc, r, &planes.z_depths).filter(|_| !outside);
-        if let Some(far) = camera_far
-            && !outside
-            && dc + r >= planes.z_depths[0]
+        let z = linear_z(dc, r, &planes.z_depths).filter(|_| !sideways);
+        if let Some((near, far)) = camera_depths
+            && !sideways
+            && dc + r >= near
             && dc - r <= far
         {
             reach = reach.max(dc + r);
             beyond_far += u32::from(dc - r > grid.far());
+            before_near += u32::from(dc + r < grid.near());
         }
         let Some(z) = z else {
             culled += 1;
@@ -183,7 +186,8 @@ pub(crate) fn assign_linear(
         rejected,
         culled,
         beyond_far,
-        reach: camera_far.map(|_| reach),
+        before_near,
+        reach: crate::assigner::sees_past(camera, grid).then_some(reach),
     })
 }
 

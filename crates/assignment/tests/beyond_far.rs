@@ -3,42 +3,68 @@
 //! identically by every method and thread count, and `AssignStats::reach` is the far of a grid
 //! that has none of them beyond it. An engine audit found those lights silently missing from
 //! the pixels beyond the grid (which read its last slice); a grid's last slice is now open by
-//! default (`OuterSlices::Open`) and lists them, and a closed one culls them.
+//! default (`OuterSlices::Open`) and lists them, and a closed one culls them. The same holds on
+//! the near side, for a grid that starts beyond the camera's near plane
+//! (`AssignStats::before_near`).
 
 mod common;
 
 use common::*;
 use glam::{UVec3, Vec3};
 use myriad_assignment::{AssignStats, Assigner, LightLists, Method};
-use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices};
+use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing, OuterSlices, RADIUS_PAD};
 use rand::{Rng, SeedableRng};
+use std::ops::Range;
 
-/// `n` point lights well inside the view's sides at depths 1..150 (radii 0.3..3), none within
-/// 0.05 of `grid_far` with its sphere's near side, so that the padding cannot move a light
-/// across the grid's far plane. Returns the lights and how many lie wholly past `grid_far`, and
-/// the farthest depth any of them reaches.
-fn lights_in_view(camera: &Camera, n: usize, grid_far: f32, seed: u64) -> (Columns, u32, f32) {
+/// What [`lights_in_view`] drew: the lights, how many lie wholly past the grid's far and wholly
+/// before its near, and the farthest depth any of them reaches.
+struct Drawn {
+    lights: Columns,
+    beyond: u32,
+    before: u32,
+    reach: f32,
+}
+
+/// `n` point lights well inside the view's sides at `depths` (radii `radii`), none within 0.05 of
+/// `grid`'s far plane with its sphere's near side nor of its near plane with its far side, so
+/// that the padding cannot move a light across either.
+fn lights_in_view(
+    camera: &Camera,
+    n: usize,
+    (depths, radii): (Range<f32>, Range<f32>),
+    grid: &ClusterGrid,
+    seed: u64,
+) -> Drawn {
     let (right, up, forward) = view_basis(camera);
     let (tx, ty) = camera.tan_half_fov().into();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let mut lights = Columns::default();
-    let (mut beyond, mut reach) = (0, 0f32);
-    while lights.len() < n {
-        let depth = rng.random_range(1.0..150.0f32);
-        let r = rng.random_range(0.3..3.0f32);
-        if (depth - r - grid_far).abs() < 0.05 {
+    let mut drawn = Drawn {
+        lights: Columns::default(),
+        beyond: 0,
+        before: 0,
+        reach: 0.0,
+    };
+    while drawn.lights.len() < n {
+        let depth = rng.random_range(depths.clone());
+        let r = rng.random_range(radii.clone());
+        if (depth - r - grid.far()).abs() < 0.05 || (depth + r - grid.near()).abs() < 0.05 {
             continue;
         }
         // Within half the view's width and height: every side plane keeps the whole sphere
         // when it is this deep, and at least partly when it is shallower.
         let x = rng.random_range(-0.5..0.5) * tx * depth;
         let y = rng.random_range(-0.5..0.5) * ty * depth;
-        lights.push(camera.position + forward * depth + right * x + up * y, r);
-        beyond += u32::from(depth - r > grid_far);
-        reach = reach.max(depth + r);
+        let p = camera.position + forward * depth + right * x + up * y;
+        drawn.lights.push(p, r);
+        drawn.beyond += u32::from(depth - r > grid.far());
+        drawn.before += u32::from(depth + r < grid.near());
+        drawn.reach = drawn.reach.max(depth + r);
     }
-    (lights, beyond, reach)
+    drawn
 }
+
+/// Depths and radii of lights reaching far past a grid out to 40.
+const FAR_FIELD: (Range<f32>, Range<f32>) = (1.0..150.0, 0.3..3.0);
 
 fn camera(far: f32) -> Camera {
     Camera::new(
@@ -91,7 +117,8 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
         let last_slice = grid.dims().x * grid.dims().y * (grid.dims().z - 1);
         // 300 lights run as one task; 6000 as several (tasks count their own and are summed).
         for (n, seed) in [(300, 1), (6000, 2)] {
-            let (mut lights, beyond, reach) = lights_in_view(&camera, n, grid.far(), seed);
+            let drawn = lights_in_view(&camera, n, FAR_FIELD, &grid, seed);
+            let (mut lights, beyond, reach) = (drawn.lights, drawn.beyond, drawn.reach);
             // Invalid lights past the grid are rejected, never counted as beyond it (a radius
             // of 0 or −1 at a finite position passed the camera's cull unless checked).
             let (_, _, forward) = view_basis(&camera);
@@ -164,7 +191,7 @@ fn lights_past_the_grid_but_in_view_are_counted_by_every_method_and_reach_covers
 fn a_grid_that_reaches_the_cameras_far_counts_nothing_beyond_it() {
     let camera = camera(60.0);
     let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 60.0);
-    let (lights, _, _) = lights_in_view(&camera, 2000, grid.far(), 3);
+    let lights = lights_in_view(&camera, 2000, FAR_FIELD, &grid, 3).lights;
     for method in Method::ALL {
         let stats = assign(
             method,
@@ -175,7 +202,11 @@ fn a_grid_that_reaches_the_cameras_far_counts_nothing_beyond_it() {
             &mut LightLists::new(),
         );
         assert!(stats.culled > 0, "{method}: lights past the camera's far");
-        assert_eq!((stats.beyond_far, stats.reach), (0, None), "{method}");
+        assert_eq!(
+            (stats.beyond_far, stats.before_near, stats.reach),
+            (0, 0, None),
+            "{method}"
+        );
     }
 }
 
@@ -184,8 +215,9 @@ fn a_grid_that_reaches_the_cameras_far_counts_nothing_beyond_it() {
 #[test]
 fn spots_and_thread_counts_give_the_same_counts() {
     let camera = camera(f32::INFINITY);
-    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 40.0);
-    let (mut lights, _, _) = lights_in_view(&camera, 3000, grid.far(), 4);
+    // Nearer than the camera sees too, so that both counts are compared.
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 4.0, 40.0);
+    let mut lights = lights_in_view(&camera, 3000, (0.2..150.0, 0.1..3.0), &grid, 4).lights;
     let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
     for i in 0..lights.len() {
         let dir = random_dir(&mut rng);
@@ -201,6 +233,7 @@ fn spots_and_thread_counts_give_the_same_counts() {
         &mut LightLists::new(),
     );
     assert!(reference.beyond_far > 100, "{reference:?}");
+    assert!(reference.before_near > 10, "{reference:?}");
     for threads in [1, 2, 3] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -219,6 +252,7 @@ fn spots_and_thread_counts_give_the_same_counts() {
             });
             let what = format!("{method}, {threads} threads");
             assert_eq!(stats.beyond_far, reference.beyond_far, "{what}");
+            assert_eq!(stats.before_near, reference.before_near, "{what}");
             assert_eq!(stats.reach, reference.reach, "{what}");
         }
     }
@@ -259,6 +293,120 @@ fn a_light_touching_the_far_plane_is_not_beyond_it() {
             );
             let what = format!("{method}, {outer:?}: {stats:?}");
             assert_eq!((stats.beyond_far, stats.culled), (0, 0), "{what}");
+        }
+    }
+}
+
+/// The near-side twin of the test above: a light whose padded sphere ends exactly on the grid's
+/// near plane touches the first slice, so it is not before the grid.
+#[test]
+fn a_light_touching_the_near_plane_is_not_before_it() {
+    let camera = axis_camera(0.1, 60.0);
+    let near = 5.0;
+    let depth = 2.0f32;
+    // The padded radius as the scalar build rounds it, and as the AVX2 build's fused
+    // multiply-add does: the radius must land exactly on the plane in both.
+    let far_side = |r: f32| depth + myriad_cluster_math::pad_radius(0.0, 0.0, depth, r);
+    let fused = |r: f32| depth + RADIUS_PAD.mul_add(depth + r, r);
+    let mut r = 3.0f32;
+    while far_side(r) < near {
+        r = r.next_up();
+    }
+    while far_side(r) > near {
+        r = r.next_down();
+    }
+    while far_side(r) == near && fused(r) != near {
+        r = r.next_down();
+    }
+    assert_eq!(
+        (far_side(r), fused(r)),
+        (near, near),
+        "no radius lands exactly on the plane"
+    );
+    let mut lights = Columns::default();
+    lights.push(Vec3::new(0.0, 0.0, -depth), r);
+    // And one a little smaller, wholly before the grid: counted, and culled by a closed grid.
+    lights.push(Vec3::new(0.0, 0.0, -depth), r * 0.9999);
+    for outer in [OuterSlices::Open, OuterSlices::Closed] {
+        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, near, 60.0)
+            .with_outer_slices(outer);
+        for method in Method::ALL {
+            let stats = assign(
+                method,
+                &lights,
+                false,
+                &camera,
+                &grid,
+                &mut LightLists::new(),
+            );
+            let what = format!("{method}, {outer:?}: {stats:?}");
+            let culled = u32::from(outer == OuterSlices::Closed);
+            assert_eq!((stats.before_near, stats.culled), (1, culled), "{what}");
+        }
+    }
+}
+
+/// A camera that sees nearer than the grid (a depth range fitted to the depth buffer, a grid
+/// starting at 5 m): the lights wholly nearer than the grid's near are counted
+/// (`AssignStats::before_near`) by every method, listed in the first slice only where it is
+/// open and culled where it is closed; with the far side seen too, both counts are right.
+#[test]
+fn lights_before_the_grid_but_in_view_are_counted_by_every_method() {
+    for (camera_far, grid_far) in [(60.0, 60.0), (f32::INFINITY, 40.0)] {
+        for edge in [OuterSlices::Open, OuterSlices::Closed] {
+            let camera = camera(camera_far);
+            let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 5.0, grid_far)
+                .with_outer_slices(edge);
+            let first_slice = grid.dims().x * grid.dims().y;
+            for (n, seed) in [(300, 6), (6000, 7)] {
+                let drawn = lights_in_view(&camera, n, (0.2..50.0, 0.05..2.0), &grid, seed);
+                let mut lights = drawn.lights;
+                // Invalid lights before the grid are rejected, never counted.
+                let (_, _, forward) = view_basis(&camera);
+                for r in [0.0, -1.0, f32::NAN] {
+                    lights.push(camera.position + forward * 1.0, r);
+                }
+                assert!(drawn.before > n as u32 / 20, "{}", drawn.before);
+                assert!(drawn.beyond > 0 || grid_far == camera_far);
+                for method in Method::ALL {
+                    let mut lists = LightLists::new();
+                    let stats = assign(method, &lights, false, &camera, &grid, &mut lists);
+                    let what = format!("{method}, far {camera_far}, {edge:?}, {n} lights");
+                    assert_eq!(stats.rejected, 3, "{what}");
+                    assert_eq!(stats.before_near, drawn.before, "{what}");
+                    assert_eq!(stats.beyond_far, drawn.beyond, "{what}");
+                    assert_eq!(stats.reach.is_some(), camera_far > grid_far, "{what}");
+                    let mut listed_before = 0;
+                    for c in 0..grid.cluster_count() {
+                        for &l in lists.lights_of(c) {
+                            let p = Vec3::new(
+                                lights.x[l as usize],
+                                lights.y[l as usize],
+                                lights.z[l as usize],
+                            );
+                            let depth = (p - camera.position).dot(forward);
+                            if depth + lights.radius[l as usize] < grid.near() - 0.01 {
+                                assert!(
+                                    c < first_slice as usize,
+                                    "{what}: light {l} before the grid listed in cluster {c}"
+                                );
+                                listed_before += 1;
+                            }
+                        }
+                    }
+                    match edge {
+                        OuterSlices::Open => {
+                            assert!(listed_before >= drawn.before, "{what}: {listed_before}");
+                            assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}");
+                        }
+                        OuterSlices::Closed => {
+                            assert_eq!(listed_before, 0, "{what}");
+                            let outside = drawn.before + drawn.beyond;
+                            assert!(stats.culled >= outside, "{what}: {stats:?}");
+                        }
+                    }
+                }
+            }
         }
     }
 }

@@ -48,7 +48,7 @@ fn context<'a>(
             near: camera.near,
             far: camera.far,
         },
-        far_cull: None,
+        outside_cull: None,
     }
 }
 

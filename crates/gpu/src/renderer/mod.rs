@@ -56,8 +56,8 @@ pub struct FrameDesc<'a> {
     /// The grid the lists were built for (its depth range may be fitted, narrower than the
     /// camera's; pixels nearer than its near read its first slice and pixels beyond its far its
     /// last, which list the lights out there unless the grid is `OuterSlices::Closed`: see
-    /// `myriad_cluster_math::OuterSlices` and the assignment's `AssignStats::beyond_far` and
-    /// `reach`).
+    /// `myriad_cluster_math::OuterSlices` and the assignment's `AssignStats::beyond_far`,
+    /// `before_near` and `reach`).
     pub grid: &'a ClusterGrid,
     /// Which lights each pixel visits.
     pub mode: ShadingMode,
