@@ -100,14 +100,12 @@ pub(crate) fn may_touch_frustum_f64(
 /// radius of the cylinder that bounds the sphere's part inside the band.
 #[inline]
 pub(crate) fn band_radius(dc: f32, r: f32, da: f32, db: f32) -> f32 {
-    let dist = if dc < da {
-        da - dc
-    } else if dc > db {
-        dc - db
-    } else {
-        return r;
-    };
-    ((r - dist).max(0.0) * (r + dist)).sqrt()
+    // Selects, not branches: the z phase's pass over a block vectorises. Inside the band the
+    // cut is computed and thrown away (it may be NaN there).
+    let (before, past) = (dc < da, dc > db);
+    let dist = if before { da - dc } else { dc - db };
+    let cut = ((r - dist).max(0.0) * (r + dist)).sqrt();
+    if before | past { cut } else { r }
 }
 
 /// Slope range `[min, max]` of the points `(x, d)` with `x ∈ [lo, hi]`, `d ∈ [da, db]`, `da > 0`.

@@ -8,7 +8,7 @@
 
 use crate::geometry::{self, ClusterBox, ZRange};
 use crate::profiling::profile_span;
-use crate::search::{self, FramePlanes};
+use crate::search::{self, FramePlanes, SliceCoordinate, SliceGuesser, Slicing};
 
 /// Lights per SoA block inside a task of few lights (a `paper` frame's tasks hold ~125).
 pub(crate) const BLOCK: usize = 256;
@@ -137,11 +137,34 @@ impl<const B: usize> Block<B> {
     /// Depth band, the widest cross-section inside it, then the slices.
     #[inline(always)]
     fn z_phase(&mut self, n: usize, planes: &FramePlanes<'_>) {
+        // The pass is built once per slicing: a `match` on it inside the loop kept the loop
+        // scalar.
+        match planes.slicing() {
+            Slicing::Linear(guesser) => self.z_pass(n, planes, guesser),
+            Slicing::Log(guesser) => self.z_pass(n, planes, guesser),
+        }
+        for_each_searched(&mut self.alive, &self.exact, n, |b| {
+            self.k0[b] = planes.first_slice_exact(self.da[b], self.guess0[b], false);
+            self.k1[b] = planes.slice_exact(self.db[b], self.guess1[b], false);
+            true
+        });
+    }
+
+    /// The z phase's arithmetic pass: branch-free, every number it reads copied into locals
+    /// first (read through `planes` inside the loop they would be reloaded after every store:
+    /// the compiler cannot tell the block's columns from the plane vectors), so it vectorises.
+    #[inline(always)]
+    fn z_pass<C: SliceCoordinate>(
+        &mut self,
+        n: usize,
+        planes: &FramePlanes<'_>,
+        guesser: SliceGuesser<C>,
+    ) {
         let z = &planes.sets.z_depths;
         let (near, far) = (z[0], z[z.len() - 1]);
-        // Read once: inside the loop it would be reloaded after every store (the compiler cannot
-        // tell the block's columns from the plane vectors), which keeps the loop scalar.
         let slices = z.len() as u32 - 1;
+        // `b < n <= B`: no bounds check left in the loop to keep it scalar.
+        let n = n.min(B);
         for b in 0..n {
             let (dc, r) = (self.dc[b], self.rad[b]);
             let da = (dc - r).max(near);
@@ -150,19 +173,14 @@ impl<const B: usize> Block<B> {
             self.da[b] = da;
             self.db[b] = db;
             self.band_r[b] = geometry::band_radius(dc, r, da, db);
-            let (guess0, exact0) = planes.slice_guess(da);
-            let (guess1, exact1) = planes.slice_guess(db);
+            let (guess0, exact0) = guesser.guess(da);
+            let (guess1, exact1) = guesser.guess(db);
             self.guess0[b] = guess0;
             self.guess1[b] = guess1;
             self.exact[b] = exact0 & exact1;
             self.k0[b] = search::first_slice_of_guess(guess0, slices);
             self.k1[b] = search::slice_of_guess(guess1, slices);
         }
-        for_each_searched(&mut self.alive, &self.exact, n, |b| {
-            self.k0[b] = planes.first_slice_exact(self.da[b], self.guess0[b], false);
-            self.k1[b] = planes.slice_exact(self.db[b], self.guess1[b], false);
-            true
-        });
     }
 
     /// Slope range across the screen's x axis, then the tile columns.

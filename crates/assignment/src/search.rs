@@ -117,7 +117,7 @@ pub(crate) fn slice_of_guess(guess: u32, slices: u32) -> u32 {
 }
 
 /// [`FramePlanes::first_slice_exact`]'s answer in a grid of `slices` when `guess` (of
-/// [`FramePlanes::slice_guess`]) is exact: one edge fewer lies below a band's start than the
+/// [`SliceGuesser::guess`]) is exact: one edge fewer lies below a band's start than the
 /// guess counts (branch-free).
 #[inline]
 pub(crate) fn first_slice_of_guess(guess: u32, slices: u32) -> u32 {
@@ -139,15 +139,78 @@ fn log2_approx(x: f32) -> f32 {
 /// How to guess a depth's slice.
 #[derive(Clone, Copy, Debug)]
 enum SliceGuess {
-    /// `t = (d − n)·scale`.
-    Linear { near: f32, scale: f32 },
-    /// `t = offset + (log₂ d − log₂ start)·scale` for `d ≥ start`, else 0.
-    Log {
-        start: f32,
-        log2_start: f32,
-        scale: f32,
-        offset: f32,
-    },
+    Linear(LinearSlices),
+    Log(LogSlices),
+}
+
+/// A slicing's continuous slice coordinate of a depth: edge `k` of the grid sits near `k`.
+///
+/// One type per slicing, so that the z phase's pass over a block is built once for each (see
+/// [`FramePlanes::slicing`]) with no `match` on the slicing inside its loop.
+pub(crate) trait SliceCoordinate: Copy {
+    fn of(&self, d: f32) -> f32;
+}
+
+/// `t = (d − n)·scale`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LinearSlices {
+    near: f32,
+    scale: f32,
+}
+
+impl SliceCoordinate for LinearSlices {
+    #[inline(always)]
+    fn of(&self, d: f32) -> f32 {
+        (d - self.near) * self.scale
+    }
+}
+
+/// `t = offset + (log₂ d − log₂ start)·scale` for `d ≥ start`, else 0.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LogSlices {
+    start: f32,
+    log2_start: f32,
+    scale: f32,
+    offset: f32,
+}
+
+impl SliceCoordinate for LogSlices {
+    #[inline(always)]
+    fn of(&self, d: f32) -> f32 {
+        // Both sides computed and one selected, so that a pass over many depths vectorises.
+        let t = self.offset + (log2_approx(d) - self.log2_start) * self.scale;
+        if d < self.start { 0.0 } else { t }
+    }
+}
+
+/// A frame's slice guess for one slicing, with the two numbers of the frame it also reads copied
+/// out: a pass over a block holds it in locals and reads nothing else per light.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SliceGuesser<C> {
+    coordinate: C,
+    /// The sets' depth count (slices + 1).
+    edges: usize,
+    /// [`FramePlanes`]' `z_margin`.
+    margin: f32,
+}
+
+impl<C: SliceCoordinate> SliceGuesser<C> {
+    /// A guess of the partition point of `d` among the depths, and whether it is provably exact
+    /// ([`exact_margin`]). Branch-free.
+    #[inline(always)]
+    pub fn guess(&self, d: f32) -> (u32, bool) {
+        let t = self.coordinate.of(d);
+        (
+            clamp_index(t + 1.0, self.edges) as u32,
+            clear_of_planes(t, self.margin),
+        )
+    }
+}
+
+/// A frame's slice guess, as the type of its slicing ([`FramePlanes::slicing`]).
+pub(crate) enum Slicing {
+    Linear(SliceGuesser<LinearSlices>),
+    Log(SliceGuesser<LogSlices>),
 }
 
 /// The plane sets of one frame plus what is needed to guess positions in them.
@@ -175,26 +238,28 @@ impl<'a> FramePlanes<'a> {
         let ty = sets.y_slopes[0];
         let (n, f, z) = (grid.near(), grid.far(), d.z as f32);
         let slice = match grid.slicing() {
-            DepthSlicing::Linear => SliceGuess::Linear {
+            DepthSlicing::Linear => SliceGuess::Linear(LinearSlices {
                 near: n,
                 scale: z / (f - n),
-            },
-            DepthSlicing::Log => SliceGuess::Log {
+            }),
+            DepthSlicing::Log => SliceGuess::Log(LogSlices {
                 start: n,
                 log2_start: n.log2(),
                 scale: z / (f / n).log2(),
                 offset: 0.0,
-            },
-            DepthSlicing::LogWithNearSlice { first_slice_depth } if d.z > 1 => SliceGuess::Log {
-                start: first_slice_depth,
-                log2_start: first_slice_depth.log2(),
-                scale: (z - 1.0) / (f / first_slice_depth).log2(),
-                offset: 1.0,
-            },
-            DepthSlicing::LogWithNearSlice { .. } => SliceGuess::Linear {
+            }),
+            DepthSlicing::LogWithNearSlice { first_slice_depth } if d.z > 1 => {
+                SliceGuess::Log(LogSlices {
+                    start: first_slice_depth,
+                    log2_start: first_slice_depth.log2(),
+                    scale: (z - 1.0) / (f / first_slice_depth).log2(),
+                    offset: 1.0,
+                })
+            }
+            DepthSlicing::LogWithNearSlice { .. } => SliceGuess::Linear(LinearSlices {
                 near: n,
                 scale: z / (f - n),
-            },
+            }),
         };
         let mut planes = Self {
             sets,
@@ -242,13 +307,13 @@ impl<'a> FramePlanes<'a> {
         let ulp = |v: f32| v.next_up() - v;
         let usable = |v: f32| v > 0.0 && v.is_finite();
         match self.slice {
-            SliceGuess::Linear { scale, .. } if usable(scale) => stray,
-            SliceGuess::Log {
+            SliceGuess::Linear(LinearSlices { scale, .. }) if usable(scale) => stray,
+            SliceGuess::Log(LogSlices {
                 start,
                 log2_start,
                 scale,
                 ..
-            } if usable(scale) && start >= f32::MIN_POSITIVE && log2_start.is_finite() => {
+            }) if usable(scale) && start >= f32::MIN_POSITIVE && log2_start.is_finite() => {
                 // Rounding of the three operations after the log (each within an ulp of the
                 // largest coordinate, about `Z`) and of `log₂ start` itself.
                 let rounding = 4.0 * ulp(depths.len() as f32 + 1.0)
@@ -280,19 +345,27 @@ impl<'a> FramePlanes<'a> {
     #[inline]
     fn slice_coordinate(&self, d: f32) -> f32 {
         match self.slice {
-            SliceGuess::Linear { near, scale } => (d - near) * scale,
-            SliceGuess::Log {
-                start,
-                log2_start,
-                scale,
-                offset,
-            } => {
-                if d < start {
-                    0.0
-                } else {
-                    offset + (log2_approx(d) - log2_start) * scale
-                }
-            }
+            SliceGuess::Linear(c) => c.of(d),
+            SliceGuess::Log(c) => c.of(d),
+        }
+    }
+
+    /// The frame's slice guess as the type of its slicing, for a pass over many depths (the z
+    /// phase's, which runs once per slicing and so vectorises).
+    #[inline]
+    pub fn slicing(&self) -> Slicing {
+        let (edges, margin) = (self.sets.z_depths.len(), self.z_margin);
+        match self.slice {
+            SliceGuess::Linear(coordinate) => Slicing::Linear(SliceGuesser {
+                coordinate,
+                edges,
+                margin,
+            }),
+            SliceGuess::Log(coordinate) => Slicing::Log(SliceGuesser {
+                coordinate,
+                edges,
+                margin,
+            }),
         }
     }
 
@@ -305,13 +378,12 @@ impl<'a> FramePlanes<'a> {
 
     /// Branch-free first half of `Self::slice_of` (a test helper): a guess of the partition
     /// point, and whether it is provably exact ([`exact_margin`]).
-    #[inline]
+    #[cfg(test)]
     pub fn slice_guess(&self, d: f32) -> (u32, bool) {
-        let t = self.slice_coordinate(d);
-        (
-            clamp_index(t + 1.0, self.sets.z_depths.len()) as u32,
-            clear_of_planes(t, self.z_margin),
-        )
+        match self.slicing() {
+            Slicing::Linear(guesser) => guesser.guess(d),
+            Slicing::Log(guesser) => guesser.guess(d),
+        }
     }
 
     /// Second half of `Self::slice_of` (a test helper): the exact slice from any guess,
@@ -650,8 +722,8 @@ mod tests {
             let sets = PlaneSets::new(&cam, &grid);
             let fp = FramePlanes::new(&sets, &grid);
             let log_error = match fp.slice {
-                SliceGuess::Log { scale, .. } => 2.0 * scale * LOG2_APPROX_ERROR,
-                SliceGuess::Linear { .. } => 0.0,
+                SliceGuess::Log(LogSlices { scale, .. }) => 2.0 * scale * LOG2_APPROX_ERROR,
+                SliceGuess::Linear(_) => 0.0,
             };
             assert!(
                 fp.z_margin >= log_error + slack,
