@@ -296,14 +296,24 @@ mod tests {
 
     #[test]
     fn block_passes_equal_the_per_light_function() {
-        // Both widths, and a block filled only in part (the phases run over the first `n`).
-        block_passes_match::<BLOCK>(BLOCK);
-        block_passes_match::<BLOCK>(37);
-        block_passes_match::<LARGE_BLOCK>(LARGE_BLOCK);
-        block_passes_match::<LARGE_BLOCK>(LARGE_BLOCK - 3);
+        // Both widths, and a block filled only in part (the phases run over the first `n`), for
+        // every slicing: the z pass is built once per slicing (`Slicing`).
+        let slicings = [
+            DepthSlicing::Log,
+            DepthSlicing::Linear,
+            DepthSlicing::LogWithNearSlice {
+                first_slice_depth: 2.0,
+            },
+        ];
+        for slicing in slicings {
+            block_passes_match::<BLOCK>(BLOCK, slicing);
+            block_passes_match::<BLOCK>(37, slicing);
+            block_passes_match::<LARGE_BLOCK>(LARGE_BLOCK, slicing);
+            block_passes_match::<LARGE_BLOCK>(LARGE_BLOCK - 3, slicing);
+        }
     }
 
-    fn block_passes_match<const B: usize>(n: usize) {
+    fn block_passes_match<const B: usize>(n: usize, slicing: DepthSlicing) {
         let cam = Camera::new(
             Vec3::ZERO,
             Vec3::NEG_Z,
@@ -314,7 +324,7 @@ mod tests {
             0.1,
             100.0,
         );
-        let grid = ClusterGrid::new(UVec3::new(32, 18, 48), DepthSlicing::Log, 0.1, 100.0);
+        let grid = ClusterGrid::new(UVec3::new(32, 18, 48), slicing, 0.1, 100.0);
         let sets = PlaneSets::new(&cam, &grid);
         let planes = FramePlanes::new(&sets, &grid);
         let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
@@ -336,10 +346,10 @@ mod tests {
                 assert_eq!(
                     block.alive[b],
                     expect.is_some(),
-                    "{B}-wide block, light {b}"
+                    "{B}-wide block, {slicing:?}, light {b}"
                 );
                 if let Some(e) = expect {
-                    assert_eq!(block.cluster_box(b), e);
+                    assert_eq!(block.cluster_box(b), e, "{slicing:?}, light {b}");
                     seen += 1;
                 }
             }
