@@ -258,43 +258,68 @@ fn spots_and_thread_counts_give_the_same_counts() {
     }
 }
 
+/// The radius of a light on the view axis at `depth` whose padded sphere's near side
+/// (`sign` −1) or far side (+1) lies exactly at `plane`, as the scalar build pads it and as the
+/// AVX2 build's fused multiply-add does: the light must touch the plane in both.
+fn radius_touching(depth: f32, plane: f32, sign: f32) -> f32 {
+    let side = |r: f32| depth + sign * myriad_cluster_math::pad_radius(0.0, 0.0, depth, r);
+    let fused = |r: f32| depth + sign * RADIUS_PAD.mul_add(depth + r, r);
+    let mut r = (plane - depth).abs();
+    while sign * (side(r) - plane) < 0.0 {
+        r = r.next_up();
+    }
+    while sign * (side(r) - plane) > 0.0 {
+        r = r.next_down();
+    }
+    while side(r) == plane && fused(r) != plane {
+        r = r.next_down();
+    }
+    assert_eq!(
+        (side(r), fused(r)),
+        (plane, plane),
+        "no radius lands exactly on the plane"
+    );
+    r
+}
+
+/// `lights` assigned by every method through `camera` onto `grid(outer)` for both kinds of outer
+/// slices, each frame's stats given to `check`.
+fn every_frame(
+    lights: &Columns,
+    camera: &Camera,
+    grid: impl Fn(OuterSlices) -> ClusterGrid,
+    check: impl Fn(OuterSlices, Method, AssignStats),
+) {
+    for outer in [OuterSlices::Open, OuterSlices::Closed] {
+        let grid = grid(outer);
+        for method in Method::ALL {
+            let stats = assign(method, lights, false, camera, &grid, &mut LightLists::new());
+            check(outer, method, stats);
+        }
+    }
+}
+
 /// A light whose padded sphere ends exactly on the grid's far plane touches the last slice:
 /// a closed grid keeps it, so it is not beyond the grid (`beyond_far` counts lights wholly past
 /// it, the ones a closed grid culls), by every method.
 #[test]
 fn a_light_touching_the_far_plane_is_not_beyond_it() {
     let camera = axis_camera(0.1, f32::INFINITY);
-    let far = 40.0;
-    // The radius whose padded sphere's near side lies exactly at `far` (the view transform of
-    // this camera is exact: depth 50 stays 50).
-    let depth = 50.0f32;
-    let near_side = |r: f32| depth - myriad_cluster_math::pad_radius(0.0, 0.0, depth, r);
-    let mut r = 10.0f32;
-    while near_side(r) > far {
-        r = r.next_up();
-    }
-    while near_side(r) < far {
-        r = r.next_down();
-    }
-    assert_eq!(near_side(r), far, "no radius lands exactly on the plane");
+    let (depth, far) = (50.0, 40.0);
     let mut lights = Columns::default();
-    lights.push(Vec3::new(0.0, 0.0, -depth), r);
-    for outer in [OuterSlices::Open, OuterSlices::Closed] {
-        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, far)
-            .with_outer_slices(outer);
-        for method in Method::ALL {
-            let stats = assign(
-                method,
-                &lights,
-                false,
-                &camera,
-                &grid,
-                &mut LightLists::new(),
-            );
-            let what = format!("{method}, {outer:?}: {stats:?}");
-            assert_eq!((stats.beyond_far, stats.culled), (0, 0), "{what}");
-        }
-    }
+    // The view transform of this camera is exact: depth 50 stays 50.
+    lights.push(
+        Vec3::new(0.0, 0.0, -depth),
+        radius_touching(depth, far, -1.0),
+    );
+    let grid = |outer| {
+        ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, far)
+            .with_outer_slices(outer)
+    };
+    every_frame(&lights, &camera, grid, |outer, method, stats| {
+        let what = format!("{method}, {outer:?}: {stats:?}");
+        assert_eq!((stats.beyond_far, stats.culled), (0, 0), "{what}");
+    });
 }
 
 /// The near-side twin of the test above: a light whose padded sphere ends exactly on the grid's
@@ -302,48 +327,21 @@ fn a_light_touching_the_far_plane_is_not_beyond_it() {
 #[test]
 fn a_light_touching_the_near_plane_is_not_before_it() {
     let camera = axis_camera(0.1, 60.0);
-    let near = 5.0;
-    let depth = 2.0f32;
-    // The padded radius as the scalar build rounds it, and as the AVX2 build's fused
-    // multiply-add does: the radius must land exactly on the plane in both.
-    let far_side = |r: f32| depth + myriad_cluster_math::pad_radius(0.0, 0.0, depth, r);
-    let fused = |r: f32| depth + RADIUS_PAD.mul_add(depth + r, r);
-    let mut r = 3.0f32;
-    while far_side(r) < near {
-        r = r.next_up();
-    }
-    while far_side(r) > near {
-        r = r.next_down();
-    }
-    while far_side(r) == near && fused(r) != near {
-        r = r.next_down();
-    }
-    assert_eq!(
-        (far_side(r), fused(r)),
-        (near, near),
-        "no radius lands exactly on the plane"
-    );
+    let (depth, near) = (2.0, 5.0);
+    let r = radius_touching(depth, near, 1.0);
     let mut lights = Columns::default();
     lights.push(Vec3::new(0.0, 0.0, -depth), r);
     // And one a little smaller, wholly before the grid: counted, and culled by a closed grid.
     lights.push(Vec3::new(0.0, 0.0, -depth), r * 0.9999);
-    for outer in [OuterSlices::Open, OuterSlices::Closed] {
-        let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, near, 60.0)
-            .with_outer_slices(outer);
-        for method in Method::ALL {
-            let stats = assign(
-                method,
-                &lights,
-                false,
-                &camera,
-                &grid,
-                &mut LightLists::new(),
-            );
-            let what = format!("{method}, {outer:?}: {stats:?}");
-            let culled = u32::from(outer == OuterSlices::Closed);
-            assert_eq!((stats.before_near, stats.culled), (1, culled), "{what}");
-        }
-    }
+    let grid = |outer| {
+        ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, near, 60.0)
+            .with_outer_slices(outer)
+    };
+    every_frame(&lights, &camera, grid, |outer, method, stats| {
+        let what = format!("{method}, {outer:?}: {stats:?}");
+        let culled = u32::from(outer == OuterSlices::Closed);
+        assert_eq!((stats.before_near, stats.culled), (1, culled), "{what}");
+    });
 }
 
 /// A camera that sees nearer than the grid (a depth range fitted to the depth buffer, a grid
