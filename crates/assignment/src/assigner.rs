@@ -149,7 +149,9 @@ pub struct AssignStats {
     /// frame's grid (its slices then cut the lights' whole depth range, instead of one last
     /// slice holding every light past the grid; a [`OuterSlices::Closed`] grid that follows it
     /// misses a light that moves past it for one frame, counted in
-    /// [`beyond_far`](Self::beyond_far)). `None` when the grid reaches the camera's far plane.
+    /// [`beyond_far`](Self::beyond_far)). Lights in view wholly before the grid's near count
+    /// like any other, also where the grid is closed (a frame with only those in view gives a
+    /// reach below the grid's near). `None` when the grid reaches the camera's far plane.
     pub reach: Option<f32>,
     /// In a frame whose camera sees nearer than the grid's near edge (`camera.near` below the
     /// grid's near, as with a range fitted to the depth buffer): the lights in view that lie

@@ -360,10 +360,18 @@ fn lights_before_the_grid_but_in_view_are_counted_by_every_method() {
                 let drawn = lights_in_view(&camera, n, (0.2..50.0, 0.05..2.0), &grid, seed);
                 let mut lights = drawn.lights;
                 // Invalid lights before the grid are rejected, never counted.
-                let (_, _, forward) = view_basis(&camera);
+                let (right, up, forward) = view_basis(&camera);
                 for r in [0.0, -1.0, f32::NAN] {
                     lights.push(camera.position + forward * 1.0, r);
                 }
+                // Lights before the grid but out of view are culled, never counted: beside or
+                // above the view, wholly nearer than the camera's near plane, behind the eye.
+                let (tx, ty) = camera.tan_half_fov().into();
+                let eye = camera.position;
+                lights.push(eye + forward * 2.0 + right * (2.0 * tx * 2.0 + 0.5), 0.2);
+                lights.push(eye + forward * 2.0 - up * (2.0 * ty * 2.0 + 0.5), 0.2);
+                lights.push(eye + forward * 0.05, 0.02);
+                lights.push(eye - forward * 1.0, 0.5);
                 assert!(drawn.before > n as u32 / 20, "{}", drawn.before);
                 assert!(drawn.beyond > 0 || grid_far == camera_far);
                 for method in Method::ALL {
@@ -371,6 +379,7 @@ fn lights_before_the_grid_but_in_view_are_counted_by_every_method() {
                     let stats = assign(method, &lights, false, &camera, &grid, &mut lists);
                     let what = format!("{method}, far {camera_far}, {edge:?}, {n} lights");
                     assert_eq!(stats.rejected, 3, "{what}");
+                    assert!(stats.culled >= 4, "{what}: {stats:?}");
                     assert_eq!(stats.before_near, drawn.before, "{what}");
                     assert_eq!(stats.beyond_far, drawn.beyond, "{what}");
                     assert_eq!(stats.reach.is_some(), camera_far > grid_far, "{what}");
