@@ -253,9 +253,10 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
 /// [`run_blocks`] in blocks of [`BLOCK`] lights.
 ///
 /// Compiled twice, as is [`run_large_blocks`]: for AVX2 + FMA (8-wide passes; picked at run time
-/// when the CPU has them) and for the baseline target. FMA rounds `a·b + c` once instead of twice,
-/// so boxes may differ by a cluster at exact boundaries between the two builds — both stay
-/// conservative, and each is deterministic for any thread count.
+/// when the CPU has them) and for the baseline target. The two differ only in vector width: Rust
+/// never contracts `a·b + c` into a fused multiply-add, and this code calls no `mul_add`, so
+/// both round alike and give the same boxes (the AVX2 builds hold no `vfmadd`, read in the
+/// release binary's assembly on 2026-11-30).
 #[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
 fn run_small_blocks(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     run_blocks::<BLOCK>(ctx, begin, end, out);
