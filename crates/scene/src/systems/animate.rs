@@ -69,7 +69,7 @@ impl Orbits {
 }
 
 /// One light's orbit position `(x, z)` at `time`: the kernel of [`animate_orbits`].
-#[inline]
+#[inline(always)] // Into both builds of `orbit_block`.
 fn orbit_point(cx: f32, cz: f32, radius: f32, speed: f32, phase: f32, time: f64) -> (f32, f32) {
     let (s, c) = fast_sin_cos(phase + turned_angle(speed, time));
     (cx + radius * c, cz + radius * s)
@@ -79,12 +79,31 @@ fn orbit_point(cx: f32, cz: f32, radius: f32, speed: f32, phase: f32, time: f64)
 /// (an f32 `speed · time` has a step of 0.016 rad at 10⁵ rad, and an f32 time stops at 2²⁴
 /// frames). Rounds the turn count by the 1.5·2⁵² trick (no rounding call, so the loop still
 /// vectorises); exact while `|speed · time| < 2⁵¹` turns, within 1e-6 rad below 10¹⁰ rad.
-#[inline]
+#[inline(always)]
 fn turned_angle(speed: f32, time: f64) -> f32 {
     const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5 · 2⁵²
     let turns = speed as f64 * time * (1.0 / std::f64::consts::TAU);
     let fraction = turns - ((turns + ROUND) - ROUND);
     (fraction * std::f64::consts::TAU) as f32
+}
+
+/// The orbit positions of the block of lights from `start` (`x.len()` of them). Built twice, for
+/// AVX2 and for the baseline, the faster picked at run time; both compute the same numbers (no
+/// fused multiply-add: Rust never contracts one). `cargo bench --bench scene_systems --
+/// frame/`: see `docs/measured.md`.
+#[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
+fn orbit_block(orbits: &Orbits, time: f64, start: usize, x: &mut [f32], z: &mut [f32]) {
+    let end = start + x.len();
+    let (cx, cz) = (&orbits.center_x[start..end], &orbits.center_z[start..end]);
+    let (radius, speed) = (
+        &orbits.orbit_radius[start..end],
+        &orbits.angular_speed[start..end],
+    );
+    let (phase, z) = (&orbits.phase[start..end], &mut z[..x.len()]);
+    // Re-sliced columns: the loop has no bounds checks and vectorises.
+    for k in 0..x.len() {
+        (x[k], z[k]) = orbit_point(cx[k], cz[k], radius[k], speed[k], phase[k], time);
+    }
 }
 
 /// Sets each light's `x` and `z` to its orbit position at `time` (seconds since time 0). The
@@ -100,19 +119,7 @@ pub fn animate_orbits(orbits: &Orbits, time: f64, x: &mut [f32], z: &mut [f32]) 
             && orbits.angular_speed.len() == n
             && orbits.phase.len() == n
     );
-    let block = |start: usize, x: &mut [f32], z: &mut [f32]| {
-        let end = start + x.len();
-        let (cx, cz) = (&orbits.center_x[start..end], &orbits.center_z[start..end]);
-        let (radius, speed) = (
-            &orbits.orbit_radius[start..end],
-            &orbits.angular_speed[start..end],
-        );
-        let (phase, z) = (&orbits.phase[start..end], &mut z[..x.len()]);
-        // Re-sliced columns: the loop has no bounds checks and vectorises.
-        for k in 0..x.len() {
-            (x[k], z[k]) = orbit_point(cx[k], cz[k], radius[k], speed[k], phase[k], time);
-        }
-    };
+    let block = |start: usize, x: &mut [f32], z: &mut [f32]| orbit_block(orbits, time, start, x, z);
     if n < PARALLEL_MIN {
         block(0, x, z);
     } else {
@@ -177,7 +184,7 @@ impl Wander {
 
 /// A well-mixed 32-bit hash (two multiply–xorshift rounds; Chris Wellons' "lowbias32"
 /// constants). 32-bit so the per-light loop vectorises.
-#[inline]
+#[inline(always)]
 fn hash32(mut x: u32) -> u32 {
     x ^= x >> 16;
     x = x.wrapping_mul(0x7feb_352d);
@@ -209,7 +216,7 @@ fn frame_key(seed: u64, frame: u64) -> u32 {
 
 /// A point in `[−1, 1)³` determined by the frame key and the light: one hash per axis, its top
 /// 24 bits as a fraction.
-#[inline]
+#[inline(always)]
 fn random_unit_cube(key: u32, light: usize) -> Vec3 {
     let base = (light as u32).wrapping_mul(3);
     let unit = |k: u32| {
@@ -242,7 +249,7 @@ impl Wander {
 /// One light's step: the kernel of [`animate_wander`], branch-free (selects only) so the loop
 /// vectorises. `key` is [`frame_key`] of the wander's seed and the frame. Returns the new
 /// position and velocity.
-#[inline]
+#[inline(always)] // Into both builds of `wander_block`.
 fn wander_step(w: WanderParams, key: u32, dt: f32, i: usize, p: Vec3, v: Vec3) -> (Vec3, Vec3) {
     let v = v + random_unit_cube(key, i) * (w.acceleration * dt);
     let speed = v.length();
@@ -278,6 +285,38 @@ fn wander_step(w: WanderParams, key: u32, dt: f32, i: usize, p: Vec3, v: Vec3) -
     (Vec3::new(px, py, pz), Vec3::new(vx, vy, vz))
 }
 
+/// One wander step of the block of lights from `start`. Built twice, for AVX2 and for the
+/// baseline, as [`orbit_block`] is.
+#[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
+fn wander_block(
+    params: WanderParams,
+    key: u32,
+    dt: f32,
+    start: usize,
+    (x, y, z, vx, vy, vz): WanderBlock<'_>,
+) {
+    let n = x.len();
+    let (y, z, vx, vy, vz) = (
+        &mut y[..n],
+        &mut z[..n],
+        &mut vx[..n],
+        &mut vy[..n],
+        &mut vz[..n],
+    );
+    for k in 0..n {
+        let (p, v) = wander_step(
+            params,
+            key,
+            dt,
+            start + k,
+            Vec3::new(x[k], y[k], z[k]),
+            Vec3::new(vx[k], vy[k], vz[k]),
+        );
+        (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+        (vx[k], vy[k], vz[k]) = (v.x, v.y, v.z);
+    }
+}
+
 /// Position and velocity columns of one block of lights.
 type WanderBlock<'a> = (
     &'a mut [f32],
@@ -308,28 +347,7 @@ pub fn animate_wander(
     assert!(wander.vy.len() == n && wander.vz.len() == n);
     let params = wander.params();
     let key = frame_key(params.seed, frame);
-    let block = |start: usize, (x, y, z, vx, vy, vz): WanderBlock<'_>| {
-        let n = x.len();
-        let (y, z, vx, vy, vz) = (
-            &mut y[..n],
-            &mut z[..n],
-            &mut vx[..n],
-            &mut vy[..n],
-            &mut vz[..n],
-        );
-        for k in 0..n {
-            let (p, v) = wander_step(
-                params,
-                key,
-                dt,
-                start + k,
-                Vec3::new(x[k], y[k], z[k]),
-                Vec3::new(vx[k], vy[k], vz[k]),
-            );
-            (x[k], y[k], z[k]) = (p.x, p.y, p.z);
-            (vx[k], vy[k], vz[k]) = (v.x, v.y, v.z);
-        }
-    };
+    let block = |start: usize, cols: WanderBlock<'_>| wander_block(params, key, dt, start, cols);
     let (vx, vy, vz) = (&mut wander.vx, &mut wander.vy, &mut wander.vz);
     if n < PARALLEL_MIN {
         block(0, (x, y, z, vx, vy, vz));

@@ -48,7 +48,7 @@ use crate::lights::Lights;
 /// `r = x − q·π/2` with π/2 split in three parts (Cody–Waite), so `|r| ≤ π/4`; Taylor
 /// polynomials for sin (to r⁹) and cos (to r¹⁰), whose truncation errors on [−π/4, π/4] are
 /// below 2e-9; the quadrant `q mod 4` swaps and negates.
-#[inline]
+#[inline(always)] // Into the AVX2 builds of the systems' blocks as well.
 pub(crate) fn fast_sin_cos(x: f32) -> (f32, f32) {
     const ROUND: f32 = 12_582_912.0; // 1.5 · 2²³
     const PIO2_1: f32 = 1.570_312_5; // π/2 = PIO2_1 + PIO2_2 + PIO2_3, first parts exact
