@@ -256,7 +256,8 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
 /// when the CPU has them) and for the baseline target. The two differ only in vector width: Rust
 /// never contracts `a·b + c` into a fused multiply-add, and this code calls no `mul_add`, so
 /// both round alike and give the same boxes (the AVX2 builds hold no `vfmadd`, read in the
-/// release binary's assembly on 2026-11-30).
+/// release binary's assembly on 2026-11-30). A unit test runs the two side by side
+/// (`both_block_widths_and_both_builds_give_the_same_task_output`).
 #[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
 fn run_small_blocks(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     run_blocks::<BLOCK>(ctx, begin, end, out);

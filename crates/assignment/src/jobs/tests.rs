@@ -524,10 +524,28 @@ fn lists_each_lights_box_and_counts_every_other_light_once<const B: usize>() {
     );
 }
 
-/// The two block widths list the same pairs and count the same lights, for a task that starts
-/// mid-block and ends in a partial block, spot lights and invalid lights among them.
+/// [`task_pairs_in_blocks`] through the baseline build of the phases: `run_blocks` inlined
+/// into this test, which is compiled for the target's baseline (SSE2 on x86-64), where the
+/// tasks' dispatchers pick their AVX2 + FMA builds on a CPU that has them.
+fn task_pairs_in_baseline_blocks<const B: usize>(
+    ctx: &FrameContext<'_>,
+    begin: usize,
+    end: usize,
+) -> (Vec<(u32, u32)>, u32, u32) {
+    let mut out = TaskOutput::default();
+    out.reset(ctx);
+    run_blocks::<B>(ctx, begin, end, &mut out);
+    let pairs = listed_pairs(&out.buckets[..ctx.parts], ctx.grid.dims().x);
+    (pairs, out.rejected, out.culled)
+}
+
+/// The two block widths, and the two builds of each (the dispatched one — AVX2 + FMA where the
+/// CPU has them — and the baseline), list the same pairs and count the same lights, for a task
+/// that starts mid-block and ends in a partial block, spot lights and invalid lights among
+/// them. The builds differ in vector width only (`run_small_blocks`' docs): this runs them
+/// side by side.
 #[test]
-fn both_block_widths_give_the_same_task_output() {
+fn both_block_widths_and_both_builds_give_the_same_task_output() {
     let (camera, grid, sets) = frame();
     let t = camera.tan_half_fov();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(15);
@@ -578,7 +596,13 @@ fn both_block_widths_give_the_same_task_output() {
             let small = task_pairs_in_blocks::<BLOCK>(&ctx, begin, end);
             let large = task_pairs_in_blocks::<LARGE_BLOCK>(&ctx, begin, end);
             let what = format!("{method}, spots {spots}");
+            let small_baseline = task_pairs_in_baseline_blocks::<BLOCK>(&ctx, begin, end);
+            let large_baseline = task_pairs_in_baseline_blocks::<LARGE_BLOCK>(&ctx, begin, end);
             assert_task_output(large, (&small.0, small.1, small.2), &what);
+            for (build, got) in [("small", small_baseline), ("large", large_baseline)] {
+                let what = format!("{what}, baseline build of the {build} blocks");
+                assert_task_output(got, (&small.0, small.1, small.2), &what);
+            }
             assert!(
                 small.0.len() > 10_000 && small.1 > 50 && small.2 > 100,
                 "{what}: pairs {}, rejected {}, culled {}",
