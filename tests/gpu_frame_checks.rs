@@ -67,6 +67,69 @@ fn assigned(scene: &RenderScene) -> LightLists {
     lists
 }
 
+/// Lists of `pairs` pairs over `clusters` clusters, spread as evenly as they go (the first
+/// clusters one more), naming lights `0..lights` in turn: well formed, if not any light's real
+/// clusters.
+fn lists_of(clusters: usize, pairs: usize, lights: u32) -> LightLists {
+    let mut lists = LightLists::new();
+    for c in 0..clusters {
+        let count = pairs / clusters + usize::from(c < pairs % clusters);
+        lists.offsets.push(lists.indices.len() as u32);
+        lists.counts.push(count as u32);
+        lists.indices.extend((0..count as u32).map(|i| i % lights));
+    }
+    lists
+}
+
+/// A device's binding limit need not be whole 4-byte words (wgpu reports a desktop Vulkan
+/// driver's as `i32::MAX`): lists filling the words under it are drawn, their buffer grown to
+/// fit the limit — not to the next power of two clamped to the limit and rounded up past it,
+/// which made wgpu panic on a bind group over the limit — and one pair more is refused, naming
+/// the limit in whole words.
+#[test]
+fn lists_up_to_a_binding_limit_of_no_whole_words_are_drawn() {
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    const LIMIT: u64 = (256 << 10) + 7;
+    let ctx = binding_limited(LIMIT);
+    assert_eq!(ctx.max_list_pairs(), LIMIT / 4);
+    let scene = RenderScene::default_scene(100, 32, 16)
+        .unwrap()
+        .with_grid(UVec3::new(16, 8, 16), DepthSlicing::Log);
+    let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let clusters = scene.grid.cluster_count();
+    // 65 537 pairs: 2¹⁸ + 4 bytes, whose next power of two is past the limit.
+    let most = (LIMIT / 4) as usize;
+    let fitting = lists_of(clusters, most, 100);
+    let frame = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        cluster_lists(&fitting),
+    );
+    renderer
+        .render(&ctx, &geometry, &frame, &target.view)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    let one_more = lists_of(clusters, most + 1, 100);
+    let frame = FrameDesc {
+        lists: Some(cluster_lists(&one_more)),
+        ..frame
+    };
+    match renderer.render(&ctx, &geometry, &frame, &target.view) {
+        Err(GpuError::BufferTooLarge { what, bytes, limit }) => {
+            assert_eq!(
+                (what, bytes, limit),
+                ("light indices", 4 * (most as u64 + 1), LIMIT - 3)
+            );
+        }
+        other => panic!("one pair past the limit: {other:?}"),
+    }
+}
+
 /// The shader works out a pixel's tile as `2 · pixel · tiles` in u32: a target of the device's
 /// largest side is refused with the first tile count along that side whose `2 · side · tiles`
 /// passes `u32::MAX` (a wide target and a tall one, each overflowing along one side only), and

@@ -91,13 +91,14 @@ impl GpuContext {
             .map(|limit| crate::loop_budget::max_lights_per_pixel(limit, mode, slices))
     }
 
-    /// The most cluster–light pairs one frame's lists may hold on this device: its largest
-    /// storage binding over the 4 bytes of an index. Give it to the assigner's pair budget
+    /// The most cluster–light pairs one frame's lists may hold on this device: the largest
+    /// storage buffer it can create and bind ([`crate::buffers::storage_capacity`]) over the 4
+    /// bytes of an index. Give it to the assigner's pair budget
     /// (`myriad_assignment::Assigner::with_pair_budget`) and a frame past it is built on a coarser
     /// grid, which the renderer takes, instead of being refused with
     /// [`GpuError::BufferTooLarge`] after the assignment (128 MiB on llvmpipe: 33.5 M pairs).
     pub fn max_list_pairs(&self) -> u64 {
-        Self::list_pairs_in(self.device.limits().max_storage_buffer_binding_size)
+        Self::list_pairs_in(crate::buffers::storage_capacity(&self.device.limits()))
     }
 
     /// The cluster–light pairs whose indices (u32) fit in a storage binding of `bytes`.

@@ -45,7 +45,8 @@ pub enum GpuError {
         what: &'static str,
         /// Bytes needed.
         bytes: u64,
-        /// The device's `max_storage_buffer_binding_size`.
+        /// The most a storage buffer may hold on the device: the smaller of its
+        /// `max_storage_buffer_binding_size` and `max_buffer_size`, in whole 4-byte words.
         limit: u64,
     },
     /// A pixel would loop over more lights than the adapter's shader compiler allows: Mesa's
