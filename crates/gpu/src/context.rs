@@ -92,8 +92,8 @@ impl GpuContext {
     }
 
     /// The most cluster–light pairs one frame's lists may hold on this device: the largest
-    /// storage buffer it can create and bind ([`crate::buffers::storage_capacity`]) over the 4
-    /// bytes of an index. Give it to the assigner's pair budget
+    /// storage buffer it can create and bind (the smaller of its `max_storage_buffer_binding_size`
+    /// and `max_buffer_size`, in whole 4-byte words) over the 4 bytes of an index. Give it to the assigner's pair budget
     /// (`myriad_assignment::Assigner::with_pair_budget`) and a frame past it is built on a coarser
     /// grid, which the renderer takes, instead of being refused with
     /// [`GpuError::BufferTooLarge`] after the assignment (128 MiB on llvmpipe: 33.5 M pairs).
