@@ -708,6 +708,25 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
         "needs a prepass of the same size",
     );
     assert_eq!(renderer.upload_generation(), generation);
+    // Nor does one after a prepass of the same size for another camera: its G-buffer holds
+    // another view's pixels (it was shaded as this camera's, with Ok, audit).
+    let mut moved = scene.camera;
+    moved.position.x += 0.5;
+    renderer.render_prepass(ctx, geometry, &moved).unwrap();
+    invalid(
+        renderer
+            .render_after_prepass(ctx, geometry, &frame(&scene.camera, &g), &target.view)
+            .map(|_| ()),
+        "the G-buffer the prepass drew, for another camera",
+    );
+    assert_eq!(renderer.upload_generation(), generation);
+    // The prepass of this camera is shaded, with the kept lights and lists.
+    renderer
+        .render_prepass(ctx, geometry, &scene.camera)
+        .unwrap();
+    let shaded =
+        renderer.render_after_prepass(ctx, geometry, &frame(&scene.camera, &g), &target.view);
+    assert_eq!(shaded.map(|r| r.lights).ok(), Some(200));
 }
 
 #[test]

@@ -127,6 +127,9 @@ pub struct Renderer {
     device: wgpu::Device,
     pipelines: Pipelines,
     gbuffer: Option<GBuffer>,
+    /// The camera the G-buffer was last drawn for, by a frame or a prepass (`None` while it
+    /// holds nothing): [`Renderer::render_after_prepass`] shades it only for that camera.
+    gbuffer_camera: Option<Camera>,
     frame_buffer: wgpu::Buffer,
     frame_group: wgpu::BindGroup,
     deferred_inputs: Option<wgpu::BindGroup>,
@@ -223,6 +226,7 @@ impl Renderer {
         Self {
             device: device.clone(),
             gbuffer: None,
+            gbuffer_camera: None,
             frame_group,
             frame_buffer,
             deferred_inputs: None,
@@ -483,11 +487,13 @@ impl Renderer {
         // the frame before).
         self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
+        self.gbuffer_camera = Some(*camera);
         Ok(())
     }
 
     /// [`Renderer::render`] without the G-buffer pass: shades the G-buffer the last
-    /// [`Renderer::render_prepass`] drew (for the same camera).
+    /// [`Renderer::render_prepass`] drew, which must have been for the same camera (else
+    /// [`GpuError::InvalidInput`]: its pixels are another view's).
     pub fn render_after_prepass(
         &mut self,
         ctx: &GpuContext,
@@ -509,6 +515,7 @@ impl Renderer {
             let gbuffer = GBuffer::new(device, width, height)?;
             self.deferred_inputs = Some(self.deferred_bind_group(device, &gbuffer));
             self.gbuffer = Some(gbuffer);
+            self.gbuffer_camera = None;
         }
         Ok(())
     }
@@ -664,6 +671,16 @@ impl Renderer {
                 "render_after_prepass needs a prepass of the same size first".into(),
             ));
         }
+        // Shading another camera's G-buffer rebuilds every pixel's position with the wrong
+        // view: a wrong image returned as Ok (audit).
+        if !draw_gbuffer && self.gbuffer_camera != Some(*frame.camera) {
+            return Err(GpuError::InvalidInput(
+                "render_after_prepass shades the G-buffer the prepass drew, for another camera \
+                 (its position, orientation, field of view or depth range differ): run the \
+                 prepass with this frame's camera"
+                    .into(),
+            ));
+        }
         // The last checks that can fail: the G-buffer's size against the device (a new size's
         // G-buffer changes nothing a later frame relies on), and the target against the passes.
         self.ensure_gbuffer(device, width, height)?;
@@ -756,6 +773,7 @@ impl Renderer {
         }
         if draw_gbuffer {
             self.encode_gbuffer(&mut encoder, scene);
+            self.gbuffer_camera = Some(*frame.camera);
         }
         self.encode_shading(device, &mut encoder, frame, target, format);
         report.forward_pass = forward_pass;
