@@ -130,6 +130,60 @@ fn lists_up_to_a_binding_limit_of_no_whole_words_are_drawn() {
     }
 }
 
+/// Kept lists of another grid are refused as such even where they would also pass the shader's
+/// loop limit on the frame's grid: a cluster of 65 534 lights fits llvmpipe's budget with two
+/// slices, not with 64 (six rounds of the slice search), and the frame on the 64-slice grid was
+/// refused for the loop limit ("use a finer grid"), not for having no lists of its grid.
+#[test]
+fn kept_lists_of_another_grid_are_refused_as_such_before_the_loop_limit() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    const CROWD: usize = 65_534;
+    let scene = RenderScene::default_scene(CROWD, 32, 16)
+        .unwrap()
+        .with_grid(UVec3::new(8, 4, 2), DepthSlicing::Log);
+    let mut lists = LightLists::new();
+    for c in 0..scene.grid.cluster_count() {
+        let count = if c == 0 { CROWD } else { 0 };
+        lists.offsets.push(lists.indices.len() as u32);
+        lists.counts.push(count as u32);
+        lists.indices.extend(0..count as u32);
+    }
+    let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
+    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let frame = FrameDesc::clustered(
+        &scene.camera,
+        &scene.grid,
+        light_columns(&scene.lights),
+        cluster_lists(&lists),
+    );
+    renderer
+        .render(&ctx, &geometry, &frame, &target.view)
+        .unwrap();
+    let finer = scene
+        .clone()
+        .with_grid(UVec3::new(8, 4, 64), DepthSlicing::Log);
+    if let Some(max) = ctx.max_lights_per_pixel(ShadingMode::Lists, 64) {
+        assert!(max < CROWD as u64, "{max} lights fit 64 slices here");
+    }
+    let kept = FrameDesc {
+        grid: &finer.grid,
+        lists: None,
+        ..frame
+    };
+    match renderer.render(&ctx, &geometry, &kept, &target.view) {
+        Err(GpuError::InvalidInput(message)) => {
+            assert!(
+                message.contains("needs light lists for this grid"),
+                "{message}"
+            )
+        }
+        other => panic!("kept lists of another grid: {:?}", other.map(|_| ())),
+    }
+}
+
 /// The shader works out a pixel's tile as `2 · pixel · tiles` in u32: a target of the device's
 /// largest side is refused with the first tile count along that side whose `2 · side · tiles`
 /// passes `u32::MAX` (a wide target and a tall one, each overflowing along one side only), and

@@ -603,32 +603,6 @@ impl Renderer {
             let edges = (frame.grid.dims().z as u64 + 1) * std::mem::size_of::<f32>() as u64;
             self.slice_edges.check_fits(device, edges)?;
         }
-        // Checked before anything is staged, so a refused frame changes nothing, and after the
-        // inputs' own checks, so lists of another grid's shape are named as such (they were
-        // refused for a loop limit, audit).
-        if let Some(max_lights) = ctx.max_lights_per_pixel(frame.mode, dims.z)
-            && !frame.heat_map
-        {
-            let lights = match frame.mode {
-                ShadingMode::BruteForce => {
-                    frame.lights.map_or(self.light_count, |c| c.len()) as u64
-                }
-                ShadingMode::Lists => frame
-                    .lists
-                    .map(|l| l.max_count())
-                    .or(self.lists_uploaded.map(|u| u.max_count))
-                    .unwrap_or(0) as u64,
-            };
-            if lights > max_lights {
-                return Err(GpuError::ShaderLoopLimit {
-                    mode: frame.mode,
-                    lights,
-                    max_lights,
-                    adapter: ctx.describe(),
-                    limit: ctx.shader_loop_limit().unwrap_or_default(),
-                });
-            }
-        }
         let camera_position = frame.camera.position.to_array();
         if frame.lights.is_none()
             && self.light_count > 0
@@ -664,6 +638,32 @@ impl Renderer {
                     }
                 }
                 _ => return Err(missing_lists(frame.grid)),
+            }
+        }
+        // Checked before anything is staged, so a refused frame changes nothing, and after the
+        // inputs' own checks and the kept lists', so lists of another grid's shape — given or
+        // kept — are named as such (they were refused for a loop limit, audit).
+        if let Some(max_lights) = ctx.max_lights_per_pixel(frame.mode, dims.z)
+            && !frame.heat_map
+        {
+            let lights = match frame.mode {
+                ShadingMode::BruteForce => {
+                    frame.lights.map_or(self.light_count, |c| c.len()) as u64
+                }
+                ShadingMode::Lists => frame
+                    .lists
+                    .map(|l| l.max_count())
+                    .or(self.lists_uploaded.map(|u| u.max_count))
+                    .unwrap_or(0) as u64,
+            };
+            if lights > max_lights {
+                return Err(GpuError::ShaderLoopLimit {
+                    mode: frame.mode,
+                    lights,
+                    max_lights,
+                    adapter: ctx.describe(),
+                    limit: ctx.shader_loop_limit().unwrap_or_default(),
+                });
             }
         }
         if !draw_gbuffer && self.gbuffer.as_ref().map(|g| g.size) != Some((width, height)) {
