@@ -263,6 +263,20 @@ impl LightField {
                      {clumps} clumps, spread {spread}"
                 ));
             }
+            Placement::Frustum(camera) => {
+                // Every light lies within (|t.x| + |t.y| + 1) · far of the eye.
+                let t = camera.tan_half_fov().as_dvec2();
+                let reach = f64::from(camera.position.abs().max_element())
+                    + (t.x.abs() + t.y.abs() + 1.0) * f64::from(camera.far);
+                if !(reach < f64::from(f32::MAX) / 2.0) {
+                    return Some(format!(
+                        "the camera's far plane at {:e} puts the frustum's far corners past f32's \
+                         range (about 3.4e38) at this field of view: give the camera a nearer \
+                         far plane",
+                        camera.far
+                    ));
+                }
+            }
             Placement::Sphere { center, radius }
                 if !(center.is_finite() && *radius >= 0.0 && radius.is_finite()) =>
             {
@@ -441,8 +455,19 @@ pub(crate) fn uniform_in_box(b: &Aabb, rng: &mut impl Rng) -> Vec3 {
 
 /// A point uniform by volume in the frustum between near and far (depth density ∝ d²).
 pub(crate) fn uniform_in_frustum(camera: &Camera, rng: &mut impl Rng) -> Vec3 {
+    let u = rng.random_range(0.0f32..1.0);
     let (n3, f3) = (camera.near.powi(3), camera.far.powi(3));
-    let depth = (n3 + rng.random_range(0.0f32..1.0) * (f3 - n3)).cbrt();
+    // Cubed in f32 where the far plane's cube fits it, as every preset's scenes were made; past
+    // ∛f32::MAX ≈ 7·10¹² the cube overflowed and every light came out NaN: cubed in f64 there.
+    let depth = if f3.is_finite() {
+        (n3 + u * (f3 - n3)).cbrt()
+    } else {
+        let (n3, f3) = (
+            f64::from(camera.near).powi(3),
+            f64::from(camera.far).powi(3),
+        );
+        ((n3 + f64::from(u) * (f3 - n3)).cbrt() as f32).min(camera.far)
+    };
     let t = camera.tan_half_fov();
     let view = Vec3::new(
         rng.random_range(-1.0f32..1.0) * t.x * depth,
@@ -547,6 +572,49 @@ mod tests {
         for _ in 0..100 {
             assert_eq!(draw(&mut a, -2.0, 3.0), b.random_range(-2.0f32..3.0));
         }
+    }
+
+    /// A far plane past ∛f32::MAX (≈ 7·10¹²) still gives lights in the frustum (its cube
+    /// overflowed f32 and every light came out NaN), and one whose frustum's far corners pass
+    /// f32's range is a problem of the field, named, not lights that fail later.
+    #[test]
+    fn frustum_fields_reach_far_planes_past_the_f32_cube() {
+        for far in [6e12f32, 8e12, 1e20, 1e37] {
+            let camera = Camera::new(Vec3::ONE, Vec3::NEG_Z, Vec3::Y, 60.0, 800, 600, 0.5, far);
+            let field = LightField::new(Placement::Frustum(camera));
+            assert_eq!(field.problem(), None, "far {far:e}");
+            let lights = field.generate(500, 3);
+            assert!(
+                lights.problems().is_empty(),
+                "far {far:e}: {:?}",
+                lights.problems()
+            );
+            let t = camera.tan_half_fov();
+            let mut beyond_half = 0;
+            for l in lights.iter() {
+                let v = camera.view_from_world_point(l.position);
+                let d = -v.z;
+                assert!(
+                    d >= 0.5 * (1.0 - 1e-3) && d <= far * (1.0 + 1e-3),
+                    "far {far:e}: {d}"
+                );
+                assert!(v.x.abs() <= t.x * d * 1.0001 && v.y.abs() <= t.y * d * 1.0001);
+                beyond_half += usize::from(d > 0.5 * far);
+            }
+            // Uniform by volume: 7/8 of the lights lie past half the far plane.
+            assert!(
+                (400..=475).contains(&beyond_half),
+                "far {far:e}: {beyond_half}"
+            );
+        }
+        let camera = Camera::new(Vec3::ONE, Vec3::NEG_Z, Vec3::Y, 60.0, 800, 600, 0.5, 3e38);
+        let problem = LightField::new(Placement::Frustum(camera)).problem();
+        assert!(
+            problem
+                .as_deref()
+                .is_some_and(|p| p.contains("far plane at 3e38")),
+            "{problem:?}"
+        );
     }
 
     #[test]
