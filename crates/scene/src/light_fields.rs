@@ -587,7 +587,7 @@ mod tests {
             assert!(
                 lights.problems().is_empty(),
                 "far {far:e}: {:?}",
-                lights.problems()
+                lights.problems().first()
             );
             let t = camera.tan_half_fov();
             let mut beyond_half = 0;
