@@ -277,6 +277,50 @@ fn commands_that_load_a_model_print_what_the_loader_changed() {
 }
 
 #[test]
+fn model_lights_say_which_directional_lights_are_not_written() {
+    // A scene file holds point and spot lights: `scene --model-lights` writes the point light
+    // and says that the sun is not written (it was dropped without a word).
+    let dir = work_dir("directional_light");
+    let path = dir.join("sun.gltf");
+    std::fs::write(
+        &path,
+        format!(
+            r#"{{"asset": {{"version": "2.0"}},
+{TRIANGLE},
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [
+      {{"type": "directional", "name": "sun"}}, {{"type": "point", "range": 3}}]}}}},
+  "scenes": [{{"nodes": [0, 1, 2]}}],
+  "nodes": [{{"mesh": 0}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 0, 1]}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 1}}}}, "translation": [0, 0, 1]}}]}}"#
+        ),
+    )
+    .unwrap();
+    let out = dir.join("sun.scene");
+    let o = myriad(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        path.as_os_str(),
+        "--model-lights".as_ref(),
+        "--lights".as_ref(),
+        "2".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("(1 of the model's own + 2 lights")
+            && stdout.contains("1 directional light of the model not written"),
+        "{stdout}"
+    );
+    let scene = myriad::scene::Scene::load(&out, myriad::scene::LightPolicy::Strict).unwrap();
+    assert_eq!(scene.lights.len(), 3);
+}
+
+#[test]
 fn an_invalid_light_is_left_out_and_counted_not_fatal() {
     // One triangle, a good point light and one with `range: 0`. The bad light used to make the
     // whole file an error, `info` included; now it is skipped, counted and warned about, like an

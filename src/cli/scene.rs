@@ -216,6 +216,14 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     } else {
         0
     };
+    // Light indices are u32 (a scene file's lights are numbered in order).
+    ensure!(
+        own.checked_add(args.lights)
+            .is_some_and(|n| n <= u32::MAX as usize),
+        "{own} of the model's own lights + --lights {} pass the {} lights a scene can number",
+        args.lights,
+        u32::MAX
+    );
     check_memory(&grid, own + args.lights)?;
     let mut lights = Lights::new();
     for light in model.lights.iter().take(own) {
@@ -225,8 +233,19 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     for (k, light) in field.generate(args.lights, args.seed).iter().enumerate() {
         lights.push(light.with_source_index((own + k) as u32));
     }
+    // A scene file holds point and spot lights: the model's directional ones (suns) are not
+    // written, and said so.
+    let suns = match model.directional_lights.len() {
+        0 => String::new(),
+        n if args.model_lights => format!(
+            "; {n} directional light{} of the model not written: a scene file holds point and \
+             spot lights",
+            if n == 1 { "" } else { "s" }
+        ),
+        _ => String::new(),
+    };
     let what = format!(
-        "{}{} lights, field {} in {}, camera {camera_name}, seed {}",
+        "{}{} lights, field {} in {}, camera {camera_name}, seed {}{suns}",
         if args.model_lights {
             format!("{own} of the model's own + ")
         } else {

@@ -157,6 +157,9 @@ pub(crate) struct Sink<'p> {
     prefix: Prefix,
 }
 
+/// The most bytes of a problem's path that a [`Sink`] keeps.
+const PATH_SHOWN: usize = 80;
+
 /// The path prefix of a [`Sink`].
 #[derive(Clone, Copy)]
 pub(crate) enum Prefix {
@@ -179,7 +182,20 @@ impl<'p> Sink<'p> {
     }
 
     /// Records a problem at `at`, a path relative to the prefix (`""` for the prefix itself).
+    /// A path longer than [`PATH_SHOWN`] bytes (an unknown key is the file's own text) is
+    /// shortened, so one bad key cannot make a message of megabytes.
     pub(crate) fn report(&mut self, at: &str, message: impl Into<String>) {
+        let shortened;
+        let at = if at.len() > PATH_SHOWN {
+            let mut end = PATH_SHOWN;
+            while !at.is_char_boundary(end) {
+                end -= 1;
+            }
+            shortened = format!("{}… ({} bytes)", &at[..end], at.len());
+            shortened.as_str()
+        } else {
+            at
+        };
         let (path, light) = match self.prefix {
             Prefix::Root if at.is_empty() => ("<root>".to_string(), None),
             Prefix::Root => (at.to_string(), None),

@@ -691,6 +691,38 @@ fn every_documented_invalid_value_is_an_error_naming_file_path_and_problem() {
     }
 }
 
+/// An unknown key is named by its first 80 bytes (cut at a character's boundary) and its
+/// length: a key of megabytes made an error line of megabytes.
+#[test]
+fn a_long_unknown_key_is_named_shortened() {
+    let base = hand_written_text();
+    for (key, shown) in [
+        ("k".repeat(80), "k".repeat(80)),
+        ("k".repeat(81), format!("{}… (81 bytes)", "k".repeat(80))),
+        // Two bytes a character: the cut falls on 80, a boundary; one byte on, it backs off.
+        (
+            "é".repeat(10_000),
+            format!("{}… (20000 bytes)", "é".repeat(40)),
+        ),
+        (
+            format!("k{}", "é".repeat(10_000)),
+            format!("k{}… (20001 bytes)", "é".repeat(39)),
+        ),
+    ] {
+        let text = edit(
+            &base,
+            r#""lights": ["#,
+            &format!(r#""{key}": 1, "lights": ["#),
+        );
+        let e = Scene::from_json_str(&text, "edited.json", LightPolicy::Strict).unwrap_err();
+        let Error::Invalid { problem, .. } = &e else {
+            panic!("expected Error::Invalid, got {e}");
+        };
+        assert_eq!(problem.path, shown);
+        assert!(problem.message.contains("unknown field"), "{e}");
+    }
+}
+
 #[test]
 fn a_section_of_the_wrong_type_is_one_problem() {
     let text = hand_written_text();
