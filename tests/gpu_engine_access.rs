@@ -635,3 +635,51 @@ fn pass_times_follow_the_timestamp_features_of_an_engines_device() {
         }
     }
 }
+
+/// Reading back a texture whose copy needs a buffer past the device's `max_buffer_size` is an
+/// error naming the sizes, not a wgpu panic (a 32768² RGBA8 target needs 4 GiB).
+#[test]
+fn a_read_back_past_the_buffer_limit_is_an_error() {
+    if GpuContext::headless_for_tests().is_none() {
+        return;
+    }
+    let adapter =
+        pollster::block_on(myriad::gpu::shared_instance().request_adapter(&Default::default()))
+            .unwrap();
+    const LIMIT: u64 = 1 << 20;
+    let descriptor = wgpu::DeviceDescriptor {
+        required_limits: wgpu::Limits {
+            max_buffer_size: LIMIT,
+            ..wgpu::Limits::downlevel_defaults()
+        },
+        ..Default::default()
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
+    let ctx = GpuContext::from_device(device, queue);
+    let texture = |height: u32| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("read back"),
+            size: wgpu::Extent3d {
+                width: 512,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        })
+    };
+    // 512 × 512 × 4 bytes is exactly the limit; one row more is past it.
+    let fits = myriad::gpu::read_rgba8(&ctx, &texture(512)).unwrap();
+    assert_eq!(fits.len() as u64, LIMIT);
+    match myriad::gpu::read_rgba8(&ctx, &texture(513)) {
+        Err(GpuError::InvalidInput(message)) => assert!(
+            message.contains("1050624-byte buffer") && message.contains("(1048576 bytes)"),
+            "{message}"
+        ),
+        other => panic!("a read back past the limit: {:?}", other.map(|v| v.len())),
+    }
+}

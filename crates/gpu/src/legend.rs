@@ -67,12 +67,14 @@ fn placed_labels(margin: u32, bar_width: u32, heat_max: u32) -> Vec<(String, u32
 /// the light count at the top of the ramp.
 pub fn with_heat_legend(rgba: &[u8], width: u32, height: u32, heat_max: u32) -> (Vec<u8>, u32) {
     let new_height = height + LEGEND_HEIGHT;
-    let mut out = Vec::with_capacity((width * new_height * 4) as usize);
+    // In usize: a wide image's bytes pass u32.
+    let bytes = width as usize * new_height as usize * 4;
+    let mut out = Vec::with_capacity(bytes);
     out.extend_from_slice(rgba);
-    out.resize((width * new_height * 4) as usize, 0);
+    out.resize(bytes, 0);
     let mut put = |x: u32, y: u32, c: [u8; 3]| {
         if x < width && y < new_height {
-            let i = ((y * width + x) * 4) as usize;
+            let i = (y as usize * width as usize + x as usize) * 4;
             out[i..i + 4].copy_from_slice(&[c[0], c[1], c[2], 255]);
         }
     };

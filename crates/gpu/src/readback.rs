@@ -75,9 +75,19 @@ fn copy_texels(
     let row = width * texel_bytes;
     let padded_row =
         row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    // In u64: a 32768² RGBA8 target is 4 GiB, past u32 (and past many devices' buffers, where
+    // wgpu would panic instead of returning an error).
+    let size = u64::from(padded_row) * u64::from(height);
+    let limit = ctx.device.limits().max_buffer_size;
+    if size > limit {
+        return Err(GpuError::InvalidInput(format!(
+            "reading back a {width} × {height} texture needs a {size}-byte buffer, more than \
+             this device's max_buffer_size ({limit} bytes)"
+        )));
+    }
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
-        size: padded_row as u64 * height as u64,
+        size,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
@@ -103,7 +113,7 @@ fn copy_texels(
     );
     ctx.queue.submit([encoder.finish()]);
     let bytes = map_and_read(ctx, &buffer)?;
-    let mut out = Vec::with_capacity((row * height) as usize);
+    let mut out = Vec::with_capacity(row as usize * height as usize);
     for y in 0..height as usize {
         let start = y * padded_row as usize;
         out.extend_from_slice(&bytes[start..start + row as usize]);
