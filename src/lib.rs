@@ -1,8 +1,9 @@
 //! # myriad — clustered shading with very many dynamic lights
 //!
 //! The facade: re-exports the four crates under short names and holds the pieces the `myriad`
-//! command-line tool shares with tests and benches (the assignment dump format, the accuracy and
-//! time-against-error measurements).
+//! command-line tool shares with tests and benches: the assignment dump format, the evaluation
+//! code (accuracy and time against error), the render glue (`render`: `Viewer`, `run_frames`,
+//! `Skips`), `light_input`, `core_link` and the Tracy profiling.
 //!
 //! | crate | re-exported as | what it is |
 //! | --- | --- | --- |

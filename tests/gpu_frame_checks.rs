@@ -282,8 +282,8 @@ fn kept_lights_are_drawn_only_from_the_camera_they_were_uploaded_for() {
 /// `upload_bytes` is exactly what was staged (48 bytes a light, 4 an offset, count or index, 4 a
 /// slice edge), piece by piece: a frame with all three, the lists alone, the lights alone, and a
 /// grid's slice edges alone. The upload generation counts the frames that uploaded lights or
-/// lists (as its doc says; a frame with both counted twice): 0 on a new renderer, one more after
-/// each such frame, the same after one that uploads neither.
+/// lists, once a frame (as its doc says; a frame with both was once counted twice): 0 on a new
+/// renderer, one more after each such frame, the same after one that uploads neither.
 #[test]
 fn the_report_counts_exactly_the_bytes_each_frame_staged() {
     let Some(ctx) = GpuContext::headless_for_tests() else {

@@ -18,7 +18,8 @@ struct Frame {
     heat_max: u32,
     // Cluster grid: tiles across, tiles down, depth slices; w unused.
     grid_dims: vec4<u32>,
-    // Camera near and far planes (the depth buffer's range).
+    // Camera near plane, and near over far (0 for an infinite far plane): the depth buffer's
+    // range.
     camera_near: f32,
     camera_near_over_far: f32,
     // Constant ambient term, as a fraction of albedo.

@@ -50,8 +50,9 @@
 //!    by the oracle (`exact`).
 //! 3. **Lock-free append** (`append.rs`): spans are bucketed by parts (depth slices), which add
 //!    up their pairs, so each part's place in the output is known; then per part, in parallel
-//!    over runs of equal work, a count (difference array), a scan into list starts and a fill
-//!    into the part's own slice of the output. Lists come out in ascending light order, so the
+//!    over runs of equal work, a count (difference array), a scan into list starts, a fill
+//!    into the part's own slice of the output, and a close (each list's count and start from
+//!    the cursors' ends). Lists come out in ascending light order, so the
 //!    output is identical for any number of threads.
 //!
 //! ## Correctness

@@ -22,7 +22,7 @@
 //! (Plain names, not links, for what a feature adds: these docs build without the features too,
 //! as an engine that turns them off builds them.)
 //! - `tracy`: Tracy spans for upload and encoding (each pass's CPU-side encode on its own) and
-//!   for each pipeline build.
+//!   for each pipeline build, and each timed pass as a Tracy GPU zone (`tracy_zones.rs`).
 //!
 //! An engine that brings its device and does its own image I/O can set
 //! `default-features = false` and depends on neither `pollster` nor `image`.
