@@ -1,7 +1,7 @@
 // The cluster of a pixel, computed exactly as `ClusterGrid::cluster_of_pixel` does on the CPU.
 //
 // Pixel -> tile is the same integer formula, floor((2p + 1) * tiles / (2 * pixels)), in u32 (the
-// renderer checks that 2 * pixels * tiles fits). Depth -> slice is a binary search of the same f32
+// renderer and the cluster check (`cluster_check.rs`) check that 2 * pixels * tiles fits). Depth -> slice is a binary search of the same f32
 // edge table the CPU builds (`ClusterGrid::fill_slice_edges`): only comparisons, so no GPU
 // rounding can move a pixel to another slice. The pass that includes this file declares
 // `slice_edges: array<f32>` (grid Z + 1 values, near to far).

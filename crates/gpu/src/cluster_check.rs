@@ -26,7 +26,8 @@ pub enum SampleDepths<'a> {
 }
 
 /// The cluster id the GPU computes for each `(pixel, view depth)` sample on a `width × height`
-/// target. Blocks until done.
+/// target. Blocks until done. A sample off the target, an empty target, or one whose tile
+/// arithmetic would pass u32 is a [`GpuError::InvalidInput`], as the renderer refuses them.
 pub fn gpu_cluster_ids(
     ctx: &GpuContext,
     grid: &ClusterGrid,
@@ -58,6 +59,26 @@ pub fn gpu_cluster_ids_of(
             "{} pixels and {} depths (need the same, non-zero count)",
             pixels.len(),
             depths.len()
+        )));
+    }
+    // What the renderer checks of a frame before its shaders run this code: a target of at
+    // least one pixel, `2 · pixels · tiles` in u32, and here also every sample on the target
+    // (the shader's tile formula assumes it).
+    let dims = grid.dims();
+    if width == 0
+        || height == 0
+        || 2 * u64::from(width) * u64::from(dims.x) > u64::from(u32::MAX)
+        || 2 * u64::from(height) * u64::from(dims.y) > u64::from(u32::MAX)
+    {
+        return Err(GpuError::InvalidInput(format!(
+            "a {width}x{height} target with {}x{} tiles: need at least one pixel, and \
+             2 · pixels · tiles within u32 along each side",
+            dims.x, dims.y
+        )));
+    }
+    if let Some(p) = pixels.iter().find(|p| p[0] >= width || p[1] >= height) {
+        return Err(GpuError::InvalidInput(format!(
+            "sample pixel {p:?} is off the {width}x{height} target"
         )));
     }
     let device = &ctx.device;

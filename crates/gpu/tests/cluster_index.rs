@@ -175,6 +175,41 @@ fn nan_depth_maps_to_slice_zero_on_the_gpu_too() {
     }
 }
 
+/// Targets and samples the shader's arithmetic does not cover are `InvalidInput` errors, as
+/// the renderer refuses such frames: an empty target, a sample off the target, and a target
+/// whose `2 · pixels · tiles` passes u32 (the last pixel of a target of one tile fewer runs).
+#[test]
+fn samples_off_the_target_and_targets_past_the_tile_arithmetic_are_refused() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let grid = ClusterGrid::new(UVec3::new(4, 4, 8), DepthSlicing::Log, 0.1, 100.0);
+    let check = |grid: &ClusterGrid, (w, h): (u32, u32), pixel: [u32; 2]| {
+        gpu_cluster_ids(&ctx, grid, w, h, &[pixel], &[5.0])
+    };
+    let invalid = |result: Result<Vec<u32>, GpuError>, want: &str| match result {
+        Err(GpuError::InvalidInput(e)) => assert!(e.contains(want), "{e}"),
+        other => panic!("want {want:?}, got {other:?}"),
+    };
+    invalid(check(&grid, (0, 16), [0, 0]), "need at least one pixel");
+    invalid(check(&grid, (16, 0), [0, 0]), "need at least one pixel");
+    invalid(
+        check(&grid, (16, 16), [16, 0]),
+        "[16, 0] is off the 16x16 target",
+    );
+    invalid(
+        check(&grid, (16, 16), [0, 16]),
+        "[0, 16] is off the 16x16 target",
+    );
+    // 2 · 2²⁰ · 2048 = 2³² passes u32; 2047 tiles do not.
+    let wide = 1 << 20;
+    let tiles = |x| ClusterGrid::new(UVec3::new(x, 4, 8), DepthSlicing::Log, 0.1, 100.0);
+    invalid(check(&tiles(2048), (wide, 16), [0, 0]), "within u32");
+    let last = wide - 1;
+    let ids = check(&tiles(2047), (wide, 16), [last, 15]).unwrap();
+    assert_eq!(ids, [tiles(2047).cluster_of_pixel(last, 15, 5.0, wide, 16)]);
+}
+
 /// Sample lists the check cannot run are `InvalidInput` errors, before any GPU work: pixels and
 /// depths of different lengths, no samples, and more samples than one dispatch's workgroups
 /// (64 a group) can take; exactly as many as that limit allows still run, one id per sample.
