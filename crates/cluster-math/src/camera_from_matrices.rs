@@ -142,6 +142,8 @@ impl std::error::Error for CameraMatrixError {}
 /// Relative tolerance for entries that must be zero and for the aspect ratio: f32 matrices built
 /// from the same numbers agree far closer; a jitter of a thousandth of a pixel at 1920 wide is
 /// 1e-6 of NDC, so anything refused here would shift clusters visibly more than rounding does.
+/// The centre's shift is held to it in NDC itself (a hundredth of a pixel at 1920 wide), not
+/// relative to the projection's scales.
 const RELATIVE_TOLERANCE: f64 = 1e-5;
 
 /// Tolerance for the view matrix's rotation part being orthonormal: f32 rotations composed from
@@ -265,7 +267,11 @@ fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, Camera
     if !(zero(m.w_axis.x) && zero(m.w_axis.y)) {
         return Err(NotPerspective("x' or y' has a constant term"));
     }
-    if !(zero(m.z_axis.x) && zero(m.z_axis.y)) {
+    // The centre's shift is NDC itself, whatever the scales: held to a fixed tolerance, not one
+    // that grows with a narrow field of view's scales (at 0.02 rad, 1e-3 of NDC: a half-pixel
+    // TAA jitter at 1920 wide went through as centred, audit).
+    let centred = |shift: f64| shift.abs() <= RELATIVE_TOLERANCE;
+    if !(centred(m.z_axis.x) && centred(m.z_axis.y)) {
         // NDC x = sx·x / (w_sign·z) + shift_x·…: the centre's offset is z_axis.xy · w_sign.
         let shift = [m.z_axis.x * m.z_axis.w, m.z_axis.y * m.z_axis.w];
         return Err(CameraMatrixError::OffCenter { shift });
@@ -326,8 +332,11 @@ fn read_view(m: DMat4) -> Result<View, CameraMatrixError> {
     if deviation > RIGID_TOLERANCE {
         return Err(CameraMatrixError::NotRigid { deviation });
     }
-    // view = R·world + t, so the eye (view origin) is −Rᵀ·t.
+    // view = M·world + t, so the eye (view origin) is −M⁻¹·t: −Mᵀ·t only where M is exactly
+    // orthonormal, and the check above lets a scale of 1 ± 1e-4 through, which moved the eye
+    // by that much of its distance from the origin (a view scaled 1.00004 at z = 10⁴ read the
+    // eye 0.8 off, audit), though such a scale moves no pixel.
     let t = m.w_axis.truncate();
-    let position = -(rows[0] * t.x + rows[1] * t.y + rows[2] * t.z);
+    let position = -(glam::DMat3::from_mat4(m).inverse() * t);
     Ok(View { rows, position })
 }

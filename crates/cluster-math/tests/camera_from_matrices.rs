@@ -244,6 +244,53 @@ fn assert_close(camera: &Camera, original: &Camera) {
     );
 }
 
+/// A narrow field of view has large scales, but the centre's shift is NDC all the same: a
+/// half-pixel TAA jitter is refused at 0.02 rad as at 60°, and a tenth of it too.
+#[test]
+fn a_jitter_is_refused_however_narrow_the_view() {
+    for fov in [0.02f32, 0.002] {
+        let projection = rh::proj::directx::perspective(fov, 16.0 / 9.0, 0.1, 1000.0);
+        let view = rh::view::look_at_mat4(vec3(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let read = |projection| {
+            Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 1920, 1080)
+        };
+        assert!(read(projection).is_ok(), "fov {fov}");
+        for pixels in [0.5, 0.05] {
+            let mut jittered = projection;
+            jittered.z_axis.x = pixels * 2.0 / 1920.0;
+            assert!(
+                matches!(read(jittered), Err(CameraMatrixError::OffCenter { .. })),
+                "fov {fov}, {pixels} px: {:?}",
+                read(jittered)
+            );
+        }
+    }
+}
+
+/// A view matrix scaled by a rounding's worth (accepted as rigid: it moves no pixel) gives the
+/// eye where it is: read as −Rᵀ·t, a scale of 1.00004 at 10⁴ from the origin put it 0.8 off.
+#[test]
+fn a_view_scaled_by_rounding_keeps_the_eye() {
+    let eye = vec3(0.0, 0.0, 10_000.0);
+    let original = Camera::new(eye, Vec3::ZERO, Vec3::Y, 60.0, 1920, 1080, 0.1, 1000.0);
+    for scale in [1.00004f32, 0.99996] {
+        let view = Mat4::from_scale(Vec3::splat(scale)) * original.view_from_world();
+        let camera = Camera::from_matrices(
+            view,
+            original.clip_from_view(),
+            ClipSpace::ZeroToOneYUp,
+            1920,
+            1080,
+        )
+        .unwrap();
+        assert!(
+            camera.position.distance(eye) < 2e-3,
+            "scale {scale}: eye read at {}",
+            camera.position
+        );
+    }
+}
+
 #[test]
 fn huge_world_coordinates_keep_the_view_direction() {
     // One unit ahead of a camera at 10⁶ would round the target by 0.06 m: a turned view.
