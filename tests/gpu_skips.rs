@@ -174,6 +174,36 @@ fn unchanged_frames_are_reused_and_changes_are_seen() {
     assert!(!f4.reused && !f4.appearance_only && f4.stats.is_some());
 }
 
+/// A refused frame drops the reuse cache: it had culled its own visible set into the state the
+/// reuse path reads, so a later frame of the cached camera whose lights only changed colour
+/// gathered them through that set and shaded them in other lights' clusters, with Ok.
+#[test]
+fn a_refused_frame_in_between_invalidates_the_reuse_cache() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+    render(&mut viewer, &scene, Skips::ALL);
+    // The same lights seen by a wider camera (another visible set), refused after the cull:
+    // the viewer's target is still 192 × 96.
+    let mut wider = scene.clone();
+    wider.camera.width = 384;
+    let refused = viewer.frame_with_skips(&wider, Method::Refined, Skips::ALL);
+    assert!(refused.is_err(), "{:?}", refused.map(|f| f.lights_assigned));
+    for i in 0..scene.lights.len() {
+        scene.lights.g[i] *= 0.5;
+    }
+    let (recoloured, frame) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(
+        !frame.reused && !frame.appearance_only,
+        "the cache outlived a refused frame"
+    );
+    let mut fresh = Viewer::new(ctx, &scene).unwrap();
+    let (expected, _) = render(&mut fresh, &scene, Skips::NONE);
+    assert!(max_channel_difference(&recoloured, &expected) <= 1);
+}
+
 #[test]
 fn a_plain_frame_in_between_invalidates_the_reuse_cache() {
     let Some(ctx) = GpuContext::headless_for_tests() else {

@@ -10,7 +10,7 @@
 //!    ([`myriad_assignment::Assigner::assign_active`]); the G-buffer is not drawn twice.
 //! 3. **fitted depth** — the grid's near/far become the prepass's nearest and farthest pixel
 //!    (and the blended draws' depth extent), widened by 1e-4 relative so GPU rounding of the
-//!    reconstructed depth cannot put a pixel outside, and never beyond the camera's range.
+//!    reconstructed depth cannot put a pixel outside, and never beyond the scene grid's range.
 //! 4. **reuse unchanged** — with the camera and every light column unchanged since the last
 //!    frame, nothing is culled, assigned or uploaded; when only colours or intensities changed,
 //!    the lights are re-uploaded and the lists kept (dirty tracking per column). Geometry is
@@ -254,6 +254,14 @@ impl Viewer {
         } else {
             self.skipping_frame(scene, method, skips, settings, &mut state)
         };
+        // A refused frame may have culled into the state (`visibility`, `visible`) that the
+        // cache's reuse path reads, though the GPU never got its lights: the cache goes with
+        // it. (Kept, a later frame of the cached camera whose lights only changed colour
+        // gathered them through the refused frame's visible set and shaded them in another
+        // light's clusters, with Ok, audit.)
+        if result.is_err() {
+            state.cache = None;
+        }
         self.skip_state = state;
         if result.is_ok() {
             crate::profiling::frame_mark();
@@ -294,6 +302,11 @@ impl Viewer {
         } else {
             skips.without_prepass()
         };
+        // A probe is timed from an idle GPU: the frames held between rounds submit without
+        // waiting, and the first probe of a round timed the last one's GPU work too.
+        if plan.probe {
+            self.ctx.wait_idle()?;
+        }
         let start = Instant::now();
         let mut frame = self.skipping_frame(scene, method, applied, settings, state)?;
         // A reused frame ran neither side's work: it times nothing, and the probe waits.
@@ -440,6 +453,11 @@ impl Viewer {
             &mut self.lists,
         );
         frame.assign_seconds = start.elapsed().as_secs_f64();
+        if stats.coarsened > 0 {
+            // Lists past the pair budget are built unmasked on the coarser grid: no cluster
+            // count of the mask describes them.
+            frame.active_clusters = None;
+        }
         frame.grid = stats.grid_built(&grid);
         frame.stats = Some(stats);
 

@@ -189,6 +189,9 @@ impl Viewer {
     /// Lists past what the device binds in one buffer ([`GpuContext::max_list_pairs`]) are built
     /// on a coarser grid (`coarser_grid`, until they fit; no light is dropped), which the frame
     /// is shaded with: [`ViewerFrame::grid`] is that grid and `stats` says how often it halved.
+    /// The budget covers the light indices only: a grid whose per-cluster offsets or counts,
+    /// or lights whose records, pass the device's buffers is refused
+    /// ([`myriad_gpu::GpuError::BufferTooLarge`]) after the assignment.
     pub fn frame(
         &mut self,
         scene: &RenderScene,
