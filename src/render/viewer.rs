@@ -235,7 +235,8 @@ impl Viewer {
         Ok(myriad_gpu::read_rgba8(&self.ctx, &self.target.texture)?)
     }
 
-    /// The last frame's lists.
+    /// The lists the last frame assigned — also when the renderer then refused that frame, so
+    /// after an error they may not be what the GPU holds.
     pub fn lists(&self) -> &LightLists {
         &self.lists
     }
