@@ -22,8 +22,9 @@
 //! one the depth never reaches, gives `far = f32::INFINITY`, which the assignment accepts with a
 //! finite grid and the renderer draws with the infinite reversed-Z projection); its range, 0..1 or
 //! −1..1, and whether NDC y points up or down on screen cannot be, so the caller names them
-//! ([`ClipSpace`]). Everything is computed in f64; the result's own matrices equal the inputs to
-//! f32 rounding (tested), and the depth range and field of view are checked as the f32 camera
+//! ([`ClipSpace`]). Everything is computed in f64; for inputs in this crate's own convention
+//! (reversed-Z 0..1, y up) the result's own matrices equal them to f32 rounding (tested; its
+//! [`Camera::clip_from_view`] is always that convention), and the depth range and field of view are checked as the f32 camera
 //! keeps them (a near plane of 1e-50 or a field of view 1e-9 short of π is refused, not rounded
 //! to 0 or π).
 
@@ -261,7 +262,7 @@ fn read_projection(m: DMat4, clip_space: ClipSpace) -> Result<Projection, Camera
     }
     if !(zero(m.x_axis.y) && zero(m.x_axis.z) && zero(m.y_axis.x) && zero(m.y_axis.z)) {
         return Err(NotPerspective(
-            "x' or y' or z' mixes x and y (shear or rotation)",
+            "x' or y' or z' mixes x and y (shear, rotation, or an oblique near plane)",
         ));
     }
     if !(zero(m.w_axis.x) && zero(m.w_axis.y)) {

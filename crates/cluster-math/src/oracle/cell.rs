@@ -92,8 +92,26 @@ impl Cell {
     }
 }
 
-/// Exact distance from `p` to the closed cell (0 when inside).
+/// Exact distance from `p` to the closed cell (0 when inside). A cell whose far depth is ∞ is
+/// first cut where its closest point to `p` cannot lie (see the body).
 pub fn distance_to_cell(p: DVec3, cell: &Cell) -> f64 {
+    if cell.depths[1] == f64::INFINITY {
+        // Infinite corners make `0 · ∞` and `∞ / ∞` NaN, which `f64::min` drops: the four edges
+        // along depth went missing and a point beside one was called too far (a miss, for a
+        // direct caller; the light tests cut first). The closest point is no farther from `p`
+        // than the near face's corner `c`, so it lies no deeper than `depth(p) + |c − p|`: cut
+        // there, with room to spare.
+        let c = cell.corner(0, 0, 0);
+        let reach = 2.0 * (c - p).length() + 1.0;
+        let far = cell.depths[0].max(-p.z) + reach;
+        if far.is_finite() {
+            let cut = Cell {
+                depths: [cell.depths[0], far],
+                ..*cell
+            };
+            return distance_to_cell(p, &cut);
+        }
+    }
     let planes = cell.planes();
     let signed: [f64; 6] = std::array::from_fn(|f| planes[f].0.dot(p) - planes[f].1);
     if signed.iter().all(|&s| s <= 0.0) {
@@ -278,6 +296,37 @@ mod tests {
                 assert!(sphere_intersects_cell(p, r, &cell), "{p} r {r} {cell:?}");
             }
         }
+    }
+
+    /// A cell open to infinite depth, with a zero slope (the middle column's edge): a point
+    /// beside its edges along depth is as far as from the same cell cut deep enough. Uncut, the
+    /// corners `0 · ∞` were NaN and those edges were lost.
+    #[test]
+    fn an_infinite_cell_keeps_its_edges_along_depth() {
+        let open = Cell {
+            x_slopes: [0.0, 0.5],
+            y_slopes: [0.0, 0.25],
+            depths: [1.0, f64::INFINITY],
+        };
+        let deep = Cell {
+            depths: [1.0, 1e9],
+            ..open
+        };
+        for p in [
+            DVec3::new(-0.3, -0.2, -5.0),
+            DVec3::new(-2.0, 3.0, -40.0),
+            DVec3::new(7.0, -1.0, -2.0),
+            DVec3::new(0.1, 0.1, 3.0),
+            DVec3::new(-1e5, 0.0, -1e6),
+        ] {
+            let (got, want) = (distance_to_cell(p, &open), distance_to_cell(p, &deep));
+            assert!(
+                (got - want).abs() <= 1e-9 * want.max(1.0),
+                "{p}: {got} against {want}"
+            );
+        }
+        // A point inside the open cell, past any finite cut one might have picked.
+        assert_eq!(distance_to_cell(DVec3::new(1e11, 1e10, -1e12), &open), 0.0);
     }
 
     #[test]
