@@ -216,7 +216,9 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     } else {
         0
     };
-    // Light indices are u32 (a scene file's lights are numbered in order).
+    check_memory(&grid, own.saturating_add(args.lights))?;
+    // Light indices are u32 (a scene file's lights are numbered in order): past the memory
+    // check only on a machine of some 275 GB.
     ensure!(
         own.checked_add(args.lights)
             .is_some_and(|n| n <= u32::MAX as usize),
@@ -224,7 +226,6 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
         args.lights,
         u32::MAX
     );
-    check_memory(&grid, own + args.lights)?;
     let mut lights = Lights::new();
     for light in model.lights.iter().take(own) {
         lights.push(light);
