@@ -59,6 +59,9 @@ fn frames_with(
     )
     .unwrap();
     assert_eq!(report.frames.len(), count);
+    // One image a frame: the callers compare them pairwise, and a zip of empty lists compares
+    // nothing.
+    assert_eq!(images.len(), count);
     assert!(
         report
             .frames

@@ -710,6 +710,25 @@ fn stress_checks_every_cluster_against_the_oracle() {
     // Lights (32 bytes or more each) and the lists went up.
     assert!(u64_field(&r, "upload_bytes") > 20000 * 32 + 4 * pairs);
     assert_stress_stages(&r);
+    // The full check reads the `exact` method's lists, which share the cull and plane searches
+    // with the method under test: the same frame with every cluster checked independently of
+    // the assignment finds no miss either, and the same exact pairs.
+    let r = stress_json(&[
+        "--lights",
+        "20000",
+        "--size",
+        "64x36",
+        "--exact-up-to",
+        "0",
+        "--sample",
+        "100000000",
+    ]);
+    let independent = &r["check"];
+    assert_eq!(independent["mode"], "independent");
+    assert_eq!(independent["misses"], 0);
+    assert_eq!(independent["clusters_checked"], check["clusters_total"]);
+    assert_eq!(independent["exact_pairs"], check["exact_pairs"]);
+    assert_eq!(u64_field(&r["assignment"], "pairs"), pairs);
 }
 
 #[test]

@@ -376,7 +376,9 @@ fn lights_before_the_grid_but_in_view_are_counted_by_every_method() {
                     assert_eq!(stats.before_near, drawn.before, "{what}");
                     assert_eq!(stats.beyond_far, drawn.beyond, "{what}");
                     assert_eq!(stats.reach.is_some(), camera_far > grid_far, "{what}");
-                    let mut listed_before = 0;
+                    // Each light before the grid, by itself: a method that listed some of them
+                    // in many tiles and dropped others passed a count of pairs.
+                    let mut listed_before = std::collections::BTreeSet::new();
                     for c in 0..grid.cluster_count() {
                         for &l in lists.lights_of(c) {
                             let p = Vec3::new(
@@ -390,17 +392,26 @@ fn lights_before_the_grid_but_in_view_are_counted_by_every_method() {
                                     c < first_slice as usize,
                                     "{what}: light {l} before the grid listed in cluster {c}"
                                 );
-                                listed_before += 1;
+                                listed_before.insert(l);
                             }
                         }
                     }
+                    let before: std::collections::BTreeSet<u32> = (0..n as u32)
+                        .filter(|&l| {
+                            let i = l as usize;
+                            let p = Vec3::new(lights.x[i], lights.y[i], lights.z[i]);
+                            let depth = (p - camera.position).dot(forward);
+                            depth + lights.radius[i] < grid.near()
+                        })
+                        .collect();
+                    assert_eq!(before.len() as u32, drawn.before, "{what}");
                     match edge {
                         OuterSlices::Open => {
-                            assert!(listed_before >= drawn.before, "{what}: {listed_before}");
+                            assert_eq!(listed_before, before, "{what}");
                             assert_eq!(stats.visible(), n as u32, "{what}: {stats:?}");
                         }
                         OuterSlices::Closed => {
-                            assert_eq!(listed_before, 0, "{what}");
+                            assert!(listed_before.is_empty(), "{what}: {listed_before:?}");
                             let outside = drawn.before + drawn.beyond;
                             assert!(stats.culled >= outside, "{what}: {stats:?}");
                         }

@@ -794,8 +794,9 @@ fn numbers_beyond_f64_and_broken_syntax_are_json_errors_with_position() {
 }
 
 /// Loads `bytes` every way and checks the ways agree: validation is clean exactly when a strict
-/// load succeeds; a failed strict load reports validation's first problem; a lenient load keeps
-/// exactly the lights validation calls ok.
+/// load succeeds; a failed strict load reports validation's first problem; a lenient load
+/// succeeds exactly when every problem is a light's, and keeps exactly the lights validation
+/// calls ok.
 fn check_consistent(bytes: &[u8]) {
     let strict = Scene::from_json_slice(bytes, "x", LightPolicy::Strict);
     let lenient = Scene::from_json_slice(bytes, "x", LightPolicy::SkipInvalid);
@@ -821,6 +822,14 @@ fn check_consistent(bytes: &[u8]) {
                 assert_eq!(problem, &report.problems[0]);
                 assert_eq!(more + 1, report.problems.len());
             }
+            let lights_only = report.problems.iter().all(|p| p.light.is_some());
+            assert_eq!(
+                lenient.is_ok(),
+                lights_only,
+                "problems {:?}; lenient load: {:?}",
+                report.problems,
+                lenient.as_ref().err()
+            );
             if let Ok(s) = &lenient {
                 assert_eq!(s.lights.len(), report.lights_ok());
                 assert_eq!(s.skipped.len(), report.lights_bad);
