@@ -11,12 +11,15 @@
 //! frame shades: that is the caller's contract, and the one way this can lose a light.
 
 use glam::UVec3;
-use myriad_cluster_math::ClusterGrid;
+use myriad_cluster_math::{ClusterGrid, OuterSlices};
 
 /// One flag per cluster of a grid.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ActiveClusters {
     dims: UVec3,
+    /// The grid the flags are for, its outer slices open (see [`ActiveClusters::is_for`]);
+    /// `None` for a mask of no grid (`default()`).
+    grid: Option<ClusterGrid>,
     cluster: Vec<bool>,
     active: usize,
 }
@@ -29,9 +32,10 @@ impl ActiveClusters {
         mask
     }
 
-    /// Clears the mask for `grid`'s dimensions, keeping the storage.
+    /// Clears the mask for `grid`, keeping the storage.
     pub fn reset(&mut self, grid: &ClusterGrid) {
         self.dims = grid.dims();
+        self.grid = Some(grid.with_outer_slices(OuterSlices::Open));
         self.cluster.clear();
         self.cluster.resize(grid.cluster_count(), false);
         self.active = 0;
@@ -40,6 +44,15 @@ impl ActiveClusters {
     /// Grid dimensions the mask is for.
     pub fn dims(&self) -> UVec3 {
         self.dims
+    }
+
+    /// Whether the mask's cluster ids are `grid`'s: the grid it was made or last reset for, or
+    /// one differing only in its outer slices (open or closed, the same cells hold the same
+    /// pixels). A grid of the same dimensions over another depth range or slicing is not: its
+    /// cluster ids are other cells (a mask from the full range's grid used on the fitted one
+    /// left clusters that the frame shades without their lights).
+    pub fn is_for(&self, grid: &ClusterGrid) -> bool {
+        self.grid == Some(grid.with_outer_slices(OuterSlices::Open))
     }
 
     /// Marks cluster `id` active. Panics when `id` is not a cluster of the mask's grid.

@@ -219,11 +219,19 @@ fn frame_problem(
     if let Some(problem) = lights.problem() {
         return Some(problem.into());
     }
-    let [a, g] = [active?.dims(), grid.dims()];
-    (a != g).then(|| {
-        format!(
+    let active = active?;
+    let [a, g] = [active.dims(), grid.dims()];
+    if a != g {
+        return Some(format!(
             "active-cluster mask is for a {}x{}x{} grid, not this {}x{}x{} one",
             a.x, a.y, a.z, g.x, g.y, g.z
+        ));
+    }
+    (!active.is_for(grid)).then(|| {
+        format!(
+            "active-cluster mask is for another {}x{}x{} grid (another depth range or slicing: \
+             its cluster ids are other cells); build it for this grid",
+            g.x, g.y, g.z
         )
     })
 }
@@ -315,6 +323,9 @@ impl Assigner {
     /// bigger clusters, so more false positives but never a missed light — and
     /// [`AssignStats::grid_dims`] / [`AssignStats::coarsened`] say so. Deterministic: the same
     /// input always degrades the same way. Without a budget the limit is what u32 offsets hold.
+    /// The one frame that passes the cap is one whose lights exceed it even on a single cluster:
+    /// that frame lists them all there, and [`AssignStats::over_budget`] says so (no light is
+    /// dropped to keep a cap).
     pub fn with_pair_budget(mut self, pairs: u64) -> Self {
         self.pair_budget = Some(pairs);
         self
@@ -652,14 +663,19 @@ pub(crate) fn sees_before(camera: &Camera, grid: &ClusterGrid) -> bool {
 
 /// Where the camera sees past either depth edge of `grid`: the near and far of its view there,
 /// for the cull that counts the lights outside the grid ([`AssignStats::before_near`],
-/// [`AssignStats::beyond_far`]). Each side that the grid covers keeps the grid's own depth. The
-/// near is clamped as an open first slice's start is ([`ClusterGrid::first_slice_start`]), so
-/// that what an open grid lists before its near and what is counted there are the same lights.
+/// [`AssignStats::beyond_far`]). A far side the grid covers keeps the grid's own depth. The
+/// near is the camera's where it sees nearer than the grid, clamped as an open first slice's
+/// start is ([`ClusterGrid::first_slice_start`]), so that what an open grid lists before its
+/// near and what is counted there are the same lights; the camera's too where it clips beyond
+/// the grid's near (the lights in front of it are not in view, and counted in no reach); else
+/// the grid's (a placeholder near).
 pub(crate) fn sees_outside(camera: &Camera, grid: &ClusterGrid) -> Option<(f32, f32)> {
     let (before, past) = (sees_before(camera, grid), sees_past(camera, grid));
     (before || past).then(|| {
         let near = if before {
             camera.near.max(ClusterGrid::MIN_NEAR)
+        } else if camera.near > grid.near() && camera.near.is_finite() {
+            camera.near
         } else {
             grid.near()
         };
@@ -692,10 +708,12 @@ pub fn coarser_grid(grid: &ClusterGrid) -> ClusterGrid {
 /// emit's innermost loop.
 fn plan_parts(grid: &ClusterGrid, tasks: usize) -> Parts {
     let slices = grid.dims().z as usize;
+    // At most 2³¹ slices a part: `k >> slice_shift` takes a u32 slice, so the shift stays
+    // under 32 (a grid of over 2³¹ slices needs two parts).
     let slices_per_part = if tasks > 1 {
         1
     } else {
-        slices.next_power_of_two()
+        slices.next_power_of_two().min(1 << 31)
     };
     let per_slice = grid.dims().x as usize * grid.dims().y as usize;
     Parts {

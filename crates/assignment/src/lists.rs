@@ -42,9 +42,11 @@ impl LightLists {
     }
 
     /// Bytes of the lists for `clusters` clusters and `pairs` pairs: `4·(2·clusters + pairs)`.
-    /// With a pair budget ([`crate::Assigner::with_pair_budget`]) this bounds every frame's output
+    /// With a pair budget ([`crate::Assigner::with_pair_budget`]) this bounds a frame's output
     /// before it is computed: `byte_size_for(grid.cluster_count(), budget)` (a coarsened grid only
-    /// has fewer clusters).
+    /// has fewer clusters) — except a frame whose lights exceed the budget even on one cluster
+    /// ([`crate::AssignStats::over_budget`]), which holds one pair per light in view: bound
+    /// every frame with `byte_size_for(grid.cluster_count(), budget.max(lights))`.
     pub const fn byte_size_for(clusters: usize, pairs: usize) -> usize {
         4 * (2 * clusters + pairs)
     }

@@ -93,6 +93,34 @@ fn axis_camera(near: f32, far: f32) -> Camera {
     )
 }
 
+/// A camera whose near plane lies beyond the grid's near clips the lights in front of it:
+/// `reach` counts the lights in view only (a light wholly nearer than the camera's near gave
+/// the reach; the grid's open first slice still lists it, conservatively).
+#[test]
+fn reach_leaves_out_lights_nearer_than_the_cameras_near() {
+    let camera = Camera {
+        near: 1.0,
+        ..camera(f32::INFINITY)
+    };
+    let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 50.0);
+    let (_, _, forward) = view_basis(&camera);
+    let mut lights = Columns::default();
+    lights.push(camera.position + forward * 0.5, 0.2);
+    for method in Method::ALL {
+        let mut lists = LightLists::new();
+        let stats = assign(method, &lights, false, &camera, &grid, &mut lists);
+        assert_eq!(stats.reach, Some(0.0), "{method}: only a clipped light");
+        let mut with_one_in_view = lights.clone();
+        with_one_in_view.push(camera.position + forward * 3.0, 0.5);
+        let stats = assign(method, &with_one_in_view, false, &camera, &grid, &mut lists);
+        let reach = stats.reach.expect("the camera sees past the grid");
+        assert!(
+            (3.5..3.5 * (1.0 + 1e-5)).contains(&reach),
+            "{method}: {reach}"
+        );
+    }
+}
+
 /// One frame of `method` by a fresh assigner, into `lists`.
 fn assign(
     method: Method,

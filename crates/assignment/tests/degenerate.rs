@@ -625,6 +625,10 @@ fn try_assign_returns_each_panic_of_assign_as_an_error_and_leaves_the_lists() {
     short_spot.spot.as_mut().unwrap().angle = &[];
     let other_grid = ClusterGrid::new(UVec3::new(4, 4, 4), DepthSlicing::Log, 0.1, 100.0);
     let mask = myriad_assignment::ActiveClusters::new(&other_grid);
+    // The same dimensions over another depth range: other cells under the same ids.
+    let other_range = ClusterGrid::new(UVec3::new(8, 4, 4), DepthSlicing::Log, 0.1, 90.0);
+    let mut other_range_mask = myriad_assignment::ActiveClusters::new(&other_range);
+    other_range_mask.mark_all();
     let no_height = Camera { height: 0, ..good };
     let full = lights.input(false);
     let cases = [
@@ -636,6 +640,12 @@ fn try_assign_returns_each_panic_of_assign_as_an_error_and_leaves_the_lists() {
             &good,
             Some(&mask),
             "mask is for a 4x4x4 grid, not this 8x4x4 one",
+        ),
+        (
+            &full,
+            &good,
+            Some(&other_range_mask),
+            "mask is for another 8x4x4 grid (another depth range or slicing",
         ),
     ];
     for (input, cam, active, needle) in cases {
@@ -700,6 +710,32 @@ fn every_method_refuses_an_unusable_camera_with_one_clear_message() {
         let (exact, _) = assert_conservative(method.name(), &lists, &truth, "infinite far");
         assert!(exact > 0);
     }
+    // A mask is for its grid's cells whether the outer slices are open or closed.
+    let mut mask = myriad_assignment::ActiveClusters::new(&grid);
+    mask.mark_all();
+    let closed = grid.with_outer_slices(myriad_cluster_math::OuterSlices::Closed);
+    let mut masked = LightLists::new();
+    Assigner::new()
+        .try_assign_active(
+            Method::Refined,
+            &lights.input(false),
+            &good,
+            &closed,
+            Some(&mask),
+            &mut masked,
+        )
+        .unwrap();
+    let mut unmasked = LightLists::new();
+    Assigner::new()
+        .try_assign(
+            Method::Refined,
+            &lights.input(false),
+            &good,
+            &closed,
+            &mut unmasked,
+        )
+        .unwrap();
+    assert_eq!(masked, unmasked);
 }
 
 #[test]
