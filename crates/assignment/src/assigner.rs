@@ -111,10 +111,12 @@ pub struct AssignStats {
     pub lights: u32,
     /// Lights skipped because their position or radius was not finite, or the radius not positive.
     pub rejected: u32,
-    /// Valid lights the frustum test rejected before any cluster was looked at. Not every
-    /// light that reaches no cluster: one kept by that (conservative, padded) test may still
-    /// list nowhere, e.g. a spot whose cone misses every cluster its sphere touches, or a light
-    /// only in inactive clusters; those count as [`visible`](Self::visible).
+    /// Valid lights the frustum test rejected, or whose z, x and y searches then found no
+    /// cluster range (a box the method's own bounds leave empty: `exact`'s wider boxes can
+    /// count a few less than `binary`'s). Not every light that reaches no cluster: one kept by
+    /// those (conservative, padded) tests may still list nowhere, e.g. a spot whose cone misses
+    /// every cluster its sphere touches, or a light only in inactive clusters; those count as
+    /// [`visible`](Self::visible).
     pub culled: u32,
     /// Cluster–light pairs written.
     pub pairs: u64,
