@@ -112,8 +112,8 @@ pub struct AssignStats {
     /// Lights skipped because their position or radius was not finite, or the radius not positive.
     pub rejected: u32,
     /// Valid lights the frustum test rejected, or whose z, x and y searches then found no
-    /// cluster range (a box the method's own bounds leave empty: `exact`'s wider boxes can
-    /// count a few less than `binary`'s). Not every light that reaches no cluster: one kept by
+    /// cluster range (a box the method's own bounds leave empty, so methods whose boxes differ
+    /// may count differently). Not every light that reaches no cluster: one kept by
     /// those (conservative, padded) tests may still list nowhere, e.g. a spot whose cone misses
     /// every cluster its sphere touches, or a light only in inactive clusters; those count as
     /// [`visible`](Self::visible).
