@@ -276,6 +276,23 @@ fn commands_that_load_a_model_print_what_the_loader_changed() {
     assert!(scene_file.is_file());
 }
 
+/// A glTF of one triangle and two `KHR_lights_punctual` lights on nodes of their own: `first`
+/// (JSON), then a good point light of range 3.
+fn triangle_lit_by(first: &str) -> String {
+    format!(
+        r#"{{"asset": {{"version": "2.0"}},
+{TRIANGLE},
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [
+      {first}, {{"type": "point", "range": 3}}]}}}},
+  "scenes": [{{"nodes": [0, 1, 2]}}],
+  "nodes": [{{"mesh": 0}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 0, 1]}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 1}}}}, "translation": [0, 0, 1]}}]}}"#
+    )
+}
+
 #[test]
 fn model_lights_say_which_directional_lights_are_not_written() {
     // A scene file holds point and spot lights: `scene --model-lights` writes the point light
@@ -284,18 +301,7 @@ fn model_lights_say_which_directional_lights_are_not_written() {
     let path = dir.join("sun.gltf");
     std::fs::write(
         &path,
-        format!(
-            r#"{{"asset": {{"version": "2.0"}},
-{TRIANGLE},
-  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
-  "extensionsUsed": ["KHR_lights_punctual"],
-  "extensions": {{"KHR_lights_punctual": {{"lights": [
-      {{"type": "directional", "name": "sun"}}, {{"type": "point", "range": 3}}]}}}},
-  "scenes": [{{"nodes": [0, 1, 2]}}],
-  "nodes": [{{"mesh": 0}},
-            {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 0, 1]}},
-            {{"extensions": {{"KHR_lights_punctual": {{"light": 1}}}}, "translation": [0, 0, 1]}}]}}"#
-        ),
+        triangle_lit_by(r#"{"type": "directional", "name": "sun"}"#),
     )
     .unwrap();
     let out = dir.join("sun.scene");
@@ -329,18 +335,7 @@ fn an_invalid_light_is_left_out_and_counted_not_fatal() {
     let path = dir.join("range_0.gltf");
     std::fs::write(
         &path,
-        format!(
-            r#"{{"asset": {{"version": "2.0"}},
-{TRIANGLE},
-  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
-  "extensionsUsed": ["KHR_lights_punctual"],
-  "extensions": {{"KHR_lights_punctual": {{"lights": [
-      {{"type": "point", "range": 0, "name": "dead"}}, {{"type": "point", "range": 3}}]}}}},
-  "scenes": [{{"nodes": [0, 1, 2]}}],
-  "nodes": [{{"mesh": 0}},
-            {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 0, 1]}},
-            {{"extensions": {{"KHR_lights_punctual": {{"light": 1}}}}, "translation": [0, 0, 1]}}]}}"#
-        ),
+        triangle_lit_by(r#"{"type": "point", "range": 0, "name": "dead"}"#),
     )
     .unwrap();
     let warning =

@@ -8,8 +8,8 @@ use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::layout::GpuLight;
 use myriad::gpu::{
-    FrameDesc, GpuContext, GpuError, HEADLESS_FORMAT, HeadlessTarget, Renderer, ShadingMode,
-    ShadingSettings, read_rgba8, wgpu,
+    FrameDesc, GpuContext, GpuError, GpuScene, HEADLESS_FORMAT, HeadlessTarget, Renderer,
+    ShadingMode, ShadingSettings, read_rgba8, wgpu,
 };
 use myriad::render::{
     GpuStage, RenderScene, Shading, Viewer, cluster_lists, light_columns, max_channel_difference,
@@ -52,6 +52,15 @@ fn binding_limited(limit: u64) -> GpuContext {
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).unwrap();
     GpuContext::from_device(device, queue)
+}
+
+/// A renderer on `ctx` with `scene`'s geometry uploaded, and a target of its camera's size.
+fn renderer_for(ctx: &GpuContext, scene: &RenderScene) -> (Renderer, GpuScene, HeadlessTarget) {
+    let mut renderer = Renderer::new(ctx, HEADLESS_FORMAT);
+    let geometry = renderer.upload_scene(ctx, &scene.geometry).unwrap();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let target = HeadlessTarget::new(&ctx.device, width, height).unwrap();
+    (renderer, geometry, target)
 }
 
 /// `scene`'s lists for its own camera and grid.
@@ -97,9 +106,7 @@ fn lists_up_to_a_binding_limit_of_no_whole_words_are_drawn() {
     let scene = RenderScene::default_scene(100, 32, 16)
         .unwrap()
         .with_grid(UVec3::new(16, 8, 16), DepthSlicing::Log);
-    let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
-    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
-    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let (mut renderer, geometry, target) = renderer_for(&ctx, &scene);
     let clusters = scene.grid.cluster_count();
     // 65 537 pairs: 2¹⁸ + 4 bytes, whose next power of two is past the limit.
     let most = (LIMIT / 4) as usize;
@@ -150,9 +157,7 @@ fn kept_lists_of_another_grid_are_refused_as_such_before_the_loop_limit() {
         lists.counts.push(count as u32);
         lists.indices.extend(0..count as u32);
     }
-    let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
-    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
-    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let (mut renderer, geometry, target) = renderer_for(&ctx, &scene);
     let frame = FrameDesc::clustered(
         &scene.camera,
         &scene.grid,
@@ -370,9 +375,7 @@ fn a_frame_refused_for_its_lights_leaves_the_last_frames_times() {
     let scene = RenderScene::default_scene(100, 32, 16).unwrap();
     let crowd = RenderScene::default_scene(too_many, 32, 16).unwrap();
     assert_eq!(crowd.lights.len(), too_many);
-    let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
-    let geometry = renderer.upload_scene(&ctx, &scene.geometry).unwrap();
-    let target = HeadlessTarget::new(&ctx.device, 32, 16).unwrap();
+    let (mut renderer, geometry, target) = renderer_for(&ctx, &scene);
     let lists = assigned(&scene);
     let frame = FrameDesc::clustered(
         &scene.camera,

@@ -73,18 +73,30 @@ fn task_pairs(ctx: &FrameContext<'_>, begin: usize, end: usize) -> (Vec<(u32, u3
     (pairs, out.rejected, out.culled)
 }
 
+/// Which build of the phases a test runs.
+#[derive(Clone, Copy)]
+enum Build {
+    /// The tasks' dispatchers: their AVX2 + FMA builds on a CPU that has them.
+    Dispatched,
+    /// `run_blocks` inlined into this test module, which is compiled for the target's baseline
+    /// (SSE2 on x86-64).
+    Baseline,
+}
+
 /// [`task_pairs`] in blocks of `B` lights, [`BLOCK`] or [`LARGE_BLOCK`], whatever the task's
-/// length (`run_task` picks the width by the length).
+/// length (`run_task` picks the width by the length), through `build`.
 fn task_pairs_in_blocks<const B: usize>(
     ctx: &FrameContext<'_>,
     begin: usize,
     end: usize,
+    build: Build,
 ) -> (Vec<(u32, u32)>, u32, u32) {
     let mut out = TaskOutput::default();
     out.reset(ctx);
-    match B {
-        BLOCK => run_small_blocks(ctx, begin, end, &mut out),
-        LARGE_BLOCK => run_large_blocks(ctx, begin, end, &mut out),
+    match (build, B) {
+        (Build::Baseline, _) => run_blocks::<B>(ctx, begin, end, &mut out),
+        (Build::Dispatched, BLOCK) => run_small_blocks(ctx, begin, end, &mut out),
+        (Build::Dispatched, LARGE_BLOCK) => run_large_blocks(ctx, begin, end, &mut out),
         _ => unreachable!("no task runs blocks of {B}"),
     }
     let pairs = listed_pairs(&out.buckets[..ctx.parts], ctx.grid.dims().x);
@@ -508,7 +520,7 @@ fn lists_each_lights_box_and_counts_every_other_light_once<const B: usize>() {
     }
     want.sort_unstable();
     assert_task_output(
-        task_pairs_in_blocks::<B>(&ctx, begin, end),
+        task_pairs_in_blocks::<B>(&ctx, begin, end, Build::Dispatched),
         (&want, rejected, culled_early + culled_late),
         &format!("{B}-wide blocks: {culled_early} by the early cull, {culled_late} without a box"),
     );
@@ -522,21 +534,6 @@ fn lists_each_lights_box_and_counts_every_other_light_once<const B: usize>() {
         "rejected {rejected}, culled early {culled_early}, without a box {culled_late}, pairs {}",
         want.len()
     );
-}
-
-/// [`task_pairs_in_blocks`] through the baseline build of the phases: `run_blocks` inlined
-/// into this test, which is compiled for the target's baseline (SSE2 on x86-64), where the
-/// tasks' dispatchers pick their AVX2 + FMA builds on a CPU that has them.
-fn task_pairs_in_baseline_blocks<const B: usize>(
-    ctx: &FrameContext<'_>,
-    begin: usize,
-    end: usize,
-) -> (Vec<(u32, u32)>, u32, u32) {
-    let mut out = TaskOutput::default();
-    out.reset(ctx);
-    run_blocks::<B>(ctx, begin, end, &mut out);
-    let pairs = listed_pairs(&out.buckets[..ctx.parts], ctx.grid.dims().x);
-    (pairs, out.rejected, out.culled)
 }
 
 /// The two block widths, and the two builds of each (the dispatched one — AVX2 + FMA where the
@@ -593,11 +590,12 @@ fn both_block_widths_and_both_builds_give_the_same_task_output() {
                 ctx.cluster_spheres = &spheres;
             }
             let (begin, end) = (123, n);
-            let small = task_pairs_in_blocks::<BLOCK>(&ctx, begin, end);
-            let large = task_pairs_in_blocks::<LARGE_BLOCK>(&ctx, begin, end);
+            let small = task_pairs_in_blocks::<BLOCK>(&ctx, begin, end, Build::Dispatched);
+            let large = task_pairs_in_blocks::<LARGE_BLOCK>(&ctx, begin, end, Build::Dispatched);
             let what = format!("{method}, spots {spots}");
-            let small_baseline = task_pairs_in_baseline_blocks::<BLOCK>(&ctx, begin, end);
-            let large_baseline = task_pairs_in_baseline_blocks::<LARGE_BLOCK>(&ctx, begin, end);
+            let small_baseline = task_pairs_in_blocks::<BLOCK>(&ctx, begin, end, Build::Baseline);
+            let large_baseline =
+                task_pairs_in_blocks::<LARGE_BLOCK>(&ctx, begin, end, Build::Baseline);
             assert_task_output(large, (&small.0, small.1, small.2), &what);
             for (build, got) in [("small", small_baseline), ("large", large_baseline)] {
                 let what = format!("{what}, baseline build of the {build} blocks");
