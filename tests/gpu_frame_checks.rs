@@ -56,7 +56,7 @@ fn binding_limited(limit: u64) -> GpuContext {
 
 /// A renderer on `ctx` with `scene`'s geometry uploaded, and a target of its camera's size.
 fn renderer_for(ctx: &GpuContext, scene: &RenderScene) -> (Renderer, GpuScene, HeadlessTarget) {
-    let mut renderer = Renderer::new(ctx, HEADLESS_FORMAT);
+    let renderer = Renderer::new(ctx, HEADLESS_FORMAT);
     let geometry = renderer.upload_scene(ctx, &scene.geometry).unwrap();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let target = HeadlessTarget::new(&ctx.device, width, height).unwrap();
