@@ -4,20 +4,25 @@
 //! this harness runs on stable: a seeded PRNG drives a byte mutator over a small built-in corpus
 //! (and a generator of random scenes), so a run is reproducible from `--seed`, and any failing
 //! input is written to `fuzz/artifacts/<target>-<iteration>.bin` (the assignment target prints
-//! its parameters instead). It finds panics, hangs (a per-input time limit) and, for the
-//! assignment, misses against the f64 oracle.
+//! its sub-seed instead: `--subseed S` runs that one input again). It finds panics, hangs (an
+//! input running over 20 s ends the run: `watchdog.rs`) and, for the assignment, misses against
+//! the f64 oracle. `--inputs N` stops after N inputs (with `--seconds` as well, whichever comes
+//! first): a run of a fixed number of inputs checks the same ones on any machine.
 //!
 //! ```sh
-//! cargo run --release -p myriad-fuzz -- scene  --seconds 600 [--seed 1]
+//! cargo run --release -p myriad-fuzz -- scene  --seconds 600 [--seed 1] [--inputs N]
 //! cargo run --release -p myriad-fuzz -- gltf   --seconds 600
-//! cargo run --release -p myriad-fuzz -- assign --seconds 600
+//! cargo run --release -p myriad-fuzz -- assign --seconds 600 [--subseed S]
 //! ```
 //!
 //! Targets:
 //! * `scene`: `Scene::from_json_slice` (strict and lenient) and `validate_json_slice` on mutated
 //!   scene files; checks they agree (validation clean ⇔ strict load succeeds).
 //! * `gltf`: `Model::from_gltf_slice` on mutated glTF JSON and GLB (`assets/atrium.glb` and a
-//!   hand-written triangle); every 64th input also goes through a temp file and `Model::load`.
+//!   hand-written triangle); every 64th input also goes through a temp file and `Model::load`,
+//!   which must agree. A GLB is mostly mutated chunk by chunk and packed again with lengths that
+//!   match (`mutate_glb`): mutated whole, nearly every input changed its length and stopped at
+//!   the header's length check. The run prints how many inputs loaded.
 //! * `assign`: random camera (fov 0.5–179°, aspect 0.1–10, near 1e-4–10, far/near to 1e5, eye up
 //!   to 1e6 away, any orientation), small grid (≤ 8×6×8) and 1–60 lights (points and spots) →
 //!   every `Method` conservative against the oracle (`crates/assignment/tests/common`). One input
@@ -28,6 +33,7 @@
 
 #[path = "../../crates/assignment/tests/common/mod.rs"]
 mod common;
+mod watchdog;
 
 use glam::UVec3;
 use myriad::assignment::{Assigner, LightLists, Method, Parallelism, SERIAL_LIGHTS};
@@ -36,6 +42,7 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 const SCENE: &str = include_str!("../../crates/scene/tests/data/hand_written.json");
@@ -143,6 +150,59 @@ fn mutate(rng: &mut Pcg64, input: &[u8]) -> Vec<u8> {
     v
 }
 
+/// A GLB's JSON and BIN chunks, when `bytes` is one whose chunk lengths hold together.
+fn glb_chunks(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
+    let word = |at: usize| -> Option<usize> {
+        let b = bytes.get(at..at + 4)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    if bytes.get(..4)? != b"glTF" {
+        return None;
+    }
+    let json_len = word(12)?;
+    let json = bytes.get(20..20 + json_len)?;
+    let bin_at = 20 + json_len;
+    let bin_len = word(bin_at)?;
+    let bin = bytes.get(bin_at + 8..bin_at + 8 + bin_len)?;
+    Some((json, bin))
+}
+
+/// `bytes` mutated: a GLB (seven times in eight) chunk by chunk — its JSON by [`mutate`], its
+/// BIN by in-place changes that keep its length — and packed again with matching lengths, so
+/// the loader gets past the container's checks; anything else byte by byte.
+fn mutate_glb(rng: &mut Pcg64, bytes: &[u8]) -> Vec<u8> {
+    let Some((json, bin)) = glb_chunks(bytes).filter(|_| !rng.random_bool(1.0 / 8.0)) else {
+        return mutate(rng, bytes);
+    };
+    let mut json = if rng.random_bool(0.8) {
+        mutate(rng, json)
+    } else {
+        json.to_vec()
+    };
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    if !bin.is_empty() && rng.random_bool(0.3) {
+        for _ in 0..rng.random_range(1..=4) {
+            let at = rng.random_range(0..bin.len());
+            bin[at] = rng.random();
+        }
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
 fn save_artifact(target: &str, iteration: u64, bytes: &[u8]) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("artifacts");
     std::fs::create_dir_all(&dir).expect("artifacts folder");
@@ -172,14 +232,21 @@ fn scene_once(bytes: &[u8]) {
     }
 }
 
-fn gltf_once(bytes: &[u8], through_file: Option<&std::path::Path>) {
+/// Loads `bytes` as a glTF or GLB; returns whether it loaded. Through a file as well where
+/// `through_file` is given, which must agree.
+fn gltf_once(bytes: &[u8], through_file: Option<&std::path::Path>) -> bool {
     let options = LoadOptions::without_images();
-    let _ = Model::from_gltf_slice(bytes, "fuzz.gltf", None, &options);
+    let loaded = Model::from_gltf_slice(bytes, "fuzz.gltf", None, &options).is_ok();
     if let Some(dir) = through_file {
         let path = dir.join("fuzz.gltf");
         std::fs::write(&path, bytes).expect("temp file");
-        let _ = Model::load(&path, &options);
+        let from_file = Model::load(&path, &options).is_ok();
+        assert_eq!(
+            from_file, loaded,
+            "loaded from a file {from_file}, from memory {loaded}"
+        );
     }
+    loaded
 }
 
 /// The pools `assign` inputs run on: one worker (a single task) and three (a split frame).
@@ -271,26 +338,40 @@ struct Args {
     target: String,
     seconds: f64,
     seed: u64,
+    /// Stop after this many inputs.
+    inputs: u64,
+    /// Run this one `assign` input (a sub-seed a failure printed) and stop.
+    subseed: Option<u64>,
 }
 
 fn parse_args() -> Result<Args, String> {
     let mut it = std::env::args().skip(1);
-    let target = it
-        .next()
-        .ok_or("usage: myriad-fuzz <scene|gltf|assign> [--seconds N] [--seed S]")?;
-    let (mut seconds, mut seed) = (10.0, 1);
+    let target = it.next().ok_or(
+        "usage: myriad-fuzz <scene|gltf|assign> [--seconds N] [--seed S] [--inputs N] \
+             [--subseed S]",
+    )?;
+    let (mut seconds, mut seed, mut inputs, mut subseed) = (10.0, 1, u64::MAX, None);
     while let Some(flag) = it.next() {
         let value = it.next().ok_or(format!("{flag} needs a value"))?;
         match flag.as_str() {
             "--seconds" => seconds = value.parse().map_err(|e| format!("--seconds: {e}"))?,
             "--seed" => seed = value.parse().map_err(|e| format!("--seed: {e}"))?,
+            "--inputs" => inputs = value.parse().map_err(|e| format!("--inputs: {e}"))?,
+            "--subseed" => {
+                subseed = Some(value.parse().map_err(|e| format!("--subseed: {e}"))?);
+            }
             _ => return Err(format!("unknown option {flag}")),
         }
+    }
+    if subseed.is_some() && target != "assign" {
+        return Err("--subseed replays an assign input".into());
     }
     Ok(Args {
         target,
         seconds,
         seed,
+        inputs,
+        subseed,
     })
 }
 
@@ -315,36 +396,56 @@ fn main() {
         }
     };
     let pools = Pools::new();
+    if let Some(subseed) = args.subseed {
+        let context = assign_once(&mut Pcg64::seed_from_u64(subseed), &pools);
+        println!("assign: sub-seed {subseed} passed: {context}");
+        return;
+    }
     let temp = std::env::temp_dir().join(format!("myriad-fuzz-{}", std::process::id()));
     std::fs::create_dir_all(&temp).expect("temp folder");
     let limit = Duration::from_secs_f64(args.seconds);
     // A hang or pathological-time detector, not a speed test: far above any input's normal time
     // (milliseconds), so a loaded CI machine cannot trip it.
     let slow = Duration::from_secs(20);
+    let watch = watchdog::Watch::start(args.target.clone(), args.seed, slow, save_artifact);
     let start = Instant::now();
     let (mut iterations, mut failures, mut slowest) = (0u64, 0u64, Duration::ZERO);
-    while start.elapsed() < limit {
+    let mut loaded = 0u64;
+    let no_input = Arc::new(Vec::new());
+    while start.elapsed() < limit && iterations < args.inputs {
         let t = Instant::now();
-        let (input, outcome) = if args.target == "assign" {
-            let mut r = Pcg64::seed_from_u64(rng.random());
+        let (input, subseed, outcome) = if args.target == "assign" {
+            let subseed = rng.random();
+            watch.begin(iterations, &no_input, subseed);
             let outcome = catch_unwind(AssertUnwindSafe(|| {
-                assign_once(&mut r, &pools);
+                assign_once(&mut Pcg64::seed_from_u64(subseed), &pools);
             }));
-            (Vec::new(), outcome)
+            (Arc::clone(&no_input), subseed, outcome)
         } else {
             // Mostly mutate the corpus; sometimes mutate a mutant further.
             let base = &corpus[rng.random_range(0..corpus.len())];
-            let mut input = mutate(&mut rng, base);
+            let gltf = args.target == "gltf";
+            let change = |rng: &mut Pcg64, bytes: &[u8]| {
+                if gltf {
+                    mutate_glb(rng, bytes)
+                } else {
+                    mutate(rng, bytes)
+                }
+            };
+            let mut input = change(&mut rng, base);
             if rng.random_bool(0.3) {
-                input = mutate(&mut rng, &input);
+                input = change(&mut rng, &input);
             }
+            let input = Arc::new(input);
+            watch.begin(iterations, &input, 0);
             let through = (iterations % 64 == 0).then_some(temp.as_path());
             let outcome = catch_unwind(AssertUnwindSafe(|| match args.target.as_str() {
                 "scene" => scene_once(&input),
-                _ => gltf_once(&input, through),
+                _ => loaded += u64::from(gltf_once(&input, through)),
             }));
-            (input, outcome)
+            (input, 0, outcome)
         };
+        watch.end();
         let took = t.elapsed();
         slowest = slowest.max(took);
         if outcome.is_err() || took > slow {
@@ -355,7 +456,11 @@ fn main() {
                 "slow input"
             };
             if args.target == "assign" {
-                eprintln!("{what} at iteration {iterations} (seed {})", args.seed);
+                eprintln!(
+                    "{what} at iteration {iterations} (seed {}, sub-seed {subseed}: --subseed \
+                     {subseed} runs it alone)",
+                    args.seed
+                );
             } else {
                 let path = save_artifact(&args.target, iterations, &input);
                 eprintln!("{what} at iteration {iterations}: saved {}", path.display());
@@ -364,8 +469,14 @@ fn main() {
         iterations += 1;
     }
     let _ = std::fs::remove_dir_all(&temp);
+    let loads = if args.target == "gltf" {
+        format!(" ({loaded} loaded)")
+    } else {
+        String::new()
+    };
     println!(
-        "{}: {iterations} inputs in {:.1} s (seed {}), {failures} failures, slowest input {:.1} ms",
+        "{}: {iterations} inputs{loads} in {:.1} s (seed {}), {failures} failures, slowest input \
+         {:.1} ms",
         args.target,
         start.elapsed().as_secs_f64(),
         args.seed,
