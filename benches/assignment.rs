@@ -26,7 +26,8 @@
 //!   engine's main thread can.
 //!   `scaling` calls from outside too.
 //! * **`far_edge`** — what counting the lights past the grid's far edge costs: `uniform` 100k
-//!   `refined` on one worker, with the camera's far at the grid's and infinite (see [`far_edge`]).
+//!   `refined` on one worker, with the camera's far at the grid's and infinite, and with a grid
+//!   out to half the camera's far, open and closed (see [`far_edge`]).
 //!
 //! ## What is timed
 //! One `Assigner::assign` call into a reused `LightLists`: the steady state of a frame, where the
@@ -67,10 +68,11 @@ const METHODS: [Method; 5] = [
 /// Sample size, warm-up and measurement time for one benchmark, by its rough cost per run.
 fn timing(group: &mut BenchmarkGroup<'_, WallTime>, method: Method, lights: usize) {
     // The oracle costs a few times what the fast methods do per light (2–4x at 10k lights here).
-    // `cone`'s per-tile tests cost several times `refined`'s per light (4–15x here).
+    // `cone`'s per-tile tests cost several times `refined`'s per light (4–15x here), and
+    // `linear`, one thread through every plane, as much (its 1M cell takes a tenth of a second
+    // and more, which the module docs give flat sampling).
     let weight = match method {
-        Method::Exact => 4 * lights,
-        Method::Cone => 4 * lights,
+        Method::Exact | Method::Cone | Method::Linear => 4 * lights,
         _ => lights,
     };
     let (samples, warm_up, measurement) = match weight {

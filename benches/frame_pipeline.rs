@@ -10,8 +10,12 @@
 //!
 //! Throughput is in frames, so criterion prints frames per second; the ratio of the two loops is
 //! what the pipelining buys on this machine (on llvmpipe, whose rendering takes the same cores as
-//! the CPU stage, less than on a GPU). One renderer serves every run, so the pipelines and buffers
-//! are built in the warm-up, not timed. It needs a GPU adapter (Mesa's llvmpipe counts); without
+//! the CPU stage, less than on a GPU). One renderer serves every run, so the GPU side's pipelines
+//! and buffers are built in the warm-up, not timed; the CPU side is not steady state: each timed
+//! loop starts its own stage (a fresh `Assigner`, the first frame's copy of the light columns, and
+//! for the pipelined loop its worker thread), and with [`FRAMES`] frames the pipeline's fill and
+//! drain are a large part of the loop, so the ratio understates what pipelining buys over a
+//! long run. It needs a GPU adapter (Mesa's llvmpipe counts); without
 //! one it says so and times nothing, as `myriad frames` fails there. Run with
 //! `cargo bench --bench frame_pipeline` (about a minute on 2 cores under llvmpipe, where a
 //! 100k-light frame shades for ~0.4 s even at 64×32: llvmpipe's shading, not the assignment,
