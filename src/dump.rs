@@ -74,7 +74,9 @@ impl AssignmentDump {
 
     /// Writes the dump as JSON, replacing `path` only once complete.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let text = serde_json::to_string(self)?;
+        // One line, ended: a dump printed to a terminal or a pipe ends where the next output starts.
+        let mut text = serde_json::to_string(self)?;
+        text.push('\n');
         myriad_scene::replace_file(path, text.as_bytes())
             .with_context(|| format!("cannot write dump {}", path.display()))
     }

@@ -199,8 +199,7 @@ pub fn measure(
         times.push(start.elapsed().as_secs_f64() * 1e6);
         pooled_runs += usize::from(stats.parallel);
     }
-    times.sort_by(f64::total_cmp);
-    let median_us = times[times.len() / 2];
+    let median_us = median(&mut times);
     let cmp = compare(&lists, exact);
     let bytes = lists.byte_size() as u64;
     Ok(MethodResult {
@@ -218,9 +217,32 @@ pub fn measure(
     })
 }
 
+/// The median of a non-empty list, reordering it: the middle value, or the mean of the middle
+/// two of an even count (the upper one alone made `--runs 2`'s median its slower run).
+pub fn median(values: &mut [f64]) -> f64 {
+    assert!(!values.is_empty(), "the median of no values");
+    values.sort_by(f64::total_cmp);
+    let mid = values.len() / 2;
+    if values.len() % 2 == 1 {
+        values[mid]
+    } else {
+        0.5 * (values[mid - 1] + values[mid])
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The middle value of an odd count, the mean of the middle two of an even one, in any
+    /// input order.
+    #[test]
+    fn medians_of_odd_and_even_counts() {
+        assert_eq!(median(&mut [3.0]), 3.0);
+        assert_eq!(median(&mut [9.0, 1.0, 5.0]), 5.0);
+        assert_eq!(median(&mut [10.0, 2.0]), 6.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 100.0]), 3.5);
+    }
 
     fn lists(per_cluster: &[&[u32]]) -> LightLists {
         let mut l = LightLists::default();

@@ -16,15 +16,19 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let model = atrium();
     model.save_glb(&args.out)?;
     let bytes = std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0);
-    println!(
-        "wrote {} ({} bytes: {} meshes, {} instances, {} triangles as rendered, {} cameras, {} lights)",
-        args.out.display(),
-        bytes,
-        model.meshes.len(),
-        model.instances.len(),
-        model.triangle_count(),
-        model.cameras.len(),
-        model.lights.len()
+    super::outputs::say_written(
+        &args.out,
+        &format!(
+            "wrote {} ({} bytes: {} meshes, {} instances, {} triangles as rendered, {} cameras, {} \
+             lights)",
+            args.out.display(),
+            bytes,
+            model.meshes.len(),
+            model.instances.len(),
+            model.triangle_count(),
+            model.cameras.len(),
+            model.lights.len()
+        ),
     );
     Ok(ExitCode::SUCCESS)
 }

@@ -39,3 +39,15 @@ pub fn refuse_overwriting_inputs(output: &Path, inputs: &[&Path]) -> Result<()> 
 fn is_regular_file(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.is_file())
 }
+
+/// Says what a command wrote to `output`: on stdout, unless the output is not a regular file
+/// (`--out /dev/stdout`, a pipe), where stdout may be the output itself and the line would
+/// corrupt it (`assign --out /dev/stdout | jq` read the dump with the summary glued to its end):
+/// then on stderr.
+pub fn say_written(output: &Path, line: &str) {
+    if std::fs::metadata(output).is_ok_and(|m| m.is_file()) {
+        println!("{line}");
+    } else {
+        eprintln!("{line}");
+    }
+}

@@ -157,6 +157,10 @@ struct Stats {
     /// shading is never skipped: its refusal fails the run.
     skipped: Vec<SkippedStrategy>,
     speedup_vs_brute_force: Option<f64>,
+    /// What the speedup compares: `"shading pass"` (the passes' GPU timestamps) or, on an
+    /// adapter without timestamps, `"frame wall"` (submit to idle, the G-buffer and every other
+    /// pass included).
+    speedup_measure: &'static str,
     /// The largest channel difference (of 255) of each strategy's lit image from brute force's,
     /// which shades every light with every pixel: a light a strategy's lists missed, or a pixel
     /// placed in the wrong cluster, shows here. The run fails above 1 (float rounding). `None`
@@ -187,8 +191,7 @@ fn is_loop_limit(e: &anyhow::Error) -> bool {
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    myriad::evaluate::median(&mut v)
 }
 
 fn median_opt(v: Vec<Option<f64>>) -> Option<f64> {
@@ -547,6 +550,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
         strategies,
         skipped,
         speedup_vs_brute_force: speedup,
+        speedup_measure: if timestamps {
+            "shading pass"
+        } else {
+            "frame wall"
+        },
         max_difference_from_brute_force,
         with_skips,
     };
@@ -840,11 +848,28 @@ fn print_table(s: &Stats) {
             )
             .and_then(|(w, brute)| Some(brute.gpu_shading_ms? / w.result.gpu_shading_ms?))
             .map_or(String::new(), |y| {
-                format!("; {y:.1}x with {}", render_skipping::SHADING)
+                format!("; {} with {}", times(y), render_skipping::SHADING)
             });
+        // Below 1 it says "slower": a few lights can cost clustered shading more than they
+        // save ("0.8x faster", audit).
+        let (ratio, word) = if x >= 1.0 {
+            (x, "faster")
+        } else {
+            (1.0 / x, "slower")
+        };
         println!(
-            "clustered deferred shading is {x:.1}x faster than brute-force deferred (shading pass){with_skips}"
+            "clustered deferred shading is {ratio:.1}x {word} than brute-force deferred ({}){with_skips}",
+            s.speedup_measure
         );
+    }
+}
+
+/// `ratio` as "N.Nx", or "N.Nx slower" below 1.
+fn times(ratio: f64) -> String {
+    if ratio >= 1.0 {
+        format!("{ratio:.1}x")
+    } else {
+        format!("{:.1}x slower", 1.0 / ratio)
     }
 }
 

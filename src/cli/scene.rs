@@ -289,7 +289,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         (None, None) => bail!("give --preset P or --gltf FILE"),
     };
     scene.save(&args.out)?;
-    println!("wrote {} ({what})", args.out.display());
+    super::outputs::say_written(&args.out, &format!("wrote {} ({what})", args.out.display()));
     Ok(ExitCode::SUCCESS)
 }
 

@@ -83,8 +83,7 @@ fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return 0.0;
     }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    myriad::evaluate::median(&mut v)
 }
 
 /// Samples of one configuration, frame by frame.

@@ -199,10 +199,10 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
             bad_dump.as_os_str(),
         ]);
         assert_mentions(&stderr(&out), &["skipped", "light 2", "radius"]);
-        // The skipped light is counted among the rejected ones.
+        // The skipped light is counted apart from the assigned ones.
         assert_mentions(
             &stdout(&out),
-            &["assigned 3 lights (3 visible, 0 culled, 1 rejected)"],
+            &["assigned 3 lights (3 visible, 0 culled, 0 rejected; 1 skipped on load)"],
         );
 
         // The dump names lights by their index in the file: 0, 1 and 3, never 2.
@@ -772,7 +772,7 @@ fn many_skipped_lights_are_counted_and_the_list_stops_after_ten() {
         ],
     );
     assert!(!err.contains("light 11 skipped"), "{err}");
-    assert_mentions(&stdout(&out), &["12 rejected"]);
+    assert_mentions(&stdout(&out), &["0 rejected; 12 skipped on load"]);
     // Exactly ten: all listed, no summary line.
     let err = stderr(&assign(10));
     assert_mentions(&err, &["10 invalid light(s) skipped", "light 10 skipped"]);

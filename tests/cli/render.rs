@@ -287,8 +287,14 @@ fn assert_main_job_table(text: &str, stats: &Value) {
             "brute force {brute} ms, clustered {clustered} ms"
         );
     }
+    let measure = if timestamps {
+        "shading pass"
+    } else {
+        "frame wall"
+    };
+    assert_eq!(stats["speedup_measure"], measure);
     let mut line = format!(
-        "clustered deferred shading is {speedup:.1}x faster than brute-force deferred (shading pass)"
+        "clustered deferred shading is {speedup:.1}x faster than brute-force deferred ({measure})"
     );
     if timestamps {
         let skipping = columns[1]["gpu_shading_ms"].as_f64().unwrap();
