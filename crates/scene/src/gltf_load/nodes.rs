@@ -22,13 +22,15 @@ const NO_AXIS: &str =
 /// `v` at unit length, or zero only when `v` is zero. A node's scale scales the axes a light or
 /// camera points along (1e-30, 1e20, or [1, 1, 1e-30]) but not their direction (the
 /// `KHR_lights_punctual` spec: scale does not affect a light). f32's `normalize_or_zero`
-/// squares the length, which underflows below about 1e-19 and overflows above about 1e19 and
-/// then gives zero, as if there were no direction; f64 holds the square of every f32, so it
-/// takes over there. Ordinary vectors keep f32's result bit for bit.
+/// squares the length, which underflows below about 1e-19 (to zero, or to a subnormal that
+/// normalises off unit length: 2.6e-4 off at 1e-21) and overflows above about 1e19 (to zero, as
+/// if there were no direction); f64 holds the square of every f32, so it takes over wherever the
+/// square is not a normal f32. Ordinary vectors keep f32's result bit for bit.
 fn unit_or_zero(v: Vec3) -> Vec3 {
-    match v.normalize_or_zero() {
-        Vec3::ZERO => v.as_dvec3().normalize_or_zero().as_vec3(),
-        unit => unit,
+    if v.length_squared().is_normal() {
+        v.normalize_or_zero()
+    } else {
+        v.as_dvec3().normalize_or_zero().as_vec3()
     }
 }
 

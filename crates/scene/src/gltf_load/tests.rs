@@ -232,6 +232,10 @@ fn tiny_and_huge_node_scales_keep_directions_and_zero_scales_are_named() {
     let ahead = "[0, 0, 0, 1]";
     for (scale, rotation, forward, up) in [
         ("[1e-30, 1e-30, 1e-30]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+        // Squared lengths subnormal, not zero: f32 normalised them off unit length (by 2.6e-4
+        // at 1e-21, 6e-3 at 3e-22) and the scene refused the spot.
+        ("[1e-21, 1e-21, 1e-21]", down, Vec3::NEG_Y, Vec3::NEG_Z),
+        ("[3e-22, 3e-22, 3e-22]", down, Vec3::NEG_Y, Vec3::NEG_Z),
         ("[1e-40, 1e-40, 1e-40]", down, Vec3::NEG_Y, Vec3::NEG_Z),
         ("[1e20, 1e20, 1e20]", down, Vec3::NEG_Y, Vec3::NEG_Z),
         ("[3e38, 3e38, 3e38]", down, Vec3::NEG_Y, Vec3::NEG_Z),
@@ -243,6 +247,13 @@ fn tiny_and_huge_node_scales_keep_directions_and_zero_scales_are_named() {
         assert!(model.warnings.is_empty(), "{scale}: {:?}", model.warnings);
         let spot = model.lights.get(0).spot.expect("the spot is kept");
         assert!(near(spot.direction, forward), "{scale}: {}", spot.direction);
+        let unit = |v: Vec3| (v.length() - 1.0).abs() < 1e-6;
+        assert!(
+            unit(spot.direction),
+            "{scale}: |{}|",
+            spot.direction.length()
+        );
+        assert!(unit(model.cameras[0].forward), "{scale}: camera forward");
         assert_eq!(model.directional_lights.len(), 1, "{scale}");
         let sun = model.directional_lights[0].direction;
         assert!(near(sun, forward), "{scale}: {sun}");
