@@ -174,14 +174,11 @@ fn mutate_glb(rng: &mut Pcg64, bytes: &[u8]) -> Vec<u8> {
     let Some((json, bin)) = glb_chunks(bytes).filter(|_| !rng.random_bool(1.0 / 8.0)) else {
         return mutate(rng, bytes);
     };
-    let mut json = if rng.random_bool(0.8) {
+    let json = if rng.random_bool(0.8) {
         mutate(rng, json)
     } else {
         json.to_vec()
     };
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
     let mut bin = bin.to_vec();
     if !bin.is_empty() && rng.random_bool(0.3) {
         for _ in 0..rng.random_range(1..=4) {
@@ -189,18 +186,7 @@ fn mutate_glb(rng: &mut Pcg64, bytes: &[u8]) -> Vec<u8> {
             bin[at] = rng.random();
         }
     }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
+    myriad::scene::glb_container(json, bin)
 }
 
 fn save_artifact(target: &str, iteration: u64, bytes: &[u8]) -> PathBuf {

@@ -624,8 +624,9 @@ impl Model {
 }
 
 /// The GLB container: 12-byte header, JSON chunk (padded with spaces), binary chunk (padded
-/// with zeros).
-fn glb_container(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
+/// with zeros). Public for tools that edit a GLB's chunks and pack them again (the fuzz
+/// harness's mutator).
+pub fn glb_container(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }

@@ -136,6 +136,7 @@ mod validate;
 
 pub use atrium::{ATRIUM_FILE, atrium, atrium_glb};
 pub use error::{Error, Problem, Result};
+pub use glb_write::glb_container;
 pub use gltf_load::{DEFAULT_LIGHT_CUTOFF, ImageLoading, LoadOptions};
 pub use light_fields::{
     ColorRule, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler, radius_from_intensity,
