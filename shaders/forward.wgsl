@@ -39,10 +39,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @locatio
     let base = material.base_color * textureSample(base_color_texture, material_sampler, in.uv);
     var s: Surface;
     s.position = in.rel_position;
-    s.normal = normalize(in.normal);
-    if (!front_facing) {
-        s.normal = -s.normal;
-    }
+    s.normal = surface_normal(in.normal, in.rel_position, front_facing);
     s.albedo = base.rgb;
     s.roughness = material.roughness;
     s.metallic = material.metallic;

@@ -11,6 +11,7 @@ struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) uv: vec2<f32>,
+    @location(2) rel_position: vec3<f32>,
 }
 
 @vertex
@@ -20,6 +21,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.clip = frame.clip_from_world_rel * vec4<f32>(rel, 1.0);
     out.normal = v.normal;
     out.uv = v.uv;
+    out.rel_position = rel;
     return out;
 }
 
@@ -36,10 +38,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> GBufferO
     if (color.a < material.alpha_cutoff) {
         discard;
     }
-    var n = normalize(in.normal);
-    if (!front_facing) {
-        n = -n;
-    }
+    let n = surface_normal(in.normal, in.rel_position, front_facing);
     var out: GBufferOut;
     out.albedo = vec4<f32>(color.rgb, 1.0);
     out.normal = octahedral_encode(n);

@@ -1134,3 +1134,124 @@ fn pass_times_are_each_pass_own_and_within_the_frame_wall_time() {
         "brute-force shading of 4000 lights vs the G-buffer: {t:?}"
     );
 }
+
+/// Spots lit from the camera's eye along its view, in the default scene's geometry seen through a
+/// 5° field of view at 256×128 (a pixel is 0.04°): a spot of `angle` degrees on the axis and
+/// eight around it, each 1.5 of its angle off the axis.
+fn spots_from_the_eye(angle_deg: f32) -> RenderScene {
+    use myriad::cluster_math::glam::{DVec3, Vec3};
+    use myriad::scene::{LightRecord, Lights};
+    let mut scene = RenderScene::default_scene(1, 256, 128).unwrap();
+    scene.camera.fov_y = 5f32.to_radians();
+    let (right, up, forward) = scene.camera.basis_f64();
+    let off = (1.5 * angle_deg as f64).to_radians().tan();
+    let mut lights = Lights::new();
+    for (i, (a, b)) in [(0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
+        .into_iter()
+        .chain([(0.7, 0.7), (-0.7, 0.7), (0.7, -0.7), (-0.7, -0.7)])
+        .enumerate()
+    {
+        let axis: DVec3 = (forward + off * (a * right + b * up)).normalize();
+        lights.push(
+            LightRecord::point(scene.camera.position, 200.0)
+                .with_intensity(400.0)
+                .with_color(Vec3::ONE)
+                .with_spot(axis.as_vec3(), angle_deg.to_radians())
+                .with_source_index(i as u32),
+        );
+    }
+    scene.lights = lights;
+    scene
+}
+
+/// A narrow spot reaches full strength on its axis and lights the same pixels through the
+/// clustered lists as brute force does. The records once held the cone as cosines and the shader
+/// divided by their difference clamped to 1e-4: a 0.5° spot's centre was 14.5% of a wide one's,
+/// a 0.05° spot's black; and near a cosine of 1 an f32 step is a sizeable part of a small angle,
+/// so a narrow cone's edge in the shader was not where the lists put it.
+#[test]
+fn narrow_spots_are_at_full_strength_on_their_axis_and_clustered_equals_brute_force() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let (w, h) = (256u32, 128u32);
+    let centre = |image: &[u8]| {
+        // The four pixels around the optical axis, all well inside the inner cone of any spot
+        // here (0.8 of 0.3° is six pixels).
+        let at = |x: u32, y: u32| image[4 * (y * w + x) as usize] as u32;
+        (at(w / 2 - 1, h / 2 - 1) + at(w / 2, h / 2 - 1) + at(w / 2 - 1, h / 2) + at(w / 2, h / 2))
+            / 4
+    };
+    let mut viewer: Option<Viewer> = None;
+    let mut wide_centre = None;
+    for angle in [20.0f32, 2.0, 0.5, 0.3, 0.05, 0.01] {
+        let scene = spots_from_the_eye(angle);
+        let v = match viewer.as_mut() {
+            Some(v) => v,
+            None => viewer.insert(Viewer::new(ctx.clone(), &scene).unwrap()),
+        };
+        let mut images = Vec::new();
+        for shading in [Shading::Clustered, Shading::BruteForce] {
+            v.frame(&scene, shading, Method::Refined, false).unwrap();
+            images.push(v.image().unwrap());
+        }
+        dump(&format!("spots_{angle}.png"), &images[0], w, h);
+        let (worst, differing) = max_channel_difference(&images[0], &images[1]);
+        assert!(
+            worst <= 1,
+            "{angle}° spots: clustered vs brute force differ by {worst}/255 in {differing} channels"
+        );
+        let c = centre(&images[1]);
+        let wide = *wide_centre.get_or_insert(c);
+        assert!(wide > 100, "the 20° spot's centre is only {wide}/255");
+        if angle >= 0.3 {
+            assert!(
+                c.abs_diff(wide) <= 1,
+                "{angle}° spot: centre {c}/255, the 20° spot's {wide}/255"
+            );
+        } else {
+            // Narrower than a pixel's footprint: lit, not black (a 0.01° cone's cosine is 1 in
+            // f32).
+            assert!(c > 0, "{angle}° spot: black on its axis");
+        }
+    }
+}
+
+/// Vertex normals that interpolate to zero (here: every normal of the scene zeroed) shade with
+/// the triangle's own normal, not NaN: `normalize` of zero made every such pixel NaN, black in
+/// the 8-bit image (every light's `n · l` NaN) in both the deferred and forward passes.
+#[test]
+fn zero_vertex_normals_shade_with_the_face_normal_not_nan() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let (w, h) = (256, 128);
+    let mut scene = RenderScene::default_scene(1000, w, h).unwrap();
+    let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::BruteForce, Method::Refined, false)
+        .unwrap();
+    let smooth_lit = lit_pixels(&viewer.image().unwrap());
+    for vertex in &mut scene.geometry.vertices {
+        vertex.normal = [0.0; 3];
+    }
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let mut images = Vec::new();
+    for shading in [Shading::Clustered, Shading::BruteForce] {
+        viewer
+            .frame(&scene, shading, Method::Refined, false)
+            .unwrap();
+        images.push(viewer.image().unwrap());
+    }
+    dump("zero_normals.png", &images[0], w, h);
+    let lit = lit_pixels(&images[1]);
+    assert!(
+        lit * 2 > smooth_lit,
+        "zero normals: {lit} lit pixels, {smooth_lit} with the scene's normals"
+    );
+    let (worst, differing) = max_channel_difference(&images[0], &images[1]);
+    assert!(
+        worst <= 1,
+        "zero normals: clustered vs brute force differ by {worst}/255 in {differing} channels"
+    );
+}

@@ -36,12 +36,13 @@ struct Light {
     radius: f32,
     // Linear colour times intensity.
     color: vec3<f32>,
-    // Cosine of the spot cone's outer half angle; -2 for point lights (every direction lit).
-    spot_cos_outer: f32,
+    // The cone's edge as a squared chord: |axis - edge direction|² = 2 (1 - cos outer angle), in
+    // [0, 4]; 8 for point lights (every direction lit).
+    spot_chord2_outer: f32,
     // Unit spot axis (zero for point lights).
     spot_dir: vec3<f32>,
-    // Cosine of the angle where the spot's angular falloff reaches 1.
-    spot_cos_inner: f32,
+    // 1 / (spot_chord2_outer - the inner angle's squared chord): the falloff's slope.
+    spot_ramp_scale: f32,
 }
 
 // Material constants (uniform buffer, one per material).

@@ -21,20 +21,23 @@ fn distance_falloff(dist2: f32, radius: f32) -> f32 {
     return window * window / (dist2 + 1.0);
 }
 
-// Angular falloff of a spot: exactly 0 outside the outer cone, 1 inside the inner cone.
+// Angular falloff of a spot: exactly 0 outside the outer cone, 1 inside the inner cone, and
+// between them the usual ramp in the cosine, squared. The angle is measured by the squared chord
+// between the unit axis and the unit direction to the point, |axis - dir|² = 2 (1 - cos angle):
+// a cosine near 1 keeps only a few bits of a small angle in f32 (a 0.014° cone rounds to cos 1),
+// where the chord keeps its relative precision, so a narrow spot's edge lies where the
+// assignment's cone test puts it and its ramp still reaches full strength.
 fn spot_falloff(light: Light, to_point: vec3<f32>) -> f32 {
-    if (!HAS_SPOTS || light.spot_cos_outer < -1.5) {
+    if (!HAS_SPOTS || light.spot_chord2_outer > 4.5) {
         return 1.0;
     }
-    let cos_angle = dot(light.spot_dir, to_point);
-    if (cos_angle <= light.spot_cos_outer) {
+    let chord = light.spot_dir - to_point;
+    let chord2 = dot(chord, chord);
+    // Negated so that a NaN direction lights nothing.
+    if (!(chord2 < light.spot_chord2_outer)) {
         return 0.0;
     }
-    let t = clamp(
-        (cos_angle - light.spot_cos_outer) / max(light.spot_cos_inner - light.spot_cos_outer, 1e-4),
-        0.0,
-        1.0,
-    );
+    let t = min((light.spot_chord2_outer - chord2) * light.spot_ramp_scale, 1.0);
     return t * t;
 }
 
@@ -62,12 +65,16 @@ fn shade_light(light: Light, s: Surface) -> vec3<f32> {
     let dist = sqrt(dist2);
     let l = to_light / max(dist, 1e-20);
     let n_dot_l = dot(s.normal, l);
-    if (n_dot_l <= 0.0) {
+    // Negated so that a NaN normal lights nothing rather than turning the pixel NaN.
+    if (!(n_dot_l > 0.0)) {
         return vec3<f32>(0.0);
     }
     let attenuation = distance_falloff(dist2, light.radius) * spot_falloff(light, -l);
     let v = normalize(-s.position);
-    let h = normalize(l + v);
+    // l + v is zero when the light sits right behind the point as the camera sees it (a normal
+    // facing away from the camera, at a silhouette): no highlight then, rather than a NaN.
+    let halfway = l + v;
+    let h = halfway * inverseSqrt(max(dot(halfway, halfway), 1e-30));
     let spec_strength = mix(0.04, 1.0, s.metallic);
     let specular = spec_strength * pow(max(dot(s.normal, h), 0.0), shininess(s.roughness));
     let diffuse = s.albedo * (1.0 - s.metallic);

@@ -1,7 +1,7 @@
 //! What a frame hands the renderer: borrowed light columns and CSR light lists (no scene or
 //! assignment types, so this crate depends on neither), and their conversion to GPU records.
 
-use crate::layout::GpuLight;
+use crate::layout::{GpuLight, spot_chord2};
 use glam::DVec3;
 
 /// Spot columns, one row per light (point lights: angle >= π).
@@ -167,9 +167,9 @@ pub fn fill_gpu_lights(
             position: (position - camera).as_vec3().to_array(),
             radius,
             color,
-            spot_cos_outer: GpuLight::POINT_COS_OUTER,
+            spot_chord2_outer: GpuLight::POINT_CHORD2_OUTER,
             spot_dir: [0.0; 3],
-            spot_cos_inner: 1.0,
+            spot_ramp_scale: 0.0,
         };
         let mut valid = position.is_finite()
             && radius.is_finite()
@@ -180,8 +180,8 @@ pub fn fill_gpu_lights(
             let dir = [s.dir_x[i], s.dir_y[i], s.dir_z[i]];
             valid &= angle.is_finite() && angle > 0.0 && dir.iter().all(|d| d.is_finite());
             // Normalised here, as `myriad-assignment` does (its axis "need not be normalised"):
-            // the shader compares the cosine against a dot product with this axis, so a longer
-            // one would cut the cone off at cluster edges. A zero axis bounds nothing: the light
+            // the shader measures the angle by the chord between this axis and a unit direction,
+            // so a longer one would cut the cone off at cluster edges. A zero axis bounds nothing: the light
             // shines all round, as the assignment treats it. In f64, as there: an f32 axis
             // shorter than ~1e-19 has a squared length that underflows to zero, and the light
             // would shine all round here while the lists hold only its cone's clusters.
@@ -189,8 +189,9 @@ pub fn fill_gpu_lights(
                 .normalize_or_zero()
                 .as_vec3();
             if angle < std::f32::consts::PI && axis != glam::Vec3::ZERO {
-                light.spot_cos_outer = angle.cos();
-                light.spot_cos_inner = (angle * SPOT_INNER_FRACTION).cos();
+                let (outer, ramp_scale) = spot_ramp(angle, angle * SPOT_INNER_FRACTION);
+                light.spot_chord2_outer = outer;
+                light.spot_ramp_scale = ramp_scale;
                 light.spot_dir = axis.to_array();
             }
         }
@@ -201,6 +202,18 @@ pub fn fill_gpu_lights(
         out.push(light);
     }
     skipped
+}
+
+/// A spot's outer squared chord and its falloff's slope ([`GpuLight::spot_chord2_outer`],
+/// [`GpuLight::spot_ramp_scale`]) for outer and inner half angles `outer > inner >= 0`, in f64: at
+/// 0.05° the two chords differ by 2.7e-7, a few f32 steps of either one, so the difference is
+/// not taken in f32. The slope is capped at `f32::MAX`, where the angles are too close for f32
+/// (a cone under ~1e-19 rad, whose chord is no longer a normal f32 either, lights nothing).
+fn spot_ramp(outer: f32, inner: f32) -> (f32, f32) {
+    let chord2_outer = spot_chord2(outer as f64);
+    let ramp = chord2_outer - spot_chord2(inner as f64);
+    let scale = (1.0 / ramp).min(f32::MAX as f64);
+    (chord2_outer as f32, scale as f32)
 }
 
 #[cfg(test)]
@@ -229,13 +242,13 @@ mod tests {
         let mut out = Vec::new();
         assert_eq!(fill_gpu_lights(&columns, DVec3::ZERO, &mut out), 0);
         assert_eq!(out[0].spot_dir, [0.0, -1.0, 0.0]);
-        assert_eq!(out[0].spot_cos_outer, 0.5f32.cos());
+        assert_eq!(out[0].spot_chord2_outer, spot_chord2(0.5) as f32);
         // An axis whose f32 squared length underflows is still a direction (the assignment
         // normalises in f64 and cuts the lists to the cone).
         assert_eq!(out[3].spot_dir, [1.0, 0.0, 0.0]);
-        assert_eq!(out[3].spot_cos_outer, 0.5f32.cos());
+        assert_eq!(out[3].spot_chord2_outer, spot_chord2(0.5) as f32);
         for point in &out[1..3] {
-            assert_eq!(point.spot_cos_outer, GpuLight::POINT_COS_OUTER);
+            assert_eq!(point.spot_chord2_outer, GpuLight::POINT_CHORD2_OUTER);
         }
     }
 
@@ -267,9 +280,9 @@ mod tests {
                 position: [0.5, 3.0, -7.0],
                 radius: 2.0,
                 color: [1.0, 0.5, 2.0],
-                spot_cos_outer: GpuLight::POINT_COS_OUTER,
+                spot_chord2_outer: GpuLight::POINT_CHORD2_OUTER,
                 spot_dir: [0.0; 3],
-                spot_cos_inner: 1.0,
+                spot_ramp_scale: 0.0,
             }
         );
         for (i, skipped) in out.iter().enumerate().skip(1) {
@@ -316,10 +329,10 @@ mod tests {
                 position: [0.0; 3],
                 radius: 1.0,
                 color: [1.0; 3],
-                spot_cos_outer: 0.5f32.cos(),
+                spot_chord2_outer: spot_chord2(0.5) as f32,
                 spot_dir: [0.0, 0.0, -1.0],
                 // Full strength inside 0.8 of the outer angle.
-                spot_cos_inner: 0.4f32.cos(),
+                spot_ramp_scale: (1.0 / (spot_chord2(0.5) - spot_chord2(0.4f32 as f64))) as f32,
             }
         );
         assert_eq!(
@@ -328,13 +341,75 @@ mod tests {
                 position: [0.0; 3],
                 radius: 1.0,
                 color: [1.0; 3],
-                spot_cos_outer: GpuLight::POINT_COS_OUTER,
+                spot_chord2_outer: GpuLight::POINT_CHORD2_OUTER,
                 spot_dir: [0.0; 3],
-                spot_cos_inner: 1.0,
+                spot_ramp_scale: 0.0,
             }
         );
         for i in [1, 2, 3, 4, 5, 7] {
             assert_eq!(out[i], GpuLight::default(), "row {i}");
+        }
+    }
+
+    /// `spot_falloff` of `shaders/common/lighting.wgsl`, step by step in f32 as the GPU runs it.
+    fn shader_spot_falloff(light: &GpuLight, to_point: glam::Vec3) -> f32 {
+        let chord = glam::Vec3::from(light.spot_dir) - to_point;
+        let chord2 = chord.dot(chord);
+        if !(chord2 < light.spot_chord2_outer) {
+            return 0.0;
+        }
+        let t = ((light.spot_chord2_outer - chord2) * light.spot_ramp_scale).min(1.0);
+        t * t
+    }
+
+    /// A spot's falloff in f32, from 5e-6 rad (the assignment's cone test allows about 4e-6 rad
+    /// of slack) to wide: full strength on and near the axis, nothing just outside the cone.
+    /// With the cosines the records once held, a 0.5° spot reached 14.5% on its axis, one under
+    /// 0.014° (cosine 1 in f32) lit nothing, and the edge of a 0.05° one sat a few f32 steps of
+    /// the cosine — tenths of its angle — from where the lists put it.
+    #[test]
+    fn narrow_and_wide_spots_keep_their_edge_and_reach_full_strength() {
+        for outer in [5e-6f32, 1e-4, 8.7e-4, 0.01, 0.3, 1.2, 2.0, 3.0] {
+            let columns = LightColumns {
+                x: &[0.0],
+                y: &[0.0],
+                z: &[0.0],
+                radius: &[1.0],
+                r: &[1.0],
+                g: &[1.0],
+                b: &[1.0],
+                intensity: &[1.0],
+                spot: Some(SpotColumns {
+                    dir_x: &[0.0],
+                    dir_y: &[0.0],
+                    dir_z: &[-1.0],
+                    angle: &[outer],
+                }),
+            };
+            let mut out = Vec::new();
+            assert_eq!(fill_gpu_lights(&columns, DVec3::ZERO, &mut out), 0);
+            let light = out[0];
+            // A unit direction at `angle` from the axis (-z), in the x–z plane, rounded to f32
+            // as the shader's `-l` is.
+            let at = |angle: f32| {
+                let a = angle as f64;
+                glam::DVec3::new(a.sin(), 0.0, -a.cos()).as_vec3()
+            };
+            let falloff = |fraction: f32| shader_spot_falloff(&light, at(outer * fraction));
+            for fraction in [0.0, 0.3, 0.79] {
+                assert_eq!(falloff(fraction), 1.0, "outer {outer}, {fraction} of it");
+            }
+            // Half way along the ramp: the cosine's ramp, squared, as with cosines in f64.
+            let cos = |f: f64| (outer as f64 * f).cos();
+            let want = ((cos(0.9) - cos(1.0)) / (cos(0.8) - cos(1.0))).powi(2);
+            let got = falloff(0.9) as f64;
+            assert!(
+                (got - want).abs() < 1e-2 * want,
+                "outer {outer}: {got} half way along the ramp, want {want}"
+            );
+            assert!(falloff(0.999) > 0.0, "outer {outer}: dark inside its edge");
+            assert_eq!(falloff(1.001), 0.0, "outer {outer}: lit outside its edge");
+            assert_eq!(shader_spot_falloff(&light, -at(0.0)), 0.0, "outer {outer}");
         }
     }
 

@@ -51,17 +51,29 @@ pub struct GpuLight {
     pub radius: f32,
     /// Linear colour times intensity.
     pub color: [f32; 3],
-    /// Cosine of the outer half angle; [`GpuLight::POINT_COS_OUTER`] for point lights.
-    pub spot_cos_outer: f32,
+    /// The outer half angle θ as the squared chord `|axis − edge|² = 2(1 − cos θ)` between unit
+    /// vectors ([`spot_chord2`]), in [0, 4]; [`GpuLight::POINT_CHORD2_OUTER`] for point lights.
+    /// Not the cosine: near 1 an f32 cosine keeps few bits of a small angle (a 0.014° cone's
+    /// is exactly 1), the chord its relative precision.
+    pub spot_chord2_outer: f32,
     /// Unit spot axis (zero for point lights).
     pub spot_dir: [f32; 3],
-    /// Cosine of the angle inside which the spot is at full strength.
-    pub spot_cos_inner: f32,
+    /// `1 / (spot_chord2_outer − the inner angle's squared chord)`, the falloff's slope (0 for
+    /// point lights), computed in f64 and capped at `f32::MAX`.
+    pub spot_ramp_scale: f32,
 }
 
 impl GpuLight {
-    /// `spot_cos_outer` of a point light: below every cosine, so every direction is lit.
-    pub const POINT_COS_OUTER: f32 = -2.0;
+    /// `spot_chord2_outer` of a point light: above every squared chord (at most 4), so every
+    /// direction is lit.
+    pub const POINT_CHORD2_OUTER: f32 = 8.0;
+}
+
+/// The squared chord `2(1 − cos θ) = 4 sin²(θ/2)` of a half angle θ, in f64: the shader's
+/// measure of a spot's angle ([`GpuLight::spot_chord2_outer`]).
+pub fn spot_chord2(angle: f64) -> f64 {
+    let s = (angle / 2.0).sin();
+    4.0 * s * s
 }
 
 /// Material constants (`Material` in WGSL; one uniform buffer per material).

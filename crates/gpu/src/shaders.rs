@@ -8,7 +8,7 @@
 //! `shaders/`, reached through the crate's own `shaders` link so the packaged crate carries it.
 
 /// The shared helpers, in the order they are prepended: structs first, then functions.
-pub const COMMON: [(&str, &str); 4] = [
+pub const COMMON: [(&str, &str); 5] = [
     (
         "common/layout.wgsl",
         include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/common/layout.wgsl")),
@@ -27,6 +27,13 @@ pub const COMMON: [(&str, &str); 4] = [
     (
         "common/lighting.wgsl",
         include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/common/lighting.wgsl")),
+    ),
+    (
+        "common/surface_normal.wgsl",
+        include_str!(concat!(
+            env!("MYRIAD_SHADER_DIR"),
+            "/common/surface_normal.wgsl"
+        )),
     ),
 ];
 
@@ -86,8 +93,9 @@ impl PassShader {
     /// Indices into [`COMMON`] of the helpers this pass includes.
     pub fn helpers(self) -> &'static [usize] {
         match self {
-            PassShader::GBuffer => &[0, 2],
-            PassShader::Deferred | PassShader::Forward => &[0, 1, 2, 3],
+            PassShader::GBuffer => &[0, 2, 4],
+            PassShader::Deferred => &[0, 1, 2, 3],
+            PassShader::Forward => &[0, 1, 2, 3, 4],
             PassShader::ClusterIndexCheck => &[0, 1],
         }
     }

@@ -50,7 +50,7 @@ fn structs_match_naga_layout() {
         (
             "Light",
             size_of::<GpuLight>(),
-            rust_offsets!(GpuLight: position, radius, color, spot_cos_outer, spot_dir, spot_cos_inner),
+            rust_offsets!(GpuLight: position, radius, color, spot_chord2_outer, spot_dir, spot_ramp_scale),
         ),
         (
             "Material",
@@ -93,7 +93,6 @@ fn the_check_sees_a_shifted_field() {
         .replace("    radius: f32,\n", "    radius: f32,\n    extra: f32,\n");
     let module = naga::front::wgsl::parse_str(&source).unwrap();
     let (_, wgsl) = wgsl_struct(&module, "Light");
-    let rust =
-        rust_offsets!(GpuLight: position, radius, color, spot_cos_outer, spot_dir, spot_cos_inner);
+    let rust = rust_offsets!(GpuLight: position, radius, color, spot_chord2_outer, spot_dir, spot_ramp_scale);
     assert_ne!(wgsl, rust);
 }
