@@ -5,6 +5,12 @@
 //! the cull or plane searches that the `exact` method shares with the fast methods cannot hide
 //! from that. `--reference exact-method` compares with the `exact` method's lists instead:
 //! the same numbers when both are right, and faster on very large scenes.
+//!
+//! Exit status: 1 is the verdict "this dump misses a light" (or lists a light skipped on
+//! loading); 2 is a dump that cannot be checked against this scene at all — another grid or
+//! camera, a light index past the scene's lights, or a cluster listing a light twice. The last is
+//! malformed rather than wrong: DESIGN.md's lists are sets, and a list with a repeat cannot be
+//! counted in pairs the way the verdict's numbers are.
 
 use super::oracle_check::{self, CheckReport, OracleLights, check_all, check_clusters};
 use super::source::SceneSource;
@@ -45,6 +51,10 @@ struct CheckOutput {
     reference: Reference,
     /// The grid checked: the scene's, or the coarser one a pair budget made `assign` use.
     grid: [u32; 3],
+    /// The scene's own grid; `grid` differs from it when the dump is of a coarser one.
+    scene_grid: [u32; 3],
+    /// `grid != scene_grid`: the dump was built on a coarser grid (a pair budget's fallback).
+    coarsened: bool,
     exact_pairs: u64,
     reported_pairs: u64,
     misses: u64,
@@ -91,6 +101,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let out = CheckOutput {
         reference: args.reference,
         grid: grid.dims().to_array(),
+        scene_grid: scene.grid.dims().to_array(),
+        coarsened: grid.dims() != scene.grid.dims(),
         invalid_lights_listed: invalid.lights,
         invalid_pairs: invalid.count,
         exact_pairs: report.exact_pairs,
@@ -115,7 +127,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             Reference::ExactMethod => "the exact method's lists",
         };
         println!("{name} vs {} (against {reference}):", args.dump.display());
-        if grid.dims() != scene.grid.dims() {
+        if out.coarsened {
             let [x, y, z] = out.grid;
             println!(
                 "  grid                  {x}x{y}x{z} (coarser than the scene's, as a pair budget makes it)"

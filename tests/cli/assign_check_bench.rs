@@ -66,6 +66,12 @@ fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
         let cmp = check_json(&scene, &dump);
         let context = format!("{method}: {cmp}");
         assert_eq!(cmp["grid"], serde_json::json!([6, 3, 4]), "{context}");
+        assert_eq!(
+            cmp["scene_grid"],
+            serde_json::json!([24, 12, 16]),
+            "{context}"
+        );
+        assert_eq!(cmp["coarsened"], true, "{context}");
         assert_eq!(u64_field(&cmp, "misses"), 0, "{context}");
         assert!(u64_field(&cmp, "exact_pairs") > 0, "{context}");
     }
@@ -88,6 +94,9 @@ fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
     assign_and_check(&scene, "refined", &full);
     let text = check_text(&full);
     assert!(!text.contains("coarser"), "{text}");
+    let cmp = check_json(&scene, &full);
+    assert_eq!(cmp["grid"], cmp["scene_grid"], "{cmp}");
+    assert_eq!(cmp["coarsened"], false, "{cmp}");
     // A grid no coarsening of the scene's reaches is still refused: 20x12x16 halves to
     // 10x6x8, 5x3x4, 2x1x2, 1x1x1, never 6x3x4.
     let other = write(
