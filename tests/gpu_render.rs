@@ -548,6 +548,7 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
     let Some((scene, mut viewer)) = viewer_after_one_frame(200, 192, 96) else {
         return;
     };
+    let viewer_lists = viewer.lists().clone();
     let Viewer {
         ctx,
         renderer,
@@ -726,6 +727,26 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
         .unwrap();
     let shaded =
         renderer.render_after_prepass(ctx, geometry, &frame(&scene.camera, &g), &target.view);
+    assert_eq!(shaded.map(|r| r.lights).ok(), Some(200));
+    // A NaN `up` (`Vec3::ZERO.normalize()`) is a usable camera (the documented fallback), and
+    // it is the same camera from one call to the next: with `==`, NaN ≠ NaN made every kept
+    // upload and every prepass "another camera's" (API review).
+    let mut nan_up = scene.camera;
+    nan_up.up = myriad::cluster_math::glam::Vec3::NAN;
+    assert!(nan_up.problem().is_none());
+    let lists = myriad::render::cluster_lists(&viewer_lists);
+    let upload = myriad::gpu::FrameDesc {
+        lights: Some(myriad::render::light_columns(&scene.lights)),
+        lists: Some(lists),
+        ..frame(&nan_up, &g)
+    };
+    renderer
+        .render(ctx, geometry, &upload, &target.view)
+        .unwrap();
+    let kept = renderer.render(ctx, geometry, &frame(&nan_up, &g), &target.view);
+    assert_eq!(kept.map(|r| r.lights).ok(), Some(200));
+    renderer.render_prepass(ctx, geometry, &nan_up).unwrap();
+    let shaded = renderer.render_after_prepass(ctx, geometry, &frame(&nan_up, &g), &target.view);
     assert_eq!(shaded.map(|r| r.lights).ok(), Some(200));
 }
 

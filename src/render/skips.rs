@@ -355,7 +355,7 @@ impl Viewer {
                 && c.generation == self.renderer.upload_generation()
                 && c.method == method
                 && c.skips == skips
-                && c.camera == scene.camera
+                && c.camera.same_as(&scene.camera)
                 && c.base_grid == scene.grid
                 && !geometry_dirty(&c.lights, lights)
         }) {

@@ -31,6 +31,10 @@ impl LightLists {
     }
 
     /// The lights of cluster `c`.
+    ///
+    /// # Panics
+    /// When `c` is not a cluster of the lists (`c >= offsets.len()`), or the lists are not CSR
+    /// (a list running past `indices`).
     pub fn lights_of(&self, c: usize) -> &[u32] {
         let start = self.offsets[c] as usize;
         &self.indices[start..start + self.counts[c] as usize]

@@ -60,6 +60,25 @@ impl Camera {
         }
     }
 
+    /// Whether `other` is this camera, field for field and bit for bit: what "the same view"
+    /// means when lists, a G-buffer or a cache are kept for a camera. Unlike `==`, a NaN field
+    /// (an `up` of `Vec3::ZERO.normalize()`, which the documented fallback makes usable) equals
+    /// itself, so such a camera is not "another camera" every frame; `0.0` and `-0.0` differ,
+    /// which costs at most a recomputation.
+    pub fn same_as(&self, other: &Camera) -> bool {
+        let bits = |c: &Camera| {
+            let v = |v: Vec3| v.to_array().map(f32::to_bits);
+            (
+                v(c.position),
+                v(c.target),
+                v(c.up),
+                [c.fov_y, c.near, c.far].map(f32::to_bits),
+                [c.width, c.height],
+            )
+        };
+        bits(self) == bits(other)
+    }
+
     /// What makes this camera unusable, if anything: [`Self::view_problem`], or a depth range
     /// not `0 < near < far` (`far` finite or `+∞`), a near plane below
     /// [`crate::ClusterGrid::MIN_NEAR`], or a finite range whose `near·far` passes `f32::MAX`

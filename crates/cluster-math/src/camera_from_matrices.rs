@@ -87,6 +87,10 @@ pub enum CameraMatrixError {
     EmptyTarget,
     /// The camera's position is too large for a finite f32 target point in front of it.
     PositionTooLarge,
+    /// The matrices describe a camera that [`Camera::problem`] refuses (a near plane below
+    /// [`crate::ClusterGrid::MIN_NEAR`], or a depth range whose `near·far` passes `f32::MAX`):
+    /// its message. Refused here rather than by the first grid or frame built on it.
+    Unusable(String),
 }
 
 impl std::fmt::Display for CameraMatrixError {
@@ -134,6 +138,7 @@ impl std::fmt::Display for CameraMatrixError {
                 f,
                 "the camera's position is too large for f32 (no finite point in front of it)"
             ),
+            Self::Unusable(problem) => write!(f, "the matrices' camera is unusable: {problem}"),
         }
     }
 }
@@ -215,7 +220,7 @@ impl Camera {
         if !(position.is_finite() && target.is_finite()) {
             return Err(CameraMatrixError::PositionTooLarge);
         }
-        Ok(Camera {
+        let camera = Camera {
             position,
             target,
             up: up.as_vec3(),
@@ -224,7 +229,11 @@ impl Camera {
             height,
             near: projection.near,
             far: projection.far,
-        })
+        };
+        match camera.problem() {
+            Some(problem) => Err(CameraMatrixError::Unusable(problem)),
+            None => Ok(camera),
+        }
     }
 }
 

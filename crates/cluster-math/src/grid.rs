@@ -82,7 +82,11 @@ impl std::error::Error for InvalidGrid {}
 /// Every field is private and read through a getter: [`Self::try_new`] checks them together
 /// (dimensions ≥ 1 whose product fits a u32 cluster id, a first slice inside the range), and a
 /// grid edited field by field (`grid.dims.x = width / 64` on a narrow window) would skip those
-/// checks into empty lists, panics or a 100 GB allocation. A different grid is a new one:
+/// checks into empty lists, panics or an allocation of a wrapped-around size. The checks do not
+/// bound memory: a valid grid may have up to 2³² − 1 clusters, and an assignment keeps about 8
+/// bytes a cluster (offsets and counts), 16 more with spot lights (cluster spheres) and 5 more
+/// with an active-cluster mask — pick dimensions for the memory you have. A different grid is a
+/// new one:
 /// `ClusterGrid::try_new(dims, grid.slicing(), grid.near(), grid.far())`, with
 /// `.with_outer_slices(grid.outer_slices())` to keep its [`OuterSlices`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,7 +140,8 @@ impl ClusterGrid {
             )));
         }
         if let DepthSlicing::LogWithNearSlice { first_slice_depth } = slicing
-            && !(dims.z == 1 || (first_slice_depth > near && first_slice_depth < far))
+            && !(dims.z == 1 && !first_slice_depth.is_nan()
+                || (first_slice_depth > near && first_slice_depth < far))
         {
             return Err(InvalidGrid(format!(
                 "first_slice_depth {first_slice_depth} must lie inside ({near}, {far})"
@@ -244,11 +249,20 @@ impl ClusterGrid {
         self.dims.x as usize * self.dims.y as usize * self.dims.z as usize
     }
 
-    /// Cluster id of tile `(i, j)` in slice `k`: `i + X·(j + Y·k)`.
+    /// Cluster id of tile `(i, j)` in slice `k`: `i + X·(j + Y·k)`. Unchecked outside debug
+    /// builds (the assignment's emit calls it per box row): a tile off the grid gives another
+    /// cluster's id, or a wrapped one. [`Self::checked_cluster_id`] checks.
     #[inline]
     pub fn cluster_id(&self, i: u32, j: u32, k: u32) -> u32 {
         debug_assert!(i < self.dims.x && j < self.dims.y && k < self.dims.z);
         i + self.dims.x * (j + self.dims.y * k)
+    }
+
+    /// [`Self::cluster_id`], or `None` for a tile or slice off the grid: for ids from an
+    /// engine's own data (marking `myriad-assignment`'s `ActiveClusters`, say),
+    /// where a wrong id would be another cluster's, silently.
+    pub fn checked_cluster_id(&self, i: u32, j: u32, k: u32) -> Option<u32> {
+        (i < self.dims.x && j < self.dims.y && k < self.dims.z).then(|| self.cluster_id(i, j, k))
     }
 
     /// Inverse of [`Self::cluster_id`], for `id < self.cluster_count()` (larger ids give
@@ -259,16 +273,25 @@ impl ClusterGrid {
     }
 
     /// NDC x of the left edge of tile `i` (`i` in `0..=X`): `−1 + 2i/X`.
+    ///
+    /// # Panics
+    /// When `i > X`.
     pub fn x_edge_ndc(&self, i: u32) -> f32 {
         ndc_edge_from_left(i, self.dims.x)
     }
 
     /// NDC y of the top edge of tile row `j` (`j` in `0..=Y`, counted from the top): `1 − 2j/Y`.
+    ///
+    /// # Panics
+    /// When `j > Y`.
     pub fn y_edge_ndc(&self, j: u32) -> f32 {
         -ndc_edge_from_left(j, self.dims.y)
     }
 
     /// View depth where slice `k` starts (`k` in `0..=Z`; `k = Z` gives `far`).
+    ///
+    /// # Panics
+    /// When `k > Z`.
     pub fn slice_start_depth(&self, k: u32) -> f32 {
         let z = self.dims.z;
         assert!(k <= z, "slice edge {k} out of range 0..={z}");
@@ -292,6 +315,9 @@ impl ClusterGrid {
     }
 
     /// Depth range `[start, end)` of slice `k`.
+    ///
+    /// # Panics
+    /// When `k >= Z`.
     pub fn slice_depth_range(&self, k: u32) -> (f32, f32) {
         (self.slice_start_depth(k), self.slice_start_depth(k + 1))
     }
@@ -342,12 +368,18 @@ impl ClusterGrid {
     }
 
     /// Tile column of pixel column `px` for a target `width` pixels wide.
+    ///
+    /// # Panics
+    /// When `px >= width` (a pixel outside the target, `width` 0 included): no tile holds it.
     #[inline]
     pub fn tile_x_of_pixel(&self, px: u32, width: u32) -> u32 {
         tile_of_pixel(px, width, self.dims.x)
     }
 
     /// Tile row (from the top) of pixel row `py` for a target `height` pixels high.
+    ///
+    /// # Panics
+    /// When `py >= height`.
     #[inline]
     pub fn tile_y_of_pixel(&self, py: u32, height: u32) -> u32 {
         tile_of_pixel(py, height, self.dims.y)

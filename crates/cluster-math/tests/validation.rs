@@ -87,6 +87,23 @@ fn invalid_grids_are_errors_from_try_new_and_panics_from_new() {
         let e = ClusterGrid::try_new(UVec3::new(24, 12, 16), at_edge, 0.1, 100.0).unwrap_err();
         assert!(e.to_string().contains("first_slice_depth"), "{edge}: {e}");
     }
+    // With one slice the edge is not used, but a NaN one is still refused: the grid would not
+    // equal itself, and every "is this mask, this upload for this grid" check would fail on it
+    // (`ActiveClusters::is_for` panicked the assignment, API review).
+    let nan_edge = DepthSlicing::LogWithNearSlice {
+        first_slice_depth: f32::NAN,
+    };
+    for z in [1, 16] {
+        let e = ClusterGrid::try_new(UVec3::new(24, 12, z), nan_edge, 0.1, 100.0).unwrap_err();
+        assert!(
+            e.to_string().contains("first_slice_depth NaN"),
+            "Z = {z}: {e}"
+        );
+    }
+    let unused_edge = DepthSlicing::LogWithNearSlice {
+        first_slice_depth: 1e6,
+    };
+    assert!(ClusterGrid::try_new(UVec3::new(24, 12, 1), unused_edge, 0.1, 100.0).is_ok());
     let ok = ClusterGrid::try_new(UVec3::new(24, 12, 16), near_slice, 0.1, 100.0).unwrap();
     assert_eq!(
         ok,
@@ -220,4 +237,40 @@ fn a_pixel_outside_the_target_is_refused() {
         assert!(r.is_err(), "pixel ({x}, {y}) of {w}x{h}");
     }
     assert!(grid.cluster_of_pixel(63, 31, 1.0, 64, 32) < grid.cluster_count() as u32);
+}
+
+#[test]
+fn checked_cluster_ids_refuse_tiles_off_the_grid() {
+    let grid = ClusterGrid::new(UVec3::new(4, 3, 2), DepthSlicing::Log, 0.1, 100.0);
+    assert_eq!(grid.checked_cluster_id(3, 2, 1), Some(23));
+    assert_eq!(
+        grid.checked_cluster_id(1, 2, 0),
+        Some(grid.cluster_id(1, 2, 0))
+    );
+    // Unchecked, (4, 0, 0) is cluster (0, 1, 0)'s id.
+    for (i, j, k) in [(4, 0, 0), (0, 3, 0), (0, 0, 2), (u32::MAX, 0, 0)] {
+        assert_eq!(grid.checked_cluster_id(i, j, k), None, "({i}, {j}, {k})");
+    }
+}
+
+#[test]
+fn a_camera_is_the_same_as_itself_even_with_a_nan_up() {
+    let camera = Camera::new(Vec3::ONE, Vec3::ZERO, Vec3::NAN, 60.0, 640, 480, 0.1, 100.0);
+    assert!(camera.problem().is_none());
+    assert_ne!(camera, camera, "NaN ≠ NaN: why `same_as` exists");
+    assert!(camera.same_as(&camera));
+    for change in [
+        |c: &mut Camera| c.position.x += 1e-6,
+        |c: &mut Camera| c.target.y = 0.5,
+        |c: &mut Camera| c.up = Vec3::Y,
+        |c: &mut Camera| c.fov_y *= 1.0 + f32::EPSILON,
+        |c: &mut Camera| c.width += 1,
+        |c: &mut Camera| c.height -= 1,
+        |c: &mut Camera| c.near = 0.2,
+        |c: &mut Camera| c.far = f32::INFINITY,
+    ] {
+        let mut other = camera;
+        change(&mut other);
+        assert!(!camera.same_as(&other), "{other:?}");
+    }
 }

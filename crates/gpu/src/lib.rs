@@ -29,12 +29,14 @@
 //!
 //! ```no_run
 //! use myriad_gpu::{GpuContext, HeadlessTarget, Renderer, HEADLESS_FORMAT};
-//! let ctx = GpuContext::headless()?;
+//! # #[cfg(feature = "headless")] {
+//! let ctx = GpuContext::headless()?; // `GpuContext::from_device` without the feature
 //! let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
 //! let target = HeadlessTarget::new(&ctx.device, 640, 360)?;
 //! // renderer.upload_scene(..) and, for each kind of frame to come, renderer.prepare(..) (its
 //! // pipelines, so no frame compiles shaders); then renderer.render(&ctx, &scene, &frame,
 //! // &target.view) per frame.
+//! # }
 //! # Ok::<(), myriad_gpu::GpuError>(())
 //! ```
 #![forbid(unsafe_code)]

@@ -21,6 +21,9 @@ impl Cell {
     /// starts at [`ClusterGrid::first_slice_start`] and the last slice's ends at
     /// [`ClusterGrid::last_slice_end`]: beyond the grid's range (perhaps at ∞) where the grid is
     /// [`crate::OuterSlices::Open`] and the camera sees nearer or farther.
+    ///
+    /// # Panics
+    /// When `k >= Z` (`i` and `j` off the grid give cells outside the frustum, unchecked).
     pub fn of_cluster(camera: &Camera, grid: &ClusterGrid, i: u32, j: u32, k: u32) -> Self {
         let (mut d0, mut d1) = grid.slice_depth_range(k);
         if k == 0 {

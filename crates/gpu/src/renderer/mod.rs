@@ -620,7 +620,7 @@ impl Renderer {
             match self.lists_uploaded {
                 // And to the camera they were assigned for: the same grid seen from elsewhere is
                 // other clusters in the world (such a frame shaded with Ok, audit).
-                Some(kept) if kept.grid == *frame.grid && kept.camera != *frame.camera => {
+                Some(kept) if kept.grid == *frame.grid && !kept.camera.same_as(frame.camera) => {
                     return Err(GpuError::InvalidInput(
                         "the kept lists were assigned for another camera (its position, \
                          orientation, field of view, size or depth range changed): lists belong \
@@ -673,7 +673,7 @@ impl Renderer {
         }
         // Shading another camera's G-buffer rebuilds every pixel's position with the wrong
         // view: a wrong image returned as Ok (audit).
-        if !draw_gbuffer && self.gbuffer_camera != Some(*frame.camera) {
+        if !draw_gbuffer && !self.gbuffer_camera.is_some_and(|c| c.same_as(frame.camera)) {
             return Err(GpuError::InvalidInput(
                 "render_after_prepass shades the G-buffer the prepass drew, for another camera \
                  (its position, orientation, field of view or depth range differ): run the \
