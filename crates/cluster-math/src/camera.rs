@@ -111,7 +111,8 @@ impl Camera {
     }
 
     /// What makes the view and its screen mapping unusable, if anything: a non-finite position
-    /// or target, a field of view outside (0, π), or a zero width or height. A degenerate `up` or
+    /// or target, a field of view outside (0, π), a zero width or height, or frustum slopes
+    /// (`tan(fov/2)`, times the aspect ratio across) that are not normal f32 numbers. A degenerate `up` or
     /// `target == position` is not a problem: those have the documented fallbacks. The depth
     /// range is not looked at: light assignment slices depth by its grid's range, so a camera with
     /// an infinite far plane (reversed-Z engines) and a finite grid is fine there. The assignment
@@ -134,6 +135,21 @@ impl Camera {
             return Some(format!(
                 "size must be at least 1x1 pixels, got {}x{}",
                 self.width, self.height
+            ));
+        }
+        // The frustum's slopes and the projection's scales (their inverses) must be normal f32:
+        // a field of view of 1e-36° has a subnormal slope, which GPUs flush to zero, and it
+        // rendered a blank image with no error.
+        let t = self.tan_half_fov();
+        if !(t.x.is_normal() && t.y.is_normal() && t.recip().is_finite()) {
+            return Some(format!(
+                "field of view {:e}° ({}x{} pixels) gives frustum slopes tan(fov/2) = [{:e}, {:e}], \
+                 outside f32's normal range",
+                self.fov_y.to_degrees(),
+                self.width,
+                self.height,
+                t.x,
+                t.y
             ));
         }
         None

@@ -149,6 +149,24 @@ fn camera_problems_are_named() {
         ),
         (Camera { height: 0, ..good }, "at least 1x1"),
         (Camera { width: 0, ..good }, "at least 1x1"),
+        // Slopes below f32's normal range: 1e-36° (a blank image on llvmpipe, exit 0), and a
+        // normal vertical slope made subnormal across by a 1-pixel-wide target.
+        (
+            Camera {
+                fov_y: 1e-36f32.to_radians(),
+                ..good
+            },
+            "outside f32's normal range",
+        ),
+        (
+            Camera {
+                fov_y: 3e-38,
+                width: 1,
+                height: 1000,
+                ..good
+            },
+            "outside f32's normal range",
+        ),
         (
             Camera {
                 position: Vec3::NAN,

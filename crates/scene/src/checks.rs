@@ -65,9 +65,10 @@ pub(crate) fn spot_deg_ok(deg: f64) -> bool {
     deg.is_finite() && deg > 0.0 && deg <= 180.0
 }
 
+/// (The aspect ratio's part is `Camera::view_problem`'s, which the scene's camera passes too.)
 fn fov_rad_ok(rad: f32) -> bool {
     let t = (0.5 * rad).tan();
-    rad.is_finite() && rad > 0.0 && rad < PI && t.is_finite() && t > 0.0
+    rad.is_finite() && rad > 0.0 && rad < PI && t.is_normal() && t.recip().is_finite()
 }
 
 fn spot_rad_ok(rad: f32) -> bool {
@@ -564,7 +565,8 @@ mod tests {
         let mut p = camera_parts();
         // 7 rad has a positive tan(fov / 2) but is not in (0, π); the smallest subnormal is
         // positive but halves to 0, so tan(fov / 2) is 0 and the projection divides by it.
-        for rad in [7.0, f32::from_bits(1), PI, 0.0, -1.0, f32::NAN] {
+        // 1e-36° halves to a subnormal slope, which GPUs flush to zero (a blank image).
+        for rad in [7.0, f32::from_bits(1), 1e-36f32.to_radians(), PI, 0.0, -1.0, f32::NAN] {
             p.fov_y = Some(Angle::from_rad(rad));
             let (check, problems) = camera_problems(&p);
             assert!(check.camera.is_none(), "{rad}");
