@@ -645,6 +645,7 @@ fn unusable_cameras_and_lists_of_another_grid_are_errors() {
             dir_y: &s.dir_y[..8],
             dir_z: &s.dir_z[..8],
             angle: &s.angle[..8],
+            inner_angle: s.inner_angle.map(|inner| &inner[..8]),
         }),
     };
     let fewer_lights = myriad::gpu::FrameDesc {
@@ -1274,5 +1275,47 @@ fn zero_vertex_normals_shade_with_the_face_normal_not_nan() {
     assert!(
         worst <= 1,
         "zero normals: clustered vs brute force differ by {worst}/255 in {differing} channels"
+    );
+}
+
+/// A spot's inner angle reaches the shader through the scene's columns: the same 2° spots with an
+/// inner angle of 0 and of 1.9° are equally bright on their axes, and the second is brighter off
+/// them (before inner angles were kept, both started their falloff at 1.6°).
+#[test]
+fn a_spots_inner_angle_sets_where_its_falloff_starts() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let (w, h) = (256u32, 128u32);
+    let mut images = Vec::new();
+    let mut viewer: Option<Viewer> = None;
+    for inner_deg in [0.0f32, 1.9] {
+        let mut scene = spots_from_the_eye(2.0);
+        for inner in &mut scene.lights.spot_inner_angle {
+            *inner = inner_deg.to_radians();
+        }
+        assert!(scene.lights.problems().is_empty());
+        let v = match viewer.as_mut() {
+            Some(v) => v,
+            None => viewer.insert(Viewer::new(ctx.clone(), &scene).unwrap()),
+        };
+        v.frame(&scene, Shading::Clustered, Method::Refined, false)
+            .unwrap();
+        images.push(v.image().unwrap());
+    }
+    let red = |image: &[u8], x: u32, y: u32| image[4 * (y * w + x) as usize];
+    assert_eq!(
+        red(&images[0], w / 2, h / 2),
+        red(&images[1], w / 2, h / 2),
+        "on the axis"
+    );
+    let (mut brighter, mut darker) = (0, 0);
+    for (a, b) in images[0].chunks(4).zip(images[1].chunks(4)) {
+        brighter += usize::from(b[0] > a[0] + 8);
+        darker += usize::from(b[0] < a[0]);
+    }
+    assert!(
+        brighter > 500 && darker == 0,
+        "{brighter} pixels brighter with the wide inner cone, {darker} darker"
     );
 }

@@ -515,9 +515,13 @@ fn geometry_dirty(a: &Lights, b: &Lights) -> bool {
         || a.spot_angle != b.spot_angle
 }
 
-/// Whether colours or intensities differ (only the upload depends on them).
+/// Whether colours, intensities or spots' inner angles differ (only the upload depends on them).
 fn appearance_dirty(a: &Lights, b: &Lights) -> bool {
-    a.r != b.r || a.g != b.g || a.b != b.b || a.intensity != b.intensity
+    a.r != b.r
+        || a.g != b.g
+        || a.b != b.b
+        || a.intensity != b.intensity
+        || a.spot_inner_angle != b.spot_inner_angle
 }
 
 #[cfg(test)]
@@ -598,11 +602,12 @@ mod tests {
             ("spot_dir_z", |l| &mut l.spot_dir_z),
             ("spot_angle", |l| &mut l.spot_angle),
         ];
-        let appearance: [(&str, Column); 4] = [
+        let appearance: [(&str, Column); 5] = [
             ("r", |l| &mut l.r),
             ("g", |l| &mut l.g),
             ("b", |l| &mut l.b),
             ("intensity", |l| &mut l.intensity),
+            ("spot_inner_angle", |l| &mut l.spot_inner_angle),
         ];
         let changed = |column: Column| {
             let mut changed = lights.clone();

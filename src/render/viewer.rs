@@ -75,6 +75,7 @@ pub fn light_columns(lights: &Lights) -> LightColumns<'_> {
             dir_y: &lights.spot_dir_y,
             dir_z: &lights.spot_dir_z,
             angle: &lights.spot_angle,
+            inner_angle: Some(&lights.spot_inner_angle),
         }),
     }
 }

@@ -15,6 +15,10 @@ pub struct SpotColumns<'a> {
     pub dir_z: &'a [f32],
     /// Outer half angle, radians.
     pub angle: &'a [f32],
+    /// Inner half angle, radians, in `[0, angle)`: full strength inside it, the falloff to 0 at
+    /// `angle` outside (shading only: the lists are bounded by `angle`). `None`:
+    /// [`SPOT_INNER_FRACTION`] of `angle` for every spot.
+    pub inner_angle: Option<&'a [f32]>,
 }
 
 /// A frame's lights as SoA columns, world space (the scene's units: the shading's falloff takes
@@ -67,9 +71,15 @@ impl LightColumns<'_> {
             self.b.len(),
             self.intensity.len(),
         ];
-        let spot_lens = self
-            .spot
-            .map(|s| [s.dir_x.len(), s.dir_y.len(), s.dir_z.len(), s.angle.len()]);
+        let spot_lens = self.spot.map(|s| {
+            [
+                s.dir_x.len(),
+                s.dir_y.len(),
+                s.dir_z.len(),
+                s.angle.len(),
+                s.inner_angle.map_or(n, <[f32]>::len),
+            ]
+        });
         match lens
             .iter()
             .chain(spot_lens.iter().flatten())
@@ -131,12 +141,14 @@ impl ClusterLists<'_> {
     }
 }
 
-/// Fraction of the outer cone angle where a spot reaches full strength.
+/// Fraction of the outer cone angle where a spot reaches full strength, for spot columns without
+/// inner angles ([`SpotColumns::inner_angle`] `None`).
 pub const SPOT_INNER_FRACTION: f32 = 0.8;
 
 /// Converts the columns to camera-relative GPU records in `out` (reusing its storage).
 /// Positions are differenced in f64, so lights far from the origin keep their precision near the
-/// camera. Invalid rows (non-finite values, radius <= 0, negative colour) become records that
+/// camera. Invalid rows (non-finite values, radius <= 0, negative colour, a spot's inner angle
+/// outside `[0, angle)`) become records that
 /// light nothing (radius 0 at the camera) — the assignment skips the rows whose position or
 /// radius is invalid, and lists those whose appearance alone is — and are counted in the return
 /// value.
@@ -177,6 +189,9 @@ pub fn fill_gpu_lights(
             && color.iter().all(|c| c.is_finite() && *c >= 0.0);
         if let Some(s) = &columns.spot {
             let angle = s.angle[i];
+            let inner = s
+                .inner_angle
+                .map_or(angle * SPOT_INNER_FRACTION, |inner| inner[i]);
             let dir = [s.dir_x[i], s.dir_y[i], s.dir_z[i]];
             valid &= angle.is_finite() && angle > 0.0 && dir.iter().all(|d| d.is_finite());
             // Normalised here, as `myriad-assignment` does (its axis "need not be normalised"):
@@ -189,7 +204,8 @@ pub fn fill_gpu_lights(
                 .normalize_or_zero()
                 .as_vec3();
             if angle < std::f32::consts::PI && axis != glam::Vec3::ZERO {
-                let (outer, ramp_scale) = spot_ramp(angle, angle * SPOT_INNER_FRACTION);
+                valid &= inner >= 0.0 && inner < angle;
+                let (outer, ramp_scale) = spot_ramp(angle, inner);
                 light.spot_chord2_outer = outer;
                 light.spot_ramp_scale = ramp_scale;
                 light.spot_dir = axis.to_array();
@@ -237,6 +253,7 @@ mod tests {
                 dir_y: &[-3.0, 0.0, 1.0, 0.0],
                 dir_z: &[0.0, 0.0, 0.0, 0.0],
                 angle: &[0.5, 0.5, std::f32::consts::PI, 0.5],
+                inner_angle: None,
             }),
         };
         let mut out = Vec::new();
@@ -319,6 +336,7 @@ mod tests {
                     std::f32::consts::PI,
                     0.5,
                 ],
+                inner_angle: None,
             }),
         };
         let mut out = Vec::new();
@@ -384,6 +402,7 @@ mod tests {
                     dir_y: &[0.0],
                     dir_z: &[-1.0],
                     angle: &[outer],
+                    inner_angle: None,
                 }),
             };
             let mut out = Vec::new();
@@ -413,6 +432,50 @@ mod tests {
         }
     }
 
+    /// A spot's own inner angle sets where its falloff starts (glTF's `innerConeAngle`); one
+    /// outside `[0, angle)` makes a dark record, counted like the other invalid values.
+    #[test]
+    fn spot_inner_angles_start_the_falloff_and_bad_ones_are_counted() {
+        let nan = f32::NAN;
+        let n = 6;
+        let columns = LightColumns {
+            x: &[0.0; 6],
+            y: &[0.0; 6],
+            z: &[0.0; 6],
+            radius: &[1.0; 6],
+            r: &[1.0; 6],
+            g: &[1.0; 6],
+            b: &[1.0; 6],
+            intensity: &[1.0; 6],
+            spot: Some(SpotColumns {
+                dir_x: &[0.0; 6],
+                dir_y: &[0.0; 6],
+                dir_z: &[-1.0; 6],
+                angle: &[0.5, 0.5, 0.5, 0.5, 0.5, std::f32::consts::PI],
+                // 0 and 0.3 are good; NaN, negative and the outer angle itself are not; the
+                // last row is a point light (angle π), whose inner angle is not read.
+                inner_angle: Some(&[0.0, 0.3, nan, -0.1, 0.5, nan]),
+            }),
+        };
+        let mut out = Vec::new();
+        assert_eq!(fill_gpu_lights(&columns, DVec3::ZERO, &mut out), 3);
+        assert_eq!(out.len(), n);
+        for (i, inner) in [(0, 0.0f64), (1, 0.3f32 as f64)] {
+            let want = (1.0 / (spot_chord2(0.5) - spot_chord2(inner))) as f32;
+            assert_eq!(out[i].spot_ramp_scale, want, "row {i}");
+            assert_eq!(out[i].spot_chord2_outer, spot_chord2(0.5) as f32);
+        }
+        // Full strength up to the inner angle, not to 0.8 of the outer one (0.4).
+        let at = |a: f64| glam::DVec3::new(a.sin(), 0.0, -a.cos()).as_vec3();
+        assert_eq!(shader_spot_falloff(&out[1], at(0.29)), 1.0);
+        assert!(shader_spot_falloff(&out[1], at(0.35)) < 1.0);
+        assert!(shader_spot_falloff(&out[0], at(0.2)) < 1.0);
+        for (i, bad) in out.iter().enumerate().take(5).skip(2) {
+            assert_eq!(*bad, GpuLight::default(), "row {i}");
+        }
+        assert_eq!(out[5].spot_chord2_outer, GpuLight::POINT_CHORD2_OUTER);
+    }
+
     #[test]
     fn light_columns_of_unequal_length_are_refused() {
         let two = [1.0f32; 2];
@@ -436,6 +499,7 @@ mod tests {
             dir_y: &two,
             dir_z: &two,
             angle: &[0.5; 3],
+            inner_angle: None,
         };
         let spots = LightColumns {
             b: &two,
@@ -454,6 +518,18 @@ mod tests {
             ..spots
         };
         assert_eq!(equal.check(), Ok(()));
+        let short_inner = LightColumns {
+            spot: Some(SpotColumns {
+                angle: &two,
+                inner_angle: Some(&[0.1]),
+                ..spot
+            }),
+            ..spots
+        };
+        assert_eq!(
+            short_inner.check(),
+            Err("light columns differ in length: 2 positions, a column of 1".to_string())
+        );
         assert_eq!((equal.len(), equal.is_empty()), (2, false));
         let none = LightColumns {
             x: &[],

@@ -534,7 +534,8 @@ pub fn atrium() -> Model {
         let p = v(x, 12.0, 0.0);
         let light = LightRecord::point(p, 25.0)
             .with_intensity(300.0)
-            .with_spot((-p).normalize(), outer);
+            .with_spot((-p).normalize(), outer)
+            .with_spot_inner_angle(inner);
         let kind = PunctualKind::Spot {
             inner_cone_angle: inner,
             outer_cone_angle: outer,

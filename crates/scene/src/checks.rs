@@ -318,6 +318,8 @@ pub(crate) fn check_grid(
 pub(crate) struct SpotParts {
     pub direction: Option<Vec3>,
     pub angle: Option<Angle>,
+    /// `None`: not given, so [`crate::default_spot_inner_angle`] of the outer angle.
+    pub inner: Option<Angle>,
 }
 
 /// The parts of a light. `spot: None` is a point light.
@@ -401,6 +403,25 @@ pub(crate) fn check_light(
                 format!("must be in (0, 180] degrees, got {}", a.shown_deg()),
             );
         }
+        // In [0, outer), in the file's degrees and in the radians kept: the shader's falloff
+        // runs from the inner angle to the outer one.
+        if let (Some(inner), Some(outer)) = (s.inner, s.angle) {
+            let below = |a: f64, b: f64| a.is_finite() && a >= 0.0 && a < b;
+            let deg_ok = match (inner.deg, outer.deg) {
+                (Some(i), Some(o)) => below(i, o),
+                _ => true,
+            };
+            if !(deg_ok && below(inner.rad as f64, outer.rad as f64)) {
+                sink.report(
+                    "spot.inner_angle_deg",
+                    format!(
+                        "must be in [0, angle_deg {}) degrees, got {}",
+                        outer.shown_deg(),
+                        inner.shown_deg()
+                    ),
+                );
+            }
+        }
         spot = match (s.direction, s.angle) {
             (Some(d), Some(a)) => Some(SpotCone {
                 direction: unit_direction(d),
@@ -416,12 +437,18 @@ pub(crate) fn check_light(
         (Some(position), Some(radius), Some(color), Some(intensity))
             if p.spot.is_none() || spot.is_some() =>
         {
+            let spot_inner_angle = match (&p.spot, spot) {
+                (Some(SpotParts { inner: Some(a), .. }), Some(_)) => a.rad,
+                (_, Some(cone)) => crate::default_spot_inner_angle(cone.angle),
+                (_, None) => 0.0,
+            };
             Some(LightRecord {
                 position,
                 radius,
                 color,
                 intensity,
                 spot,
+                spot_inner_angle,
                 source_index,
             })
         }
@@ -566,7 +593,15 @@ mod tests {
         // 7 rad has a positive tan(fov / 2) but is not in (0, π); the smallest subnormal is
         // positive but halves to 0, so tan(fov / 2) is 0 and the projection divides by it.
         // 1e-36° halves to a subnormal slope, which GPUs flush to zero (a blank image).
-        for rad in [7.0, f32::from_bits(1), 1e-36f32.to_radians(), PI, 0.0, -1.0, f32::NAN] {
+        for rad in [
+            7.0,
+            f32::from_bits(1),
+            1e-36f32.to_radians(),
+            PI,
+            0.0,
+            -1.0,
+            f32::NAN,
+        ] {
             p.fov_y = Some(Angle::from_rad(rad));
             let (check, problems) = camera_problems(&p);
             assert!(check.camera.is_none(), "{rad}");
@@ -586,6 +621,7 @@ mod tests {
             l.spot = Some(SpotParts {
                 direction: Some(Vec3::Z),
                 angle: Some(Angle::from_rad(rad)),
+                inner: None,
             });
             let (r, problems) = light_problems(&l);
             assert!(r.is_none(), "{rad}");
@@ -599,6 +635,7 @@ mod tests {
         l.spot = Some(SpotParts {
             direction: Some(Vec3::Z),
             angle: Some(Angle::from_rad(PI)),
+            inner: None,
         });
         assert!(light_problems(&l).0.is_some());
     }
@@ -699,6 +736,7 @@ mod tests {
         p.spot = Some(SpotParts {
             direction: Some(Vec3::ZERO),
             angle: Some(Angle::from_deg(0.0)),
+            inner: None,
         });
         let (r, problems) = light_problems(&p);
         assert!(r.is_none());
@@ -723,6 +761,7 @@ mod tests {
         p.spot = Some(SpotParts {
             direction: Some(Vec3::new(0.0, -3.0, 4.0)),
             angle: Some(Angle::from_deg(180.0)),
+            inner: None,
         });
         let (r, problems) = light_problems(&p);
         assert!(problems.is_empty(), "{problems:?}");
@@ -739,6 +778,7 @@ mod tests {
             p.spot = Some(SpotParts {
                 direction: Some(Vec3::Z),
                 angle: Some(Angle::from_deg(deg)),
+                inner: None,
             });
             assert_eq!(light_problems(&p).1.len(), 1, "{deg}");
         }

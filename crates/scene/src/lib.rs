@@ -62,7 +62,8 @@
 //!    to f32; `ClusterGrid::MIN_NEAR` is the floor); grid dimensions `>= 1` with `x·y·z <= u32::MAX` (cluster ids are u32); light
 //!    `radius > 0` (a non-zero radius that rounds to 0 in f32, `1e-46`, is named as written),
 //!    colour and `intensity >= 0` with colour × intensity finite in f32 (the renderer's radiance),
-//!    spot direction non-zero, spot `angle_deg` in (0, 180]. Every problem is collected, never
+//!    spot direction non-zero, spot `angle_deg` in (0, 180] and `inner_angle_deg`, when given, in
+//!    [0, `angle_deg`). Every problem is collected, never
 //!    only the first.
 //! 4. **Policy.** Problems with the root, camera or grid are always errors. Invalid lights are an
 //!    error with [`LightPolicy::Strict`], or are left out and listed in [`Scene::skipped`] with
@@ -89,6 +90,10 @@
 //! * Spot lights: `spot.angle_deg` is the outer half angle; stored as radians in
 //!   [`Lights::spot_angle`] (`>= π` means omnidirectional). The direction need not be unit length
 //!   in the file; it is normalized on reading (kept bit for bit when already within 1e-6 of unit).
+//! * The extension **`spot.inner_angle_deg`** (optional): where the spot's falloff starts, as
+//!   glTF's `innerConeAngle`; stored in [`Lights::spot_inner_angle`]. Without it a spot gets
+//!   [`DEFAULT_SPOT_INNER_FRACTION`] (0.8) of its outer angle, and the writer leaves that default
+//!   out. It only shades: the assignment bounds a spot by its outer angle.
 //!
 //! ## Writing
 //! [`Scene::to_json_string`] / [`Scene::save`] write one line per light, in `source_index` order,
@@ -141,7 +146,7 @@ pub use gltf_load::{DEFAULT_LIGHT_CUTOFF, ImageLoading, LoadOptions};
 pub use light_fields::{
     ColorRule, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler, radius_from_intensity,
 };
-pub use lights::{LightRecord, Lights};
+pub use lights::{DEFAULT_SPOT_INNER_FRACTION, LightRecord, Lights, default_spot_inner_angle};
 pub use model::{
     Aabb, AlphaMode, DirectionalLight, Image, ImagePixels, ImageSource, Instance, Material, Mesh,
     Model, ModelCamera, ModelSummary, PixelFormat, PlacedLight, Primitive, Projection,

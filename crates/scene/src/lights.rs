@@ -6,6 +6,11 @@
 //! Spot columns exist only when needed: a scene without spot lights carries no spot data at all
 //! ([`Lights::has_spots`] is false and the four spot columns are empty). Once any light is a spot,
 //! every row has spot data and point lights are marked by a zero direction and an angle of π.
+//!
+//! A spot's inner angle (full strength inside it, then the renderer's falloff to 0 at the outer
+//! angle) only shades: it bounds nothing, so the assignment never reads it. Scene-file spots
+//! without one, and spots built with [`LightRecord::with_spot`], get
+//! [`DEFAULT_SPOT_INNER_FRACTION`] of the outer angle; glTF spots keep their `innerConeAngle`.
 
 use crate::checks::{self, Angle, LightParts, SpotParts, UNIT_TOLERANCE};
 use crate::error::Problem;
@@ -14,13 +19,23 @@ use glam::Vec3;
 use myriad_cluster_math::SpotCone;
 use std::f32::consts::PI;
 
+/// The inner angle of a spot that does not give one, as a fraction of its outer angle (the
+/// renderer's fixed fraction before inner angles were kept; `myriad-gpu`'s `SPOT_INNER_FRACTION`
+/// for columns without inner angles).
+pub const DEFAULT_SPOT_INNER_FRACTION: f32 = 0.8;
+
+/// [`DEFAULT_SPOT_INNER_FRACTION`] of `outer`: the inner angle a spot gets when none is given.
+pub fn default_spot_inner_angle(outer: f32) -> f32 {
+    DEFAULT_SPOT_INNER_FRACTION * outer
+}
+
 /// Lights as SoA columns. All non-spot columns have the same length ([`Lights::len`]); the spot
 /// columns are either all empty (no spot lights) or all of that length.
 ///
 /// Invariants of a valid set (checked by [`Lights::problems`], guaranteed for lights read from a
 /// scene file; [`Lights::push`] does not check them): every value is finite, `radius > 0`,
-/// colour and intensity `>= 0`, spot directions are unit length (within 1e-6) and spot angles in
-/// `(0, π]`.
+/// colour and intensity `>= 0`, spot directions are unit length (within 1e-6), spot angles in
+/// `(0, π]` and a spot's inner angle in `[0, angle)`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lights {
     /// World-space position, x.
@@ -49,6 +64,10 @@ pub struct Lights {
     /// omnidirectional, and point lights have exactly [`std::f32::consts::PI`]. Empty when no
     /// light is a spot.
     pub spot_angle: Vec<f32>,
+    /// Inner half angle of the spot cone in radians, in `[0, spot_angle)`: full strength inside
+    /// it, falling to 0 at `spot_angle` (shading only; nothing is bounded by it). 0 for point
+    /// lights. Empty when no light is a spot.
+    pub spot_inner_angle: Vec<f32>,
     /// Each light's index in the scene file's `lights` array (or whatever numbering the builder
     /// chose), so outputs can refer to input order even when invalid lights were skipped.
     pub source_index: Vec<u32>,
@@ -67,6 +86,8 @@ pub struct LightRecord {
     pub intensity: f32,
     /// The spot cone (unit axis, outer half angle in radians), or `None` for a point light.
     pub spot: Option<SpotCone>,
+    /// The spot's inner half angle in radians, in `[0, outer)` (0 for a point light).
+    pub spot_inner_angle: f32,
     /// Index in the source (the scene file's `lights` array).
     pub source_index: u32,
 }
@@ -80,6 +101,7 @@ impl LightRecord {
             color: Vec3::ONE,
             intensity: 1.0,
             spot: None,
+            spot_inner_angle: 0.0,
             source_index: 0,
         }
     }
@@ -94,10 +116,20 @@ impl LightRecord {
         Self { intensity, ..self }
     }
 
-    /// The same light as a spot with unit axis `direction` and outer half angle `angle` (radians).
+    /// The same light as a spot with unit axis `direction` and outer half angle `angle` (radians),
+    /// its inner angle [`DEFAULT_SPOT_INNER_FRACTION`] of that.
     pub fn with_spot(self, direction: Vec3, angle: f32) -> Self {
         Self {
             spot: Some(SpotCone { direction, angle }),
+            spot_inner_angle: default_spot_inner_angle(angle),
+            ..self
+        }
+    }
+
+    /// The same light with the spot's inner half angle `inner` (radians, in `[0, outer)`).
+    pub fn with_spot_inner_angle(self, inner: f32) -> Self {
+        Self {
+            spot_inner_angle: inner,
             ..self
         }
     }
@@ -166,6 +198,7 @@ impl Lights {
             self.spot_dir_y = vec![0.0; n];
             self.spot_dir_z = vec![0.0; n];
             self.spot_angle = vec![PI; n];
+            self.spot_inner_angle = vec![0.0; n];
         }
         self.x.push(light.position.x);
         self.y.push(light.position.y);
@@ -177,14 +210,15 @@ impl Lights {
         self.intensity.push(light.intensity);
         self.source_index.push(light.source_index);
         if with_spots {
-            let (d, angle) = match light.spot {
-                Some(s) => (s.direction, s.angle),
-                None => (Vec3::ZERO, PI),
+            let (d, angle, inner) = match light.spot {
+                Some(s) => (s.direction, s.angle, light.spot_inner_angle),
+                None => (Vec3::ZERO, PI, 0.0),
             };
             self.spot_dir_x.push(d.x);
             self.spot_dir_y.push(d.y);
             self.spot_dir_z.push(d.z);
             self.spot_angle.push(angle);
+            self.spot_inner_angle.push(inner);
         }
     }
 
@@ -194,12 +228,18 @@ impl Lights {
             direction: Vec3::new(self.spot_dir_x[i], self.spot_dir_y[i], self.spot_dir_z[i]),
             angle: self.spot_angle[i],
         });
+        let spot_inner_angle = if spot.is_some() {
+            self.spot_inner_angle[i]
+        } else {
+            0.0
+        };
         LightRecord {
             position: Vec3::new(self.x[i], self.y[i], self.z[i]),
             radius: self.radius[i],
             color: Vec3::new(self.r[i], self.g[i], self.b[i]),
             intensity: self.intensity[i],
             spot,
+            spot_inner_angle,
             source_index: self.source_index[i],
         }
     }
@@ -244,7 +284,7 @@ impl Lights {
             .extend(indices.iter().map(|&i| self.source_index[i as usize]));
     }
 
-    fn columns(&self) -> [&Vec<f32>; 12] {
+    fn columns(&self) -> [&Vec<f32>; 13] {
         [
             &self.x,
             &self.y,
@@ -258,10 +298,11 @@ impl Lights {
             &self.spot_dir_y,
             &self.spot_dir_z,
             &self.spot_angle,
+            &self.spot_inner_angle,
         ]
     }
 
-    fn columns_mut(&mut self) -> [&mut Vec<f32>; 12] {
+    fn columns_mut(&mut self) -> [&mut Vec<f32>; 13] {
         [
             &mut self.x,
             &mut self.y,
@@ -275,6 +316,7 @@ impl Lights {
             &mut self.spot_dir_y,
             &mut self.spot_dir_z,
             &mut self.spot_angle,
+            &mut self.spot_inner_angle,
         ]
     }
 
@@ -298,6 +340,7 @@ impl Lights {
             ("spot_dir_y", self.spot_dir_y.len()),
             ("spot_dir_z", self.spot_dir_z.len()),
             ("spot_angle", self.spot_angle.len()),
+            ("spot_inner_angle", self.spot_inner_angle.len()),
         ];
         let spot_len = if self.has_spots() { n } else { 0 };
         let bad: Vec<String> = base
@@ -344,6 +387,7 @@ impl Lights {
                     Some(SpotParts {
                         direction: Some(d),
                         angle: Some(Angle::from_rad(angle)),
+                        inner: Some(Angle::from_rad(self.spot_inner_angle[i])),
                     })
                 }
             } else {
@@ -495,9 +539,20 @@ mod tests {
                 .with_spot(Vec3::Y, 4.0)
                 .with_source_index(12),
         );
+        lights.push(
+            LightRecord::point(Vec3::ZERO, 1.0)
+                .with_spot(Vec3::Y, 0.5)
+                .with_spot_inner_angle(0.5)
+                .with_source_index(13),
+        );
         lights.spot_angle[0] = 1.0;
         let shown: Vec<String> = lights.problems().iter().map(|p| p.to_string()).collect();
-        assert_eq!(shown.len(), 4, "{shown:#?}");
+        assert_eq!(shown.len(), 5, "{shown:#?}");
+        assert!(
+            shown[4].starts_with("lights[13].spot.inner_angle_deg: must be in [0, angle_deg"),
+            "{}",
+            shown[4]
+        );
         assert!(shown[0].starts_with("lights[9].spot_angle: a point light"));
         assert_eq!(
             shown[1],

@@ -416,8 +416,7 @@ pub enum PunctualKind {
     Point,
     /// Emits in a cone; angles in radians from the axis.
     Spot {
-        /// Where the falloff starts (kept for engines: myriad's renderer starts it at 0.8 of the
-        /// outer angle, see the glTF loader's decisions).
+        /// Where the falloff starts (stored in [`Lights::spot_inner_angle`]).
         inner_cone_angle: f32,
         /// Where the light ends (stored in [`Lights::spot_angle`]).
         outer_cone_angle: f32,

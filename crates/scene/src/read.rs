@@ -32,7 +32,7 @@ pub(crate) const CAMERA_FIELDS: &[&str] = &[
 ];
 pub(crate) const GRID_FIELDS: &[&str] = &["x", "y", "z", "depth", "first_slice_depth"];
 pub(crate) const LIGHT_FIELDS: &[&str] = &["position", "radius", "color", "intensity", "spot"];
-pub(crate) const SPOT_FIELDS: &[&str] = &["direction", "angle_deg"];
+pub(crate) const SPOT_FIELDS: &[&str] = &["direction", "angle_deg", "inner_angle_deg"];
 
 /// The `depth` names of the scene file.
 pub(crate) const DEPTH_LINEAR: &str = "linear";
@@ -329,6 +329,7 @@ fn read_light(j: &Json, index: u32, parsed: &mut Parsed) {
                     None => SpotParts {
                         direction: None,
                         angle: None,
+                        inner: None,
                     },
                     Some(s) => SpotParts {
                         direction: s
@@ -337,6 +338,10 @@ fn read_light(j: &Json, index: u32, parsed: &mut Parsed) {
                         angle: s
                             .required("angle_deg", &mut sink)
                             .and_then(|j| json::to_f64(j, "spot.angle_deg", &mut sink))
+                            .map(Angle::from_deg),
+                        inner: s
+                            .optional("inner_angle_deg")
+                            .and_then(|j| json::to_f64(j, "spot.inner_angle_deg", &mut sink))
                             .map(Angle::from_deg),
                     },
                 });
@@ -490,6 +495,48 @@ mod tests {
                 "lights[4].spot.angle_deg",
                 "lights[4].spot.direction",
             ]
+        );
+    }
+
+    /// `spot.inner_angle_deg` is optional (default 0.8 of `angle_deg`) and must lie in
+    /// `[0, angle_deg)`.
+    #[test]
+    fn spot_inner_angles_are_read_defaulted_and_checked() {
+        let spot = |extra: &str| {
+            format!(
+                r#"{{"position": [0, 0, 0], "radius": 1,
+                    "spot": {{"direction": [0, -1, 0], "angle_deg": 40{extra}}}}}"#
+            )
+        };
+        let lights = [
+            spot(""),
+            spot(r#", "inner_angle_deg": 10"#),
+            spot(r#", "inner_angle_deg": 0"#),
+            spot(r#", "inner_angle_deg": 40"#),
+            spot(r#", "inner_angle_deg": -1"#),
+            spot(r#", "inner_angle_deg": "ten""#),
+        ];
+        let p = parse(doc(&format!("[{}]", lights.join(","))).as_bytes()).unwrap();
+        assert_eq!(p.lights.source_index, [0, 1, 2]);
+        let rad = |deg: f64| deg.to_radians() as f32;
+        assert_eq!(
+            p.lights.spot_inner_angle,
+            [0.8 * rad(40.0), rad(10.0), 0.0],
+            "{:?}",
+            paths(&p)
+        );
+        assert_eq!(
+            paths(&p),
+            [
+                "lights[3].spot.inner_angle_deg",
+                "lights[4].spot.inner_angle_deg",
+                "lights[5].spot.inner_angle_deg",
+            ]
+        );
+        let shown: Vec<String> = p.all_problems().map(|p| p.to_string()).collect();
+        assert!(
+            shown[0].contains("must be in [0, angle_deg 40.0) degrees, got 40.0"),
+            "{shown:?}"
         );
     }
 

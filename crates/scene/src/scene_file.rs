@@ -261,12 +261,15 @@ impl Scene {
             if l.is_spot(i) {
                 out.extend_from_slice(b", \"spot\": {\"direction\": ");
                 write_vec3(out, [l.spot_dir_x[i], l.spot_dir_y[i], l.spot_dir_z[i]])?;
-                write!(
-                    out,
-                    ", \"angle_deg\": {}}}",
-                    degrees_text(l.spot_angle[i], spot_deg_ok)
-                )
-                .map_err(io)?;
+                let (outer, inner) = (l.spot_angle[i], l.spot_inner_angle[i]);
+                write!(out, ", \"angle_deg\": {}", degrees_text(outer, spot_deg_ok)).map_err(io)?;
+                // Only when it is not the default the reader gives a spot without one, so files
+                // of spots without inner angles read and write back as they were.
+                if inner != crate::default_spot_inner_angle(outer) {
+                    let text = degrees_text(inner, |d| d.is_finite() && d >= 0.0);
+                    write!(out, ", \"inner_angle_deg\": {text}").map_err(io)?;
+                }
+                out.push(b'}');
             }
             out.push(b'}');
         }
@@ -407,6 +410,23 @@ mod tests {
         assert!(lines[5].contains(r#""spot": {"direction": [0.0, -1.0, 0.0], "angle_deg": "#));
         let back = Scene::from_json_str(&text, "t", LightPolicy::Strict).unwrap();
         assert_eq!(back.lights, scene().lights);
+    }
+
+    /// A spot's own inner angle is written and read back; the default one is not written, so a
+    /// file of spots without inner angles is written back as it was.
+    #[test]
+    fn spot_inner_angles_are_written_unless_they_are_the_default() {
+        let mut s = scene();
+        let text = s.to_json_string().unwrap();
+        assert!(!text.contains("inner_angle_deg"), "{text}");
+        let spot = s.lights.get(1).with_spot_inner_angle(0.25);
+        let point = s.lights.get(0);
+        s.lights = [point, spot].into_iter().collect();
+        let text = s.to_json_string().unwrap();
+        assert!(text.contains(r#""inner_angle_deg": "#), "{text}");
+        let back = Scene::from_json_str(&text, "t", LightPolicy::Strict).unwrap();
+        assert_eq!(back.lights.spot_inner_angle, [0.0, 0.25]);
+        assert_eq!(back.lights, s.lights);
     }
 
     #[test]

@@ -61,13 +61,10 @@
 //!   "node": KHR_lights_punctual lights[I] "name": <what is wrong>; left out`. The geometry, the
 //!   cameras and the other lights stay usable. Only a node naming a light that does not exist is an
 //!   error: then the document itself is broken.
-//! * **A spot's inner cone is read, checked and kept ([`PunctualKind::Spot`](crate::PunctualKind))
-//!   but not drawn with.** The light's columns ([`Lights`](crate::Lights)) hold one angle, the
-//!   outer cone, which bounds the light for the assignment; `myriad-gpu` starts every spot's
-//!   falloff at 0.8 of it (`SPOT_INNER_FRACTION`), as for spots from scene files, which have no
-//!   inner angle. A spot whose inner cone is far from that (the spec's default 0 with an outer
-//!   45°: 3.4× brighter at 30° than the spec's falloff) looks different from its authoring
-//!   tool; the lists are the same either way. An engine that shades itself has the angle.
+//! * **A spot's inner cone is kept and drawn with.** The outer cone bounds the light for the
+//!   assignment ([`Lights::spot_angle`](crate::Lights::spot_angle)); the inner one
+//!   ([`Lights::spot_inner_angle`](crate::Lights::spot_inner_angle)) only shades: full strength
+//!   inside it, the spec's falloff (in the cosine) to 0 at the outer angle, squared.
 //! * **Directions ignore scale.** A spot's or sun's direction and a camera's view and up are the
 //!   node's −Z and +Y axes at unit length, however the node scales them (1e-30, 1e20, or
 //!   non-uniformly): normalised in f64 where f32 would square the length to 0 or ∞. Only a

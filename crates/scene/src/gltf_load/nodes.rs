@@ -469,13 +469,16 @@ impl Loader<'_> {
             .with_color(color)
             .with_intensity(light.intensity);
         if let PunctualKind::Spot {
-            outer_cone_angle, ..
+            inner_cone_angle,
+            outer_cone_angle,
         } = kind
         {
             if direction == Vec3::ZERO {
                 return Err(format!("{NO_AXIS}, so the light has no direction"));
             }
-            record = record.with_spot(direction, outer_cone_angle);
+            record = record
+                .with_spot(direction, outer_cone_angle)
+                .with_spot_inner_angle(inner_cone_angle);
         }
         Ok(Usable::Clustered {
             record,

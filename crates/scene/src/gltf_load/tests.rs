@@ -302,6 +302,9 @@ fn a_spot_inner_cone_outside_the_outer_is_clamped_and_reported() {
     };
     assert_eq!(outer_cone_angle, 0.5);
     assert!(inner_cone_angle < 0.5 && inner_cone_angle > 0.49);
+    // The clamped inner angle is what the lights hold and the renderer draws with.
+    assert_eq!(model.lights.spot_inner_angle, [inner_cone_angle]);
+    assert_eq!(model.lights.spot_angle, [0.5]);
     assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
     assert!(
         model.warnings[0].contains("innerConeAngle 0.6 is not in [0, outerConeAngle 0.5)"),
