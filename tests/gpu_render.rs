@@ -19,6 +19,16 @@ fn max_channel_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
     (worst, differing)
 }
 
+/// The clustered (`Method::Refined` lists) and brute-force images of `scene`.
+fn clustered_and_brute_force(viewer: &mut Viewer, scene: &RenderScene) -> [Vec<u8>; 2] {
+    [Shading::Clustered, Shading::BruteForce].map(|shading| {
+        viewer
+            .frame(scene, shading, Method::Refined, false)
+            .unwrap();
+        viewer.image().unwrap()
+    })
+}
+
 /// Pixels with a channel above 40/255: lit, not background or shadow.
 fn lit_pixels(rgba: &[u8]) -> usize {
     rgba.chunks(4)
@@ -155,11 +165,7 @@ fn a_near_plane_far_below_the_scene_keeps_clustered_equal_to_brute_force() {
             Some(v) => v,
             None => viewer.insert(Viewer::new(ctx.clone(), &scene).unwrap()),
         };
-        let mut images = Vec::new();
-        for shading in [Shading::Clustered, Shading::BruteForce] {
-            v.frame(&scene, shading, Method::Refined, false).unwrap();
-            images.push(v.image().unwrap());
-        }
+        let images = clustered_and_brute_force(v, &scene);
         let depth = v.renderer.read_depth(&v.ctx).unwrap().unwrap();
         let covered = depth.iter().filter(|&&d| d > 0.0).count();
         let reference = *reference_covered.get_or_insert(covered);
@@ -1212,11 +1218,7 @@ fn narrow_spots_are_at_full_strength_on_their_axis_and_clustered_equals_brute_fo
             Some(v) => v,
             None => viewer.insert(Viewer::new(ctx.clone(), &scene).unwrap()),
         };
-        let mut images = Vec::new();
-        for shading in [Shading::Clustered, Shading::BruteForce] {
-            v.frame(&scene, shading, Method::Refined, false).unwrap();
-            images.push(v.image().unwrap());
-        }
+        let images = clustered_and_brute_force(v, &scene);
         dump(&format!("spots_{angle}.png"), &images[0], w, h);
         let (worst, differing) = max_channel_difference(&images[0], &images[1]);
         assert!(
@@ -1258,13 +1260,7 @@ fn zero_vertex_normals_shade_with_the_face_normal_not_nan() {
         vertex.normal = [0.0; 3];
     }
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
-    let mut images = Vec::new();
-    for shading in [Shading::Clustered, Shading::BruteForce] {
-        viewer
-            .frame(&scene, shading, Method::Refined, false)
-            .unwrap();
-        images.push(viewer.image().unwrap());
-    }
+    let images = clustered_and_brute_force(&mut viewer, &scene);
     dump("zero_normals.png", &images[0], w, h);
     let lit = lit_pixels(&images[1]);
     assert!(
