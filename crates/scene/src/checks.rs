@@ -71,6 +71,29 @@ fn fov_rad_ok(rad: f32) -> bool {
     rad.is_finite() && rad > 0.0 && rad < PI && t.is_normal() && t.recip().is_finite()
 }
 
+/// Why a field of view within (0, 180) degrees as written is refused: its f32 radians, or their
+/// half-angle tangent, left the usable range. Empty unless degrees were written and are in range.
+fn fov_rounding(a: &Angle) -> String {
+    if !a.deg.is_some_and(fov_deg_ok) {
+        return String::new();
+    }
+    if !(a.rad > 0.0 && a.rad < PI) {
+        return format!(", which is {} rad in f32", show_f32(a.rad));
+    }
+    format!(
+        ", whose half-angle tangent {:e} is outside f32's normal range",
+        (0.5 * a.rad).tan()
+    )
+}
+
+/// Why a spot angle within (0, 180] degrees as written is refused: its radians round to 0.
+fn spot_rounding(a: &Angle) -> String {
+    match a.deg {
+        Some(d) if spot_deg_ok(d) && a.rad == 0.0 => ", which is 0 rad in f32".to_string(),
+        _ => String::new(),
+    }
+}
+
 fn spot_rad_ok(rad: f32) -> bool {
     rad.is_finite() && rad > 0.0 && rad <= PI
 }
@@ -167,7 +190,11 @@ pub(crate) fn check_camera(p: &CameraParts, sink: &mut Sink<'_>) -> CameraCheck 
     {
         sink.report(
             "fov_y_deg",
-            format!("must be in (0, 180) degrees, got {}", a.shown_deg()),
+            format!(
+                "must be in (0, 180) degrees, got {}{}",
+                a.shown_deg(),
+                fov_rounding(&a)
+            ),
         );
     }
     for (name, v) in [("width", p.width), ("height", p.height)] {
@@ -196,7 +223,20 @@ pub(crate) fn check_camera(p: &CameraParts, sink: &mut Sink<'_>) -> CameraCheck 
         if !f.is_finite() {
             sink.report("far", format!("must be finite, got {}", show_f32(f)));
         } else if let Some(n) = near_ok {
-            if f > n {
+            if f > n && !(n * f).is_finite() {
+                // The renderer's reversed-Z projection and squared distances need near·far in
+                // f32 (`Camera::problem`): `render` refused such a camera after `validate`,
+                // `assign` and `check` had accepted it (audit).
+                sink.report(
+                    "far",
+                    format!(
+                        "near·far = {:.3e} overflows f32 (near {}, far {}); use smaller units",
+                        n as f64 * f as f64,
+                        show_f32(n),
+                        show_f32(f)
+                    ),
+                );
+            } else if f > n {
                 depth_range = Some((n, f));
             } else {
                 sink.report(
@@ -228,16 +268,28 @@ pub(crate) fn check_camera(p: &CameraParts, sink: &mut Sink<'_>) -> CameraCheck 
                 Some(width),
                 Some(height),
                 Some((near, far)),
-            ) => Some(Camera {
-                position,
-                target,
-                up,
-                fov_y: fov.rad,
-                width,
-                height,
-                near,
-                far,
-            }),
+            ) => {
+                let camera = Camera {
+                    position,
+                    target,
+                    up,
+                    fov_y: fov.rad,
+                    width,
+                    height,
+                    near,
+                    far,
+                };
+                // What the checks above do not name field by field (frustum slopes outside
+                // f32's normal range across a very wide or tall target): a scene file's camera
+                // is one every command can use.
+                match camera.problem() {
+                    Some(problem) => {
+                        sink.report("", problem);
+                        None
+                    }
+                    None => Some(camera),
+                }
+            }
             _ => None,
         }
     } else {
@@ -400,7 +452,11 @@ pub(crate) fn check_light(
         {
             sink.report(
                 "spot.angle_deg",
-                format!("must be in (0, 180] degrees, got {}", a.shown_deg()),
+                format!(
+                    "must be in (0, 180] degrees, got {}{}",
+                    a.shown_deg(),
+                    spot_rounding(&a)
+                ),
             );
         }
         // In [0, outer), in the file's degrees and in the radians kept: the shader's falloff
@@ -495,6 +551,51 @@ mod tests {
         let mut problems = Vec::new();
         let check = check_camera(p, &mut Sink::new(&mut problems, Prefix::Section("camera")));
         (check, problems)
+    }
+
+    /// Every camera a scene file accepts is one `Camera::problem` accepts (the renderer's test):
+    /// `validate`, `assign` and `check` took near 10 with far 1e38, which `render` then refused
+    /// after setting up the GPU (hunt). And a value refused for its f32 rounding says so, where
+    /// the message showed a number inside the range it asked for.
+    #[test]
+    fn scene_cameras_are_usable_cameras_and_rounding_is_named() {
+        let shown = |p: &CameraParts| -> Vec<String> {
+            let (check, problems) = camera_problems(p);
+            assert!(check.camera.is_none() || problems.is_empty());
+            problems.iter().map(|p| p.to_string()).collect()
+        };
+        let mut p = camera_parts();
+        (p.near, p.far) = (Some(10.0), Some(1e38));
+        assert_eq!(
+            shown(&p),
+            [
+                "camera.far: near·far = 1.000e39 overflows f32 (near 10.0, far 1e+38); use smaller units"
+            ]
+        );
+        let mut p = camera_parts();
+        p.fov_y = Some(Angle::from_deg(179.999_999));
+        assert_eq!(
+            shown(&p),
+            [
+                "camera.fov_y_deg: must be in (0, 180) degrees, got 179.999999, which is 3.1415927 \
+              rad in f32"
+            ]
+        );
+        p.fov_y = Some(Angle::from_deg(1e-36));
+        let text = shown(&p);
+        assert!(
+            text.len() == 1 && text[0].contains("half-angle tangent 8.7"),
+            "{text:?}"
+        );
+        // A vertical slope that is a normal f32, made subnormal across by a 1-pixel-wide target
+        // of 4e9 rows: not a field the checks name, so `Camera::problem`'s text, at `camera`.
+        p.fov_y = Some(Angle::from_deg(1e-30));
+        (p.width, p.height) = (Some(1), Some(4_000_000_000));
+        let text = shown(&p);
+        assert!(
+            text.len() == 1 && text[0].starts_with("camera: field of view"),
+            "{text:?}"
+        );
     }
 
     #[test]
@@ -720,6 +821,25 @@ mod tests {
         let mut problems = Vec::new();
         let r = check_light(p, 5, &mut Sink::new(&mut problems, Prefix::Light(5)));
         (r, problems)
+    }
+
+    #[test]
+    fn a_spot_angle_that_rounds_to_zero_says_so() {
+        let mut p = light_parts();
+        p.spot = Some(SpotParts {
+            direction: Some(Vec3::Z),
+            angle: Some(Angle::from_deg(1e-44)),
+            inner: None,
+        });
+        let (r, problems) = light_problems(&p);
+        assert!(r.is_none());
+        let shown: Vec<String> = problems.iter().map(|p| p.to_string()).collect();
+        assert_eq!(
+            shown,
+            [
+                "lights[5].spot.angle_deg: must be in (0, 180] degrees, got 1e-44, which is 0 rad in f32"
+            ]
+        );
     }
 
     #[test]

@@ -58,8 +58,9 @@
 //!    (`1e39`) is an error, not an infinity. Degrees are converted to radians in f64 and then
 //!    rounded once. Checks: everything finite; camera `position != target`, `up != 0` and not
 //!    parallel to `target − position` (the roll would be the camera's fallback, a guess),
-//!    `fov_y_deg` in (0, 180), `width, height >= 1`, `1e-12 <= near < far` (compared after rounding
-//!    to f32; `ClusterGrid::MIN_NEAR` is the floor); grid dimensions `>= 1` with `x·y·z <= u32::MAX` (cluster ids are u32); light
+//!    `fov_y_deg` in (0, 180) (and frustum slopes that are normal f32 numbers),
+//!    `width, height >= 1`, `1e-12 <= near < far` with `near·far` finite (compared after rounding to f32;
+//!    `ClusterGrid::MIN_NEAR` is the floor); grid dimensions `>= 1` with `x·y·z <= u32::MAX` (cluster ids are u32); light
 //!    `radius > 0` (a non-zero radius that rounds to 0 in f32, `1e-46`, is named as written),
 //!    colour and `intensity >= 0` with colour × intensity finite in f32 (the renderer's radiance),
 //!    spot direction non-zero, spot `angle_deg` in (0, 180] and `inner_angle_deg`, when given, in
