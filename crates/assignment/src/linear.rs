@@ -143,6 +143,12 @@ pub(crate) fn assign_linear(
             let (j0, j1) = step_planes(ny, |j| yn[j].dot(c) >= -r, |j| yn[j].dot(c) <= r);
             (i0, i1, j0, j1)
         } else {
+            // The sphere reaches the eye's depth, where every side plane meets: the paper's
+            // stepping (monotonic tile by tile only in front of the eye) does not apply, so every
+            // tile of its slices. Loose, never a miss; `binary` bounds such lights per side. The
+            // padding grows with the distance, so a small light far to the side of a very wide
+            // view lands here too (fov 179.99999°, a 0.05 light 10⁵ off axis: 1,440 pairs where
+            // `binary` lists 5; hunt, 2026-11-30) — kept, as the paper's baseline.
             (0, nx - 1, 0, ny - 1)
         };
         if i0 > i1 || j0 > j1 {
