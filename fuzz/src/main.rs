@@ -92,6 +92,8 @@ const TOKENS: &[&str] = &[
     "\"",
     "\\u0000",
     "\"spot\":{\"direction\":[0,0,0],\"angle_deg\":180}",
+    "\"spot\":{\"direction\":[0,-1,0],\"angle_deg\":30,\"inner_angle_deg\":29.999999}",
+    "\"inner_angle_deg\":1e-50",
     "\"children\":[0]",
     "\"count\":2147483648",
     "\"byteOffset\":4294967295",
