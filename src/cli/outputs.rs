@@ -45,7 +45,7 @@ fn is_regular_file(path: &Path) -> bool {
 /// corrupt it (`assign --out /dev/stdout | jq` read the dump with the summary glued to its end):
 /// then on stderr.
 pub fn say_written(output: &Path, line: &str) {
-    if std::fs::metadata(output).is_ok_and(|m| m.is_file()) {
+    if is_regular_file(output) {
         println!("{line}");
     } else {
         eprintln!("{line}");

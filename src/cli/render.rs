@@ -863,18 +863,21 @@ fn print_table(s: &Stats) {
             .map_or(String::new(), |y| {
                 format!("; {} with {}", times(y), render_skipping::SHADING)
             });
-        // Below 1 it says "slower": a few lights can cost clustered shading more than they
-        // save ("0.8x faster", audit).
-        let (ratio, word) = if x >= 1.0 {
-            (x, "faster")
-        } else {
-            (1.0 / x, "slower")
-        };
-        println!(
-            "clustered deferred shading is {ratio:.1}x {word} than brute-force deferred ({}){with_skips}",
-            s.speedup_measure
-        );
+        println!("{}", speedup_sentence(x, s.speedup_measure, &with_skips));
     }
+}
+
+/// The main job's last line. Below 1 it says "slower": a few lights can cost clustered shading
+/// more than they save ("0.8x faster", audit).
+fn speedup_sentence(ratio: f64, measure: impl std::fmt::Display, with_skips: &str) -> String {
+    let (ratio, word) = if ratio >= 1.0 {
+        (ratio, "faster")
+    } else {
+        (1.0 / ratio, "slower")
+    };
+    format!(
+        "clustered deferred shading is {ratio:.1}x {word} than brute-force deferred ({measure}){with_skips}"
+    )
 }
 
 /// `ratio` as "N.Nx", or "N.Nx slower" below 1.
@@ -894,6 +897,21 @@ pub fn main_job() -> Result<ExitCode> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_speedup_below_one_says_slower() {
+        assert_eq!(
+            speedup_sentence(42.6, "shading pass", "; 45.6x with clustered+skips"),
+            "clustered deferred shading is 42.6x faster than brute-force deferred (shading pass); \
+             45.6x with clustered+skips"
+        );
+        assert_eq!(
+            speedup_sentence(0.8, "frame wall", ""),
+            "clustered deferred shading is 1.2x slower than brute-force deferred (frame wall)"
+        );
+        assert_eq!(times(0.5), "2.0x slower");
+        assert_eq!(times(2.0), "2.0x");
+    }
 
     /// Renders with frames of `frame` each under `budget`: how many frames were rendered, and
     /// how many leading ones `frames_within` said to drop.

@@ -322,6 +322,28 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
     );
 }
 
+/// A dump written to stdout (`--out /dev/stdout | jq`) is the whole of stdout: the summary line
+/// goes to stderr when the output is not a regular file (it was glued to the dump's end).
+#[test]
+fn a_dump_to_stdout_is_all_of_stdout() {
+    let out = myriad(&[
+        "assign",
+        "--preset",
+        "paper",
+        "--lights",
+        "50",
+        "--method",
+        "binary",
+        "--out",
+        "/dev/stdout",
+    ]);
+    assert!(out.status.success(), "{}", all_output(&out));
+    let dump: Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not one JSON value ({e}):\n{}", stdout(&out)));
+    assert_eq!(dump["grid"], serde_json::json!([24, 12, 16]));
+    assert_mentions(&stderr(&out), &["assigned 50 lights", "wrote /dev/stdout"]);
+}
+
 #[test]
 fn check_rejects_broken_dumps_naming_the_file() {
     let dir = work_dir("broken_dumps");
