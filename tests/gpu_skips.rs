@@ -395,3 +395,37 @@ fn without_feature_variants_every_shader_path_is_built() {
         "a frame with `variants` built the spot paths a scene without spots does not need"
     );
 }
+
+/// Past the pair budget the lists are built unmasked on a coarser grid, so the frame reports no
+/// active-cluster count (the mask's count described clusters the lists no longer have) and the
+/// image still equals the image without savings.
+#[test]
+fn coarsened_lists_report_no_active_cluster_count() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(300, 192, 96).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let active = Skips {
+        active_clusters: true,
+        ..Skips::NONE
+    };
+    let (reference, _) = render(&mut viewer, &scene, Skips::NONE);
+    let (_, full) = render(&mut viewer, &scene, active);
+    assert!(
+        full.active_clusters.is_some_and(|n| n > 0),
+        "{:?}",
+        full.active_clusters
+    );
+    viewer.set_pair_budget(200);
+    let (image, coarse) = render(&mut viewer, &scene, active);
+    let stats = coarse.stats.as_ref().unwrap();
+    assert!(stats.coarsened > 0, "{stats:?}");
+    assert_ne!(coarse.grid.dims(), scene.grid.dims());
+    assert_eq!(coarse.active_clusters, None);
+    let worst = max_channel_difference(&image, &reference);
+    assert!(
+        worst <= 1,
+        "coarsened lists differ from the full ones by {worst}/255"
+    );
+}

@@ -170,6 +170,13 @@ impl Viewer {
         })
     }
 
+    /// Caps the lists at `pairs` cluster–light pairs (and never past what the device binds,
+    /// [`GpuContext::max_list_pairs`], the default): past the cap a frame's lists are built on a
+    /// coarser grid ([`myriad_assignment::Assigner::with_pair_budget`]), no light dropped.
+    pub fn set_pair_budget(&mut self, pairs: u64) {
+        self.assigner = Assigner::new().with_pair_budget(pairs.min(self.ctx.max_list_pairs()));
+    }
+
     /// Builds the pipelines [`Viewer::frame`] will use for `shading` and `heat_map` ahead of it
     /// ([`Renderer::prepare`]), so that frame's encoding compiles no shaders; returns how many it
     /// built. The main job calls it before each strategy's frames: brute force's one timed frame
