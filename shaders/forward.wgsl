@@ -36,10 +36,11 @@ fn vs_main(v: VertexIn) -> VertexOut {
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let face = face_normal(in.rel_position);
     let base = material.base_color * textureSample(base_color_texture, material_sampler, in.uv);
     var s: Surface;
     s.position = in.rel_position;
-    s.normal = surface_normal(in.normal, in.rel_position, front_facing);
+    s.normal = surface_normal(in.normal, face, in.rel_position, front_facing);
     s.albedo = base.rgb;
     s.roughness = material.roughness;
     s.metallic = material.metallic;

@@ -33,12 +33,14 @@ struct GBufferOut {
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> GBufferOut {
+    // Before the discard: derivatives (see `face_normal`).
+    let face = face_normal(in.rel_position);
     // Materials without a texture bind a 1x1 white one, so the sample is unconditional.
     let color = material.base_color * textureSample(base_color_texture, material_sampler, in.uv);
     if (color.a < material.alpha_cutoff) {
         discard;
     }
-    let n = surface_normal(in.normal, in.rel_position, front_facing);
+    let n = surface_normal(in.normal, face, in.rel_position, front_facing);
     var out: GBufferOut;
     out.albedo = vec4<f32>(color.rgb, 1.0);
     out.normal = octahedral_encode(n);

@@ -1307,7 +1307,7 @@ fn a_spots_inner_angle_sets_where_its_falloff_starts() {
     );
     let (mut brighter, mut darker) = (0, 0);
     for (a, b) in images[0].chunks(4).zip(images[1].chunks(4)) {
-        brighter += usize::from(b[0] > a[0] + 8);
+        brighter += usize::from(b[0] > a[0].saturating_add(8));
         darker += usize::from(b[0] < a[0]);
     }
     assert!(

@@ -4,9 +4,20 @@
 // spreading through an engine's HDR post-processing). There the triangle's own normal, from the
 // position's screen derivatives, turned toward the camera, stands in.
 
-fn surface_normal(interpolated: vec3<f32>, rel_position: vec3<f32>, front_facing: bool) -> vec3<f32> {
-    // Outside the branch: derivatives need uniform control flow.
-    let face = cross(dpdx(rel_position), dpdy(rel_position));
+// The triangle's normal (unnormalised, either side) from the screen derivatives of the position.
+// Call it first in the fragment shader, before any `discard` and outside any branch: derivatives
+// need the whole 2×2 quad running the same code (after a neighbour's `OpKill` they are undefined).
+fn face_normal(rel_position: vec3<f32>) -> vec3<f32> {
+    return cross(dpdx(rel_position), dpdy(rel_position));
+}
+
+// `face` is `face_normal(rel_position)`, taken at the top of the shader.
+fn surface_normal(
+    interpolated: vec3<f32>,
+    face: vec3<f32>,
+    rel_position: vec3<f32>,
+    front_facing: bool,
+) -> vec3<f32> {
     let len2 = dot(interpolated, interpolated);
     // False for NaN, zero and overflowing lengths.
     if (len2 > 1e-30 && len2 < 1e30) {

@@ -60,23 +60,23 @@ impl Camera {
         }
     }
 
-    /// Whether `other` is this camera, field for field and bit for bit: what "the same view"
-    /// means when lists, a G-buffer or a cache are kept for a camera. Unlike `==`, a NaN field
-    /// (an `up` of `Vec3::ZERO.normalize()`, which the documented fallback makes usable) equals
-    /// itself, so such a camera is not "another camera" every frame; `0.0` and `-0.0` differ,
-    /// which costs at most a recomputation.
+    /// Whether `other` is this camera, field for field: what "the same view" means when lists, a
+    /// G-buffer or a cache are kept for a camera. `==`, except that NaN equals NaN: a NaN field
+    /// (an `up` of `Vec3::ZERO.normalize()`, which the documented fallback makes usable) made
+    /// every kept upload "another camera's" under `==`. (`0.0` and `-0.0` stay equal, as the
+    /// views they give are: bit equality refused such a camera's kept lists.)
     pub fn same_as(&self, other: &Camera) -> bool {
-        let bits = |c: &Camera| {
-            let v = |v: Vec3| v.to_array().map(f32::to_bits);
-            (
-                v(c.position),
-                v(c.target),
-                v(c.up),
-                [c.fov_y, c.near, c.far].map(f32::to_bits),
-                [c.width, c.height],
-            )
+        let floats = |c: &Camera| {
+            let mut all = [0.0; 12];
+            all[..3].copy_from_slice(&c.position.to_array());
+            all[3..6].copy_from_slice(&c.target.to_array());
+            all[6..9].copy_from_slice(&c.up.to_array());
+            all[9..].copy_from_slice(&[c.fov_y, c.near, c.far]);
+            all
         };
-        bits(self) == bits(other)
+        let same = |(a, b): (f32, f32)| a == b || (a.is_nan() && b.is_nan());
+        (self.width, self.height) == (other.width, other.height)
+            && floats(self).into_iter().zip(floats(other)).all(same)
     }
 
     /// What makes this camera unusable, if anything: [`Self::view_problem`], or a depth range

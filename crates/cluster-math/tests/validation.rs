@@ -277,6 +277,11 @@ fn a_camera_is_the_same_as_itself_even_with_a_nan_up() {
     assert!(camera.problem().is_none());
     assert_ne!(camera, camera, "NaN ≠ NaN: why `same_as` exists");
     assert!(camera.same_as(&camera));
+    let signed_zero = Camera {
+        target: Vec3::new(-0.0, 0.0, -0.0),
+        ..camera
+    };
+    assert!(camera.same_as(&signed_zero), "-0.0 is 0.0");
     for change in [
         |c: &mut Camera| c.position.x += 1e-6,
         |c: &mut Camera| c.target.y = 0.5,

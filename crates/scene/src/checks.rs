@@ -447,8 +447,11 @@ pub(crate) fn check_light(
                 format!("must be finite and non-zero, got {}", show_vec3(d)),
             );
         }
+        let outer_ok = s
+            .angle
+            .is_some_and(|a| a.deg.is_none_or(spot_deg_ok) && spot_rad_ok(a.rad));
         if let Some(a) = s.angle
-            && !(a.deg.is_none_or(spot_deg_ok) && spot_rad_ok(a.rad))
+            && !outer_ok
         {
             sink.report(
                 "spot.angle_deg",
@@ -461,17 +464,27 @@ pub(crate) fn check_light(
         }
         // In [0, outer), in the file's degrees and in the radians kept: the shader's falloff
         // runs from the inner angle to the outer one.
-        if let (Some(inner), Some(outer)) = (s.inner, s.angle) {
+        // (Against a valid outer angle only: a bad one is reported once, above.)
+        if let (Some(inner), Some(outer), true) = (s.inner, s.angle, outer_ok) {
             let below = |a: f64, b: f64| a.is_finite() && a >= 0.0 && a < b;
             let deg_ok = match (inner.deg, outer.deg) {
                 (Some(i), Some(o)) => below(i, o),
                 _ => true,
             };
             if !(deg_ok && below(inner.rad as f64, outer.rad as f64)) {
+                // Below the outer angle as written, but not once both are f32 radians.
+                let rounding = if deg_ok && inner.deg.is_some() {
+                    format!(
+                        ", which is {} rad in f32, as angle_deg is",
+                        show_f32(inner.rad)
+                    )
+                } else {
+                    String::new()
+                };
                 sink.report(
                     "spot.inner_angle_deg",
                     format!(
-                        "must be in [0, angle_deg {}) degrees, got {}",
+                        "must be in [0, angle_deg {}) degrees, got {}{rounding}",
                         outer.shown_deg(),
                         inner.shown_deg()
                     ),

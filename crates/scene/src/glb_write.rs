@@ -533,17 +533,13 @@ impl Model {
                 (PunctualKind::Point, None) => {
                     ("point", None, Mat4::from_translation(light.position))
                 }
-                (
-                    PunctualKind::Spot {
-                        inner_cone_angle,
-                        outer_cone_angle,
-                    },
-                    Some(cone),
-                ) => (
+                // The cone as the light columns hold it (what is drawn and assigned), where
+                // `placed_lights` only records what the source said: an edited column is written.
+                (PunctualKind::Spot { .. }, Some(cone)) => (
                     "spot",
                     Some(SpotJson {
-                        inner_cone_angle: *inner_cone_angle,
-                        outer_cone_angle: *outer_cone_angle,
+                        inner_cone_angle: light.spot_inner_angle,
+                        outer_cone_angle: cone.angle,
                     }),
                     looking(light.position, cone.direction),
                 ),
@@ -714,6 +710,7 @@ mod tests {
         model.lights.push(
             LightRecord::point(Vec3::new(2.0, 5.0, 0.0), 9.0)
                 .with_spot(down, 0.6)
+                .with_spot_inner_angle(0.3)
                 .with_source_index(1),
         );
         model.placed_lights.push(PlacedLight {

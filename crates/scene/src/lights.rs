@@ -4,7 +4,7 @@
 //! structs). [`LightRecord`] is the row type for building and inspecting lights one at a time.
 //!
 //! Spot columns exist only when needed: a scene without spot lights carries no spot data at all
-//! ([`Lights::has_spots`] is false and the four spot columns are empty). Once any light is a spot,
+//! ([`Lights::has_spots`] is false and the five spot columns are empty). Once any light is a spot,
 //! every row has spot data and point lights are marked by a zero direction and an angle of π.
 //!
 //! A spot's inner angle (full strength inside it, then the renderer's falloff to 0 at the outer
@@ -24,9 +24,12 @@ use std::f32::consts::PI;
 /// for columns without inner angles).
 pub const DEFAULT_SPOT_INNER_FRACTION: f32 = 0.8;
 
-/// [`DEFAULT_SPOT_INNER_FRACTION`] of `outer`: the inner angle a spot gets when none is given.
+/// [`DEFAULT_SPOT_INNER_FRACTION`] of `outer`: the inner angle a spot gets when none is given;
+/// 0 for the few subnormal angles where that product rounds back to `outer` (an inner angle must
+/// lie below the outer one).
 pub fn default_spot_inner_angle(outer: f32) -> f32 {
-    DEFAULT_SPOT_INNER_FRACTION * outer
+    let inner = DEFAULT_SPOT_INNER_FRACTION * outer;
+    if inner < outer { inner } else { 0.0 }
 }
 
 /// Lights as SoA columns. All non-spot columns have the same length ([`Lights::len`]); the spot
@@ -117,7 +120,8 @@ impl LightRecord {
     }
 
     /// The same light as a spot with unit axis `direction` and outer half angle `angle` (radians),
-    /// its inner angle [`DEFAULT_SPOT_INNER_FRACTION`] of that.
+    /// its inner angle [`DEFAULT_SPOT_INNER_FRACTION`] of that (so set another inner angle after
+    /// this, with [`Self::with_spot_inner_angle`]).
     pub fn with_spot(self, direction: Vec3, angle: f32) -> Self {
         Self {
             spot: Some(SpotCone { direction, angle }),

@@ -515,6 +515,7 @@ mod tests {
             spot(r#", "inner_angle_deg": 40"#),
             spot(r#", "inner_angle_deg": -1"#),
             spot(r#", "inner_angle_deg": "ten""#),
+            spot(r#", "inner_angle_deg": 39.9999999"#),
         ];
         let p = parse(doc(&format!("[{}]", lights.join(","))).as_bytes()).unwrap();
         assert_eq!(p.lights.source_index, [0, 1, 2]);
@@ -531,6 +532,7 @@ mod tests {
                 "lights[3].spot.inner_angle_deg",
                 "lights[4].spot.inner_angle_deg",
                 "lights[5].spot.inner_angle_deg",
+                "lights[6].spot.inner_angle_deg",
             ]
         );
         let shown: Vec<String> = p.all_problems().map(|p| p.to_string()).collect();
@@ -538,6 +540,28 @@ mod tests {
             shown[0].contains("must be in [0, angle_deg 40.0) degrees, got 40.0"),
             "{shown:?}"
         );
+        assert!(
+            shown[3].ends_with("got 39.9999999, which is 0.6981317 rad in f32, as angle_deg is"),
+            "{shown:?}"
+        );
+        // A bad outer angle is the one problem, not the inner angle beside it too.
+        let p = parse(
+            doc(&format!(
+                "[{}]",
+                spot(r#", "inner_angle_deg": 0"#).replace("40", "0")
+            ))
+            .as_bytes(),
+        )
+        .unwrap();
+        assert_eq!(paths(&p), ["lights[0].spot.angle_deg"]);
+        // An outer angle of a few subnormal steps, where 0.8 of it rounds back to it: the
+        // default inner angle is 0, and the loaded lights pass their own checks (it loaded,
+        // then `Lights::problems` named an inner angle the file does not have, review).
+        let p = parse(doc(&format!("[{}]", spot("").replace("40", "1e-43"))).as_bytes()).unwrap();
+        assert_eq!(p.problem_count(), 0, "{:?}", paths(&p));
+        assert_eq!(p.lights.spot_inner_angle, [0.0]);
+        assert!(p.lights.spot_angle[0] > 0.0);
+        assert!(p.lights.problems().is_empty(), "{:?}", p.lights.problems());
     }
 
     #[test]

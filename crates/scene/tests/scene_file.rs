@@ -93,6 +93,7 @@ fn light_columns_bits(l: &Lights) -> Vec<Vec<u32>> {
         bits(&l.spot_dir_y),
         bits(&l.spot_dir_z),
         bits(&l.spot_angle),
+        bits(&l.spot_inner_angle),
         l.source_index.clone(),
     ]
 }
@@ -248,6 +249,14 @@ fn random_scene(rng: &mut Rng, lights: usize, spots: bool) -> Scene {
                 rng.f32_in(1e-6, PI)
             };
             light = light.with_spot(d, angle);
+            // Half keep the default inner angle (not written), the rest one of their own: any
+            // angle below the outer one, 0 and -0.0 among them.
+            light = match rng.next() % 6 {
+                0..=2 => light,
+                3 => light.with_spot_inner_angle(0.0),
+                4 => light.with_spot_inner_angle(-0.0),
+                _ => light.with_spot_inner_angle(rng.f32_in(0.0, angle).min(angle.next_down())),
+            };
         }
         l.push(light);
     }

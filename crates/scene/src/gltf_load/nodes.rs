@@ -433,7 +433,17 @@ impl Loader<'_> {
                 // The spec wants 0 <= inner < outer. Only the outer cone bounds the light, so a
                 // bad inner angle is kept usable (clamped) and reported, not fatal.
                 if !(inner >= 0.0 && inner < outer) {
-                    let clamped = inner.clamp(0.0, outer * 0.999);
+                    // Below the outer angle even where 0.999 of it rounds back to it (subnormal).
+                    let below = if outer * 0.999 < outer {
+                        outer * 0.999
+                    } else {
+                        0.0
+                    };
+                    let clamped = if inner.is_nan() {
+                        0.0
+                    } else {
+                        inner.clamp(0.0, below)
+                    };
                     self.model.warnings.push(format!(
                         "{at}: innerConeAngle {inner} is not in [0, outerConeAngle {outer}); \
                          clamped to {clamped}"

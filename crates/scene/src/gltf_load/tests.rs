@@ -311,6 +311,15 @@ fn a_spot_inner_cone_outside_the_outer_is_clamped_and_reported() {
         "{:?}",
         model.warnings
     );
+    // A subnormal outer angle, where 0.999 of it rounds back to it: clamped to 0, below it.
+    let tiny = extra.replace("0.6", "1e-44").replace("0.5", "1e-44");
+    let model = load_str(&triangle_gltf([0, 1, 2], &tiny)).unwrap();
+    assert_eq!(model.lights.spot_inner_angle, [0.0]);
+    assert!(
+        model.lights.problems().is_empty(),
+        "{:?}",
+        model.lights.problems()
+    );
 }
 
 #[test]
