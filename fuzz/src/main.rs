@@ -94,6 +94,7 @@ const TOKENS: &[&str] = &[
     "\"spot\":{\"direction\":[0,0,0],\"angle_deg\":180}",
     "\"spot\":{\"direction\":[0,-1,0],\"angle_deg\":30,\"inner_angle_deg\":29.999999}",
     "\"inner_angle_deg\":1e-50",
+    "\"angle_deg\":1e-43",
     "\"children\":[0]",
     "\"count\":2147483648",
     "\"byteOffset\":4294967295",
