@@ -64,7 +64,8 @@ pub struct FrameDesc<'a> {
     /// Write lights-per-pixel instead of the lit image.
     pub heat_map: bool,
     /// This frame's lights, or `None` to keep the last upload (allowed only while the camera
-    /// position is unchanged: records are camera-relative).
+    /// position is unchanged, to within 4 f32 steps of its coordinates, the rounding of an eye
+    /// read back from a turned view matrix: records are camera-relative).
     pub lights: Option<LightColumns<'a>>,
     /// This frame's lists, or `None` to keep the last upload (allowed only for the same grid and
     /// camera as that upload's: lists belong to one view). Needed for [`ShadingMode::Lists`].
@@ -606,7 +607,9 @@ impl Renderer {
         let camera_position = frame.camera.position.to_array();
         if frame.lights.is_none()
             && self.light_count > 0
-            && self.lights_camera != Some(camera_position)
+            && !self
+                .lights_camera
+                .is_some_and(|kept| same_eye(kept, camera_position))
         {
             return Err(GpuError::InvalidInput(
                 "the camera moved, so the camera-relative lights must be uploaded again".into(),
@@ -870,4 +873,15 @@ pub fn frame_uniforms(frame: &FrameDesc<'_>, light_count: u32, max_count: u32) -
         ambient: frame.settings.ambient,
         exposure: frame.settings.exposure,
     }
+}
+/// Whether kept camera-relative lights, uploaded from an eye at `kept`, may be drawn from `now`:
+/// the same point to within 4 f32 steps of its coordinates. An engine that only turns its camera
+/// and reads it back through `Camera::from_matrices` gets the eye as `−M⁻¹t`, whose rounding moves
+/// it a step or two between frames; the lights would then be off by as much, far inside the
+/// assignment's padding (4e-6 of a light's view-space extent).
+fn same_eye(kept: [f32; 3], now: [f32; 3]) -> bool {
+    kept.iter().zip(&now).all(|(&a, &b)| {
+        let size = a.abs().max(b.abs());
+        (a - b).abs() <= 4.0 * (size.next_up() - size)
+    })
 }
