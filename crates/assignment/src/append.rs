@@ -524,6 +524,7 @@ impl AtomicCounters {
         budget: u64,
         out: &mut crate::LightLists,
     ) -> Result<usize, u64> {
+        crate::profiling::profile_span!("append (atomic counters)");
         if self.counters.len() < clusters {
             self.counters.resize_with(clusters, || AtomicU32::new(0));
         }

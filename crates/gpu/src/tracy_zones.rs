@@ -41,6 +41,9 @@ pub(crate) const TIE_INTERVAL: Duration = Duration::from_secs(1);
 #[derive(Default)]
 pub(crate) struct GpuZones {
     context: Option<tracy_client::GpuContext>,
+    /// Tracy refused a context (its 255 a process are taken): no zones from this renderer, and
+    /// no more tries (each read the GPU clock, three blocking round trips, every frame).
+    refused: bool,
     emitted: u64,
     /// When the GPU clock was last tied to the CPU's, and how often it was.
     tied_at: Option<Instant>,
@@ -76,7 +79,7 @@ impl GpuZones {
         let Some(client) = Client::running() else {
             return Ok(());
         };
-        if zones.is_empty() {
+        if zones.is_empty() || self.refused {
             return Ok(());
         }
         // Tracy wants the timestamps in increasing order.
@@ -93,7 +96,10 @@ impl GpuZones {
             // Tracy allows 255 contexts a process; past them the frame goes without zones.
             match client.new_gpu_context(Some("myriad renderer"), kind, now, period) {
                 Ok(context) => self.context = Some(context),
-                Err(_) => return Ok(()),
+                Err(_) => {
+                    self.refused = true;
+                    return Ok(());
+                }
             }
             self.tied(Instant::now());
         } else if let Some(context) = &self.context {
