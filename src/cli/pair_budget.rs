@@ -50,6 +50,8 @@ pub enum BudgetSource {
     Memory,
     /// What u32 offsets hold (the memory is unknown, or holds more).
     Offsets,
+    /// What the GPU binds in one storage buffer (the renderer's lists must fit one).
+    Device,
 }
 
 impl PairBudget {
@@ -74,6 +76,21 @@ impl PairBudget {
         }
     }
 
+    /// The budget, lowered to `device_pairs` (what the GPU binds,
+    /// `GpuContext::max_list_pairs`) where that is less and the budget was not asked for: the
+    /// lists are then built on a coarser grid the renderer takes, rather than refused by it after
+    /// the assignment.
+    pub fn capped_by_device(self, device_pairs: u64) -> Self {
+        if self.source == BudgetSource::Requested || device_pairs >= self.pairs {
+            return self;
+        }
+        Self {
+            pairs: device_pairs,
+            source: BudgetSource::Device,
+            ..self
+        }
+    }
+
     /// The budget and why it is what it is, for a message: "N pairs (what …)".
     pub fn describe(&self) -> String {
         let pairs = self.pairs;
@@ -84,6 +101,9 @@ impl PairBudget {
                 self.bytes_per_pair
             ),
             BudgetSource::Offsets => format!("{pairs} pairs (what u32 offsets hold)"),
+            BudgetSource::Device => {
+                format!("{pairs} pairs (what the GPU binds in one storage buffer)")
+            }
         }
     }
 
@@ -105,7 +125,7 @@ impl PairBudget {
         };
         let hint = match self.source {
             BudgetSource::Memory => "; --pair-budget sets the budget",
-            BudgetSource::Requested | BudgetSource::Offsets => "",
+            BudgetSource::Requested | BudgetSource::Offsets | BudgetSource::Device => "",
         };
         coarsened_warning(
             name,

@@ -756,7 +756,7 @@ fn print_table(s: &Stats) {
     let prepass_drew = |r: &StrategyResult| {
         is_skipping(r) && s.with_skips.as_ref().is_some_and(|w| w.prepass_ms > 0.0)
     };
-    row("GPU frame (submit to idle, wall)", &|r| {
+    row("GPU frame (encode to idle, wall)", &|r| {
         let mark = if prepass_drew(r) { "†" } else { "" };
         format!("{:.2}{mark}", r.gpu_frame_wall_ms)
     });

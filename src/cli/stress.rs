@@ -17,11 +17,14 @@
 //!    grid is coarsened, a warning says so, and the later stages use that grid;
 //! 3. **GPU setup** — device, geometry upload, and one warm-up frame with the same lights and
 //!    empty lists, so that pipeline compilation and the light buffer's allocation do not land in
-//!    the measured frame;
+//!    the measured frame. The device is made first of all, before the scene: a light buffer it
+//!    cannot bind is refused at once, and its largest binding caps the default pair budget
+//!    (`GpuContext::max_list_pairs`; lists past it are built on a coarser grid, which the
+//!    renderer takes, instead of being refused after a minute of assignment);
 //! 4. **upload** of the measured frame (lights → GPU records, lists, through the staging ring):
 //!    bytes and CPU time;
 //! 5. **GPU render**, clustered only: pass timestamps where the adapter has them, and the wall
-//!    time from submit to idle. (Brute force and one-slice tiles are not attempted: on llvmpipe
+//!    time from encoding to idle. (Brute force and one-slice tiles are not attempted: on llvmpipe
 //!    a pixel may loop over at most 65 534 lights and the renderer refuses more —
 //!    `GpuError::ShaderLoopLimit`; clustered lists stay far below that);
 //! 6. **oracle check** (`oracle_check.rs`): up to `--exact-up-to` lights (200k), **every
@@ -56,6 +59,7 @@ use super::render::parse_size;
 use super::source::check_memory_for;
 use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
+use myriad::gpu::layout::GpuLight;
 use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
 use myriad::render::{RenderScene, Viewer, cluster_lists, light_columns};
 use myriad::scene::DepthSlicing;
@@ -99,13 +103,16 @@ pub struct Args {
 /// Milliseconds of each stage.
 #[derive(Serialize, Debug, Default)]
 struct Stages {
+    /// Making the GPU device (first of all).
+    device_ms: f64,
     scene_ms: f64,
     assign_ms: f64,
     assign_again_ms: f64,
+    /// Geometry upload and the warm-up frame.
     gpu_setup_ms: f64,
     upload_ms: f64,
     encode_ms: f64,
-    /// Submit to GPU idle, wall clock (includes encode + submit).
+    /// Encoding to GPU idle, wall clock (encode + submit, then the wait).
     gpu_wall_ms: f64,
     /// The upload's buffer copies on the GPU (timestamps between commands).
     gpu_upload_ms: Option<f64>,
@@ -177,6 +184,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let progress = Progress::new("stress");
     let mut stages = Stages::default();
 
+    // The device first: what it binds decides how many lights and pairs a frame may have, which
+    // is better known before a minute of generation and assignment than after.
+    let (ctx, device_seconds) = progress.stage("GPU device", || Ok(GpuContext::headless()?))?;
+    let light_bytes = args.lights as u64 * std::mem::size_of::<GpuLight>() as u64;
+    let binding = ctx.max_list_pairs() * std::mem::size_of::<u32>() as u64;
+    ensure!(
+        light_bytes <= binding,
+        "--lights {}: the lights buffer needs {light_bytes} bytes, more than {} binds in one \
+         storage buffer ({binding} bytes); at most {} lights",
+        args.lights,
+        ctx.describe(),
+        binding / std::mem::size_of::<GpuLight>() as u64
+    );
+
     // 1. Scene.
     let (scene, seconds) = progress.stage("scene generation", || {
         RenderScene::from_model(
@@ -199,7 +220,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     // 2. Assignment, cold then warm.
     let input = myriad::light_input(&scene.lights);
-    let budget = PairBudget::new(args.pair_budget, STRESS_BYTES_PER_PAIR);
+    let budget = PairBudget::new(args.pair_budget, STRESS_BYTES_PER_PAIR)
+        .capped_by_device(ctx.max_list_pairs());
     let mut assigner = Assigner::new().with_pair_budget(budget.pairs);
     let mut lists = LightLists::new();
     let (_, seconds) = progress.stage("light assignment (first call, allocating)", || {
@@ -230,8 +252,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     ));
 
     // 3. GPU set-up and a warm-up frame (same lights, empty lists).
-    let (mut viewer, seconds) = progress.stage("GPU setup (device, geometry, warm-up)", || {
-        let ctx = GpuContext::headless()?;
+    let (mut viewer, seconds) = progress.stage("GPU setup (geometry, warm-up)", || {
         let mut viewer = Viewer::new(ctx, &scene)?;
         let empty = vec![0u32; grid.cluster_count()];
         let no_lists = ClusterLists {
@@ -245,11 +266,19 @@ pub fn run(args: Args) -> Result<ExitCode> {
         };
         viewer
             .renderer
-            .render(&viewer.ctx, &viewer.scene, &warm_up, &viewer.target.view)?;
+            .render(&viewer.ctx, &viewer.scene, &warm_up, &viewer.target.view)
+            .map_err(|e| {
+                let hint = render_hint(&e, grid.dims() != scene.grid.dims());
+                anyhow::Error::new(e).context(format!(
+                    "the warm-up frame of {} lights{hint}",
+                    scene.lights.len()
+                ))
+            })?;
         myriad::profiling::frame_mark();
         viewer.ctx.wait_idle()?;
         Ok(viewer)
     })?;
+    stages.device_ms = device_seconds * 1e3;
     stages.gpu_setup_ms = seconds * 1e3;
     let adapter = viewer.ctx.describe();
     let timestamps = viewer.ctx.has_timestamps();
@@ -279,6 +308,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 scene.lights.len()
             ))
         })?;
+    // The GPU may be at work already: the wait below counts from here, not from after the
+    // progress lines.
+    let submitted = Instant::now();
     myriad::profiling::frame_mark();
     stages.upload_ms = report.upload_seconds * 1e3;
     stages.encode_ms = report.encode_seconds * 1e3;
@@ -290,11 +322,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     // 5. The GPU's work: submit to idle, wall clock (encode + submit included, as `myriad
     // render` reports it), and the pass timestamps.
-    let (wait_seconds, _) = progress.stage("GPU render (clustered)", || {
-        let start = Instant::now();
-        viewer.ctx.wait_idle()?;
-        Ok(start.elapsed().as_secs_f64())
-    })?;
+    progress.start("GPU render (clustered)");
+    viewer.ctx.wait_idle()?;
+    let wait_seconds = submitted.elapsed().as_secs_f64();
+    progress.done("GPU render (clustered)", wait_seconds);
     stages.gpu_wall_ms = (wait_seconds + report.encode_seconds) * 1e3;
     let passes = viewer.renderer.last_pass_times(&viewer.ctx)?;
     if let Some(p) = passes {
@@ -432,6 +463,7 @@ fn print_table(r: &Report) {
     let row = |name: &str, value: String, detail: String| {
         println!("{}", format!("{name:<42} {value:>11}  {detail}").trim_end());
     };
+    row("GPU device", format!("{:.1}", s.device_ms), String::new());
     row(
         "scene generation",
         format!("{:.1}", s.scene_ms),
@@ -457,7 +489,7 @@ fn print_table(r: &Report) {
         ),
     );
     row(
-        "GPU setup (device, geometry, warm-up)",
+        "GPU setup (geometry, warm-up)",
         format!("{:.1}", s.gpu_setup_ms),
         String::new(),
     );
@@ -493,7 +525,7 @@ fn print_table(r: &Report) {
         "timestamps".into(),
     );
     row(
-        "GPU frame (submit to idle, wall)",
+        "GPU frame (encode to idle, wall)",
         format!("{:.2}", s.gpu_wall_ms),
         String::new(),
     );

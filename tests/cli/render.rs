@@ -203,7 +203,7 @@ fn assert_main_job_table(text: &str, stats: &Value) {
         ("GPU G-buffer pass", |c| timed_cell(&c["gpu_gbuffer_ms"], 2)),
         ("GPU shading pass", |c| timed_cell(&c["gpu_shading_ms"], 2)),
         ("GPU forward pass", |c| timed_cell(&c["gpu_forward_ms"], 2)),
-        ("GPU frame (submit to idle, wall)", |c| {
+        ("GPU frame (encode to idle, wall)", |c| {
             format!("{:.2}", c["gpu_frame_wall_ms"].as_f64().unwrap())
         }),
         ("cluster-light pairs", |c| c["pairs"].to_string()),
@@ -232,7 +232,7 @@ fn assert_main_job_table(text: &str, stats: &Value) {
     // The skipping column's frame wall time is marked where its prepass drew the G-buffer, and
     // only there.
     let prepass = stats["with_skips"]["prepass_ms"].as_f64().unwrap_or(0.0) > 0.0;
-    let marks: Vec<bool> = row("GPU frame (submit to idle, wall)")
+    let marks: Vec<bool> = row("GPU frame (encode to idle, wall)")
         .iter()
         .map(|c| c.ends_with('†'))
         .collect();

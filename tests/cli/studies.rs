@@ -916,7 +916,8 @@ fn stress_reports_the_stage_times_its_progress_lines_announced() {
         ms("assign_again_ms"),
         "light assignment (again, buffers reused)",
     );
-    same(ms("gpu_setup_ms"), "GPU setup (device, geometry, warm-up)");
+    same(ms("device_ms"), "GPU device");
+    same(ms("gpu_setup_ms"), "GPU setup (geometry, warm-up)");
     same(
         ms("upload_ms") + ms("encode_ms"),
         "upload + encode + submit",
@@ -930,9 +931,10 @@ fn stress_reports_the_stage_times_its_progress_lines_announced() {
     // Each stage is announced as it begins, before its time; the note under the upload carries
     // the report's byte count.
     for stage in [
+        "GPU device",
         "scene generation",
         "light assignment (first call, allocating)",
-        "GPU setup (device, geometry, warm-up)",
+        "GPU setup (geometry, warm-up)",
         "upload + encode + submit",
         "GPU render (clustered)",
     ] {
@@ -1029,4 +1031,26 @@ fn rounds(cell: &str, value: f64, decimals: usize) -> bool {
         && cell
             .parse::<f64>()
             .is_ok_and(|c| (c - value).abs() <= half * (1.0 + 1e-9))
+}
+
+/// A light buffer the device cannot bind is refused before the scene is generated or assigned
+/// (it was refused by the warm-up frame, after both, with advice to "cull first", which `stress`
+/// cannot): the message names the most lights the device takes.
+#[test]
+fn stress_refuses_more_lights_than_the_device_binds_first() {
+    let Some(ctx) = myriad::gpu::GpuContext::headless_for_tests() else {
+        return;
+    };
+    let record = std::mem::size_of::<myriad::gpu::layout::GpuLight>() as u64;
+    let most = ctx.max_list_pairs() * 4 / record;
+    let lights = (most + 1).to_string();
+    let err = myriad_fails(&["stress", "--lights", &lights, "--size", "64x36"]);
+    assert_mentions(
+        &err,
+        &[
+            &format!("--lights {lights}: the lights buffer needs"),
+            &format!("at most {most} lights"),
+        ],
+    );
+    assert!(!err.contains("scene generation"), "{err}");
 }

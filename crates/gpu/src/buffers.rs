@@ -69,8 +69,30 @@ impl GrowableBuffer {
             return Ok(false);
         }
         let size = grown_size(bytes, storage_capacity(&device.limits()));
-        self.buffer = Self::create(device, self.label, size);
+        // Past the device's memory wgpu raises an out-of-memory error, which panics unless a
+        // scope catches it (a frame of a million lights' lists on a GPU with little memory).
+        let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let buffer = Self::create(device, self.label, size);
+        if let Some(error) = ready(scope.pop()).flatten() {
+            return Err(GpuError::OutOfMemory(format!(
+                "the {} buffer of {size} bytes: {error}",
+                self.label
+            )));
+        }
+        self.buffer = buffer;
         Ok(true)
+    }
+}
+
+/// The output of `future` if it is ready when first polled, else `None`. wgpu's error scopes
+/// resolve at once on native backends (an error is raised as the call is made), so a frame can
+/// read one without an executor.
+fn ready<F: std::future::Future>(future: F) -> Option<F::Output> {
+    let mut future = std::pin::pin!(future);
+    let mut context = std::task::Context::from_waker(std::task::Waker::noop());
+    match future.as_mut().poll(&mut context) {
+        std::task::Poll::Ready(output) => Some(output),
+        std::task::Poll::Pending => None,
     }
 }
 

@@ -691,75 +691,24 @@ impl Renderer {
         let format = self.check_target(device, frame, target, forward_pass)?;
         profile_span!("upload lights and lists", upload);
         let upload_start = Instant::now();
-        let mut report = FrameReport::default();
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
-        let mut rebind_lights = self.lights_group.is_none();
         // A frame after a prepass keeps the prepass's G-buffer timestamps (its queries stay as
         // the prepass wrote them and are resolved again with this frame's).
         self.timer.begin_frame(!draw_gbuffer);
         self.timer.upload_start(&mut encoder);
-
-        // Lights.
-        if let Some(columns) = &frame.lights {
-            report.skipped_lights = fill_gpu_lights(
-                columns,
-                frame.camera.position.as_dvec3(),
-                &mut self.scratch_lights,
-            );
-            let bytes = std::mem::size_of_val(self.scratch_lights.as_slice()) as u64;
-            rebind_lights |= self.lights.reserve(device, bytes)?;
-            report.upload_bytes += stage(
-                &mut self.belt,
-                &mut encoder,
-                &self.lights,
-                &self.scratch_lights,
-            );
-            self.light_count = columns.len();
-            self.lights_camera = Some(camera_position);
-            self.has_spots = columns.spot.is_some();
-        }
-        report.lights = self.light_count;
-
-        // Lists and slice edges.
-        if let Some(lists) = &frame.lists {
-            for (buffer, data) in [
-                (&mut self.offsets, lists.offsets),
-                (&mut self.counts, lists.counts),
-                (&mut self.indices, lists.indices),
-            ] {
-                rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
-                report.upload_bytes += stage(&mut self.belt, &mut encoder, buffer, data);
-            }
-            self.lists_uploaded = Some(UploadedLists {
-                grid: *frame.grid,
-                camera: *frame.camera,
-                max_count: lists.max_count(),
-                lights_named: lists.lights_named(),
-            });
-        }
-        // Once per frame, however much it uploads: the generation counts frames.
-        if frame.lights.is_some() || frame.lists.is_some() {
-            self.uploads += 1;
-        }
-        let max_count = match (frame.mode, self.lists_uploaded) {
-            (ShadingMode::BruteForce, _) => self.light_count as u32,
-            (ShadingMode::Lists, Some(kept)) => kept.max_count,
-            (ShadingMode::Lists, None) => unreachable!("checked above: lists for this grid"),
-        };
-        if self.edges_uploaded != Some(*frame.grid) {
-            frame.grid.fill_slice_edges(&mut self.scratch_edges);
-            let bytes = std::mem::size_of_val(self.scratch_edges.as_slice()) as u64;
-            rebind_lights |= self.slice_edges.reserve(device, bytes)?;
-            report.upload_bytes += stage(
-                &mut self.belt,
-                &mut encoder,
-                &self.slice_edges,
-                &self.scratch_edges,
-            );
-            self.edges_uploaded = Some(*frame.grid);
-        }
+        let (mut report, rebind_lights, max_count) =
+            match self.upload(device, frame, &mut encoder, camera_position) {
+                Ok(uploaded) => uploaded,
+                Err(error @ GpuError::OutOfMemory(_)) => {
+                    // Earlier buffers may have been replaced and staged into this frame's
+                    // encoder, which is dropped: nothing uploaded is known to be there.
+                    self.forget_uploads(device);
+                    return Err(error);
+                }
+                Err(error) => return Err(error),
+            };
 
         self.timer.upload_end(&mut encoder, report.upload_bytes > 0);
         let uniforms = frame_uniforms(frame, self.light_count as u32, max_count);
@@ -788,6 +737,89 @@ impl Renderer {
         self.belt.recall();
         report.encode_seconds = encode_start.elapsed().as_secs_f64();
         Ok(report)
+    }
+
+    /// The frame's uploads into `encoder`: its lights, lists and slice edges, each buffer grown
+    /// as needed. Returns the report so far, whether the lights' bind group must be rebuilt, and
+    /// the longest list a pixel loops over.
+    fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        frame: &FrameDesc<'_>,
+        encoder: &mut wgpu::CommandEncoder,
+        camera_position: [f32; 3],
+    ) -> Result<(FrameReport, bool, u32), GpuError> {
+        let mut report = FrameReport::default();
+        let mut rebind_lights = self.lights_group.is_none();
+
+        // Lights.
+        if let Some(columns) = &frame.lights {
+            report.skipped_lights = fill_gpu_lights(
+                columns,
+                frame.camera.position.as_dvec3(),
+                &mut self.scratch_lights,
+            );
+            let bytes = std::mem::size_of_val(self.scratch_lights.as_slice()) as u64;
+            rebind_lights |= self.lights.reserve(device, bytes)?;
+            report.upload_bytes +=
+                stage(&mut self.belt, encoder, &self.lights, &self.scratch_lights);
+            self.light_count = columns.len();
+            self.lights_camera = Some(camera_position);
+            self.has_spots = columns.spot.is_some();
+        }
+        report.lights = self.light_count;
+
+        // Lists and slice edges.
+        if let Some(lists) = &frame.lists {
+            for (buffer, data) in [
+                (&mut self.offsets, lists.offsets),
+                (&mut self.counts, lists.counts),
+                (&mut self.indices, lists.indices),
+            ] {
+                rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
+                report.upload_bytes += stage(&mut self.belt, encoder, buffer, data);
+            }
+            self.lists_uploaded = Some(UploadedLists {
+                grid: *frame.grid,
+                camera: *frame.camera,
+                max_count: lists.max_count(),
+                lights_named: lists.lights_named(),
+            });
+        }
+        // Once per frame, however much it uploads: the generation counts frames.
+        if frame.lights.is_some() || frame.lists.is_some() {
+            self.uploads += 1;
+        }
+        let max_count = match (frame.mode, self.lists_uploaded) {
+            (ShadingMode::BruteForce, _) => self.light_count as u32,
+            (ShadingMode::Lists, Some(kept)) => kept.max_count,
+            (ShadingMode::Lists, None) => unreachable!("checked above: lists for this grid"),
+        };
+        if self.edges_uploaded != Some(*frame.grid) {
+            frame.grid.fill_slice_edges(&mut self.scratch_edges);
+            let bytes = std::mem::size_of_val(self.scratch_edges.as_slice()) as u64;
+            rebind_lights |= self.slice_edges.reserve(device, bytes)?;
+            report.upload_bytes += stage(
+                &mut self.belt,
+                encoder,
+                &self.slice_edges,
+                &self.scratch_edges,
+            );
+            self.edges_uploaded = Some(*frame.grid);
+        }
+        Ok((report, rebind_lights, max_count))
+    }
+
+    /// After a device buffer could not be grown: no lights, lists or slice edges are known to be
+    /// on the GPU, and the staging belt, which staged some of them into the dropped encoder,
+    /// starts anew.
+    fn forget_uploads(&mut self, device: &wgpu::Device) {
+        self.light_count = 0;
+        self.lights_camera = None;
+        self.lists_uploaded = None;
+        self.edges_uploaded = None;
+        self.lights_group = None;
+        self.belt = wgpu::util::StagingBelt::new(device.clone(), STAGING_CHUNK_BYTES);
     }
 }
 
