@@ -178,6 +178,24 @@ mod tests {
     use super::*;
     use myriad::scene::DepthSlicing;
 
+    /// The device's binding caps a default budget, never one asked for (that one coarsens to
+    /// what was asked, and the renderer says if the device still cannot bind it).
+    #[test]
+    fn the_device_caps_a_default_budget_only() {
+        let llvmpipe = 1 << 25;
+        let memory = PairBudget::from_memory(None, 24, Some(24 << 30));
+        let b = memory.capped_by_device(llvmpipe);
+        assert_eq!((b.pairs, b.source), (llvmpipe, BudgetSource::Device));
+        assert_eq!(
+            b.describe(),
+            "33554432 pairs (what the GPU binds in one storage buffer)"
+        );
+        // A device that binds more leaves the memory's budget.
+        assert_eq!(memory.capped_by_device(u64::MAX), memory);
+        let asked = PairBudget::from_memory(Some(1 << 30), 24, Some(24 << 30));
+        assert_eq!(asked.capped_by_device(llvmpipe), asked);
+    }
+
     #[test]
     fn the_default_follows_the_memory_up_to_what_offsets_hold() {
         let gib = 1u64 << 30;
