@@ -16,8 +16,8 @@
 //!    pair budget (`pair_budget.rs`: `--pair-budget`, or what the memory holds): past it the
 //!    grid is coarsened, a warning says so, and the later stages use that grid;
 //! 3. **GPU setup** — device, geometry upload, and one warm-up frame with the same lights and
-//!    empty lists, so that pipeline compilation and the light buffer's allocation do not land in
-//!    the measured frame. The device is made first of all, before the scene: a light buffer it
+//!    empty lists over the real indices, so that pipeline compilation and the buffers' allocation
+//!    do not land in the measured frame. The device is made first of all, before the scene: a light buffer it
 //!    cannot bind is refused at once, and its largest binding caps the default pair budget
 //!    (`GpuContext::max_list_pairs`; lists past it are built on a coarser grid, which the
 //!    renderer takes, instead of being refused after a minute of assignment);
@@ -254,11 +254,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // 3. GPU set-up and a warm-up frame (same lights, empty lists).
     let (mut viewer, seconds) = progress.stage("GPU setup (geometry, warm-up)", || {
         let mut viewer = Viewer::new(ctx, &scene)?;
+        // Empty lists over the real indices: every buffer the measured frame needs is grown
+        // here (the indices' is the largest), and no pixel shades a light.
         let empty = vec![0u32; grid.cluster_count()];
         let no_lists = ClusterLists {
             offsets: &empty,
             counts: &empty,
-            indices: &[],
+            indices: &lists.indices,
         };
         let warm_up = FrameDesc {
             settings: viewer.settings,
