@@ -56,8 +56,14 @@ fn main() {
     );
     // Read back into a `Camera` (an error would say why: a jittered projection, a left-handed
     // pair, a size other than the projection's aspect ratio...).
-    let camera = Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 1920, 1080)
-        .expect("a centred right-handed perspective");
+    let camera = match Camera::from_matrices(view, projection, ClipSpace::ZeroToOneYUp, 1920, 1080)
+    {
+        Ok(camera) => camera,
+        Err(why) => {
+            eprintln!("this view is no camera the clusters can be built for: {why}");
+            std::process::exit(1);
+        }
+    };
     // The far plane is infinite; the grid slices depth over a finite range of its own: a
     // 16×9×24 grid with log slices, first out to 50 m. Pixels past its far edge read its last
     // slice, which is open (`OuterSlices::Open`, the default): it lists the lights out there too,
@@ -80,8 +86,13 @@ fn main() {
         })
         .collect();
 
-    // Created once; reused every frame so steady-state frames allocate no storage.
+    // Created once; reused every frame so steady-state frames allocate no storage for the lists
+    // or the assigner's scratch (called from outside any pool, `OutsideCalls::Join` still boxes
+    // a few small rayon jobs a frame; `with_outside_calls(OutsideCalls::HandOff)` avoids them).
     let mut assigner = Assigner::new();
+    // The grid the lists were last built on: a pixel reads them through it, not through the
+    // next frame's grid below.
+    let mut built = grid;
     let mut lists = LightLists::new();
     let mut columns = LightColumns::default();
 
@@ -95,13 +106,22 @@ fn main() {
         // helper jobs on rayon's global pool (`OutsideCalls::Join`; with `OutsideCalls::HandOff`
         // it hands the whole frame to a worker instead, allocating nothing).
         columns.fill(&lights);
-        let stats = assigner.assign(
+        // `try_assign`: a frame the assigner cannot take (columns of different lengths, a mask
+        // of another grid) is an error, and the lists stay as they were.
+        let stats = match assigner.try_assign(
             Method::Refined,
             &columns.input(),
             &camera,
             &grid,
             &mut lists,
-        );
+        ) {
+            Ok(stats) => stats,
+            Err(why) => {
+                eprintln!("frame {frame} not assigned: {why}");
+                continue;
+            }
+        };
+        built = stats.grid_built(&grid);
         println!(
             "frame {frame}: {} lights, {} visible, {} culled, {} beyond the grid's far {:.1} (in its \
              last slice) -> {} cluster-light pairs, {} KiB to upload",
@@ -118,13 +138,18 @@ fn main() {
         // listed in the open last slice, and counted.
         if let Some(reach) = stats.reach {
             let far = (reach * 1.05).max(camera.near * 2.0);
-            grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, far);
+            let dims = UVec3::new(16, 9, 24);
+            match ClusterGrid::try_new(dims, DepthSlicing::Log, camera.near, far) {
+                Ok(next) => grid = next,
+                // A reach too far for f32 (`far` infinite): keep this frame's grid.
+                Err(why) => eprintln!("frame {frame}: grid kept: {why}"),
+            }
         }
     }
 
     // What the shader does per pixel: pixel + view depth -> cluster -> its lights.
     let (px, py, depth) = (960, 540, 20.0);
-    let cluster = grid.cluster_of_pixel(px, py, depth, camera.width, camera.height);
+    let cluster = built.cluster_of_pixel(px, py, depth, camera.width, camera.height);
     let here = lists.lights_of(cluster as usize);
     println!(
         "pixel ({px}, {py}) at depth {depth}: cluster {cluster}, {} lights, first {:?}",

@@ -22,10 +22,13 @@ use myriad_gpu::{
 const SIZE: (u32, u32) = (320, 180);
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
-/// What the engine owns: its device and queue (here a headless one) and a render target.
+/// What the engine owns: its device and queue (here a headless one), a render target, and the
+/// assigner and lists it keeps from frame to frame (their storage grows once, then is reused).
 struct Engine {
     ctx: GpuContext,
     target: wgpu::Texture,
+    assigner: Assigner,
+    lists: LightLists,
 }
 
 /// The engine's wgpu instance: one per process, kept for its lifetime. Devices may come and go,
@@ -37,10 +40,31 @@ fn engine_instance() -> &'static wgpu::Instance {
         .get_or_init(|| wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle()))
 }
 
+/// The engine's device and queue: one for the process, as an engine has (this file's tests share
+/// it; devices made and dropped on several threads at once can deadlock NVIDIA's driver,
+/// `GpuContext::headless_for_tests` says what was seen).
+fn engine_device() -> Result<&'static (wgpu::Device, wgpu::Queue), String> {
+    static DEVICE: std::sync::OnceLock<Result<(wgpu::Device, wgpu::Queue), String>> =
+        std::sync::OnceLock::new();
+    DEVICE
+        .get_or_init(|| {
+            let adapter =
+                pollster::block_on(engine_instance().request_adapter(&Default::default()))
+                    .map_err(|e| e.to_string())?;
+            // What the renderer needs of the device, asked for up front.
+            let descriptor = wgpu::DeviceDescriptor {
+                required_limits: Renderer::required_limits(),
+                ..Default::default()
+            };
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| e.to_string())
+        })
+        .as_ref()
+        .map_err(Clone::clone)
+}
+
 impl Engine {
     fn new() -> Result<Self, Box<dyn std::error::Error>> {
-        let adapter = pollster::block_on(engine_instance().request_adapter(&Default::default()))?;
-        let (device, queue) = pollster::block_on(adapter.request_device(&Default::default()))?;
+        let (device, queue) = engine_device()?.clone();
         let target = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("engine target"),
             size: wgpu::Extent3d {
@@ -57,7 +81,15 @@ impl Engine {
         });
         // Hand the renderer the engine's device.
         let ctx = GpuContext::from_device(device, queue);
-        Ok(Self { ctx, target })
+        // Lists past what the device binds are built on a coarser grid, which the frame must
+        // then be drawn with, rather than refused by the renderer after the assignment.
+        let assigner = Assigner::new().with_pair_budget(ctx.max_list_pairs());
+        Ok(Self {
+            ctx,
+            target,
+            assigner,
+            lists: LightLists::new(),
+        })
     }
 }
 
@@ -160,7 +192,7 @@ fn view() -> (Camera, ClusterGrid) {
 /// One frame: assign on the CPU (for `ShadingMode::Lists`), then render into the engine's
 /// target; returns the report, the pairs assigned and the target's pixels.
 fn frame(
-    engine: &Engine,
+    engine: &mut Engine,
     renderer: &mut Renderer,
     scene: &myriad_gpu::GpuScene,
     lights: &Lights,
@@ -178,7 +210,7 @@ fn frame(
 
 /// [`frame`] with other shading settings.
 fn frame_with(
-    engine: &Engine,
+    engine: &mut Engine,
     renderer: &mut Renderer,
     scene: &myriad_gpu::GpuScene,
     lights: &Lights,
@@ -186,18 +218,17 @@ fn frame_with(
     settings: ShadingSettings,
 ) -> Result<(FrameReport, u64, Vec<u8>), GpuError> {
     let (camera, grid) = view();
-    let mut lists = LightLists::new();
     let (pairs, grid) = if mode == ShadingMode::Lists {
         let input = LightInput::points(&lights.x, &lights.y, &lights.z, &lights.radius);
-        // Lists past what the device binds are built on a coarser grid, which the frame must
-        // then be drawn with, rather than refused by the renderer after the assignment.
-        let stats = Assigner::new()
-            .with_pair_budget(engine.ctx.max_list_pairs())
-            .assign(Method::Refined, &input, &camera, &grid, &mut lists);
+        let stats = engine
+            .assigner
+            .try_assign(Method::Refined, &input, &camera, &grid, &mut engine.lists)
+            .map_err(|e| GpuError::InvalidInput(e.to_string()))?;
         (stats.pairs, stats.grid_built(&grid))
     } else {
         (0, grid)
     };
+    let lists = &engine.lists;
     let report = renderer.render(
         &engine.ctx,
         scene,
@@ -229,8 +260,9 @@ fn lit_pixels(pixels: &[u8]) -> usize {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let engine = Engine::new()?;
-    let mut renderer = Renderer::new(&engine.ctx, FORMAT);
+    let mut engine = Engine::new()?;
+    // `try_new`: a device below the renderer's limits is an error that names them.
+    let mut renderer = Renderer::try_new(&engine.ctx, FORMAT)?;
     let scene = renderer.upload_scene(&engine.ctx, &floor())?;
     let lights = Lights::rows(64);
     // At load time: the shading pipelines of the frames to come, so no frame compiles shaders.
@@ -249,17 +281,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
     )?;
     let built_before = renderer.pipelines_built();
-    let (report, pairs, pixels) =
-        frame(&engine, &mut renderer, &scene, &lights, ShadingMode::Lists)?;
-    println!(
-        "{} lights, {pairs} pairs, {} bytes uploaded; {} of {} pixels lit; {prepared} pipeline(s) \
-         built at load time, {} during the frame",
-        lights.x.len(),
-        report.upload_bytes,
-        lit_pixels(&pixels),
-        SIZE.0 * SIZE.1,
-        renderer.pipelines_built() - built_before
-    );
+    // Three frames through the engine's one assigner and lists (grown in the first, reused in
+    // the others).
+    for n in 0..3 {
+        let (report, pairs, pixels) = frame(
+            &mut engine,
+            &mut renderer,
+            &scene,
+            &lights,
+            ShadingMode::Lists,
+        )?;
+        println!(
+            "frame {n}: {} lights, {pairs} pairs, {} bytes uploaded; {} of {} pixels lit; \
+             {prepared} pipeline(s) built at load time, {} during the frames",
+            lights.x.len(),
+            report.upload_bytes,
+            lit_pixels(&pixels),
+            SIZE.0 * SIZE.1,
+            renderer.pipelines_built() - built_before
+        );
+    }
     Ok(())
 }
 
@@ -273,16 +314,22 @@ mod tests {
         if GpuContext::headless_for_tests().is_none() {
             return;
         }
-        let engine = Engine::new().unwrap();
+        let mut engine = Engine::new().unwrap();
         let mut renderer = Renderer::new(&engine.ctx, FORMAT);
         let scene = renderer.upload_scene(&engine.ctx, &floor()).unwrap();
         let lights = Lights::rows(64);
-        let (report, pairs, clustered) =
-            frame(&engine, &mut renderer, &scene, &lights, ShadingMode::Lists).unwrap();
+        let (report, pairs, clustered) = frame(
+            &mut engine,
+            &mut renderer,
+            &scene,
+            &lights,
+            ShadingMode::Lists,
+        )
+        .unwrap();
         assert_eq!(report.lights, 64);
         assert!(pairs > 64, "{pairs} pairs");
         let (_, _, brute) = frame(
-            &engine,
+            &mut engine,
             &mut renderer,
             &scene,
             &lights,
@@ -307,7 +354,7 @@ mod tests {
             ..Default::default()
         };
         let (forced, _, all_features) = frame_with(
-            &engine,
+            &mut engine,
             &mut renderer,
             &scene,
             &lights,
@@ -328,12 +375,12 @@ mod tests {
         if GpuContext::headless_for_tests().is_none() {
             return;
         }
-        let engine = Engine::new().unwrap();
+        let mut engine = Engine::new().unwrap();
         let mut renderer = Renderer::new(&engine.ctx, FORMAT);
         let scene = renderer.upload_scene(&engine.ctx, &floor()).unwrap();
         let (few, many) = (Lights::rows(8), Lights::rows(64));
         let (report, _, before) =
-            frame(&engine, &mut renderer, &scene, &few, ShadingMode::Lists).unwrap();
+            frame(&mut engine, &mut renderer, &scene, &few, ShadingMode::Lists).unwrap();
         assert_eq!(report.lights, 8);
         // 64 lights with lists one cluster short: refused.
         let (camera, grid) = view();
@@ -367,7 +414,7 @@ mod tests {
         let stale = renderer.render(&engine.ctx, &scene, &desc(false, all), &target);
         assert!(matches!(stale, Err(GpuError::InvalidInput(_))), "{stale:?}");
         let (report, _, after) =
-            frame(&engine, &mut renderer, &scene, &few, ShadingMode::Lists).unwrap();
+            frame(&mut engine, &mut renderer, &scene, &few, ShadingMode::Lists).unwrap();
         assert_eq!(report.lights, 8);
         assert_eq!(after, before);
     }
@@ -377,7 +424,7 @@ mod tests {
         let Some(headless) = GpuContext::headless_for_tests() else {
             return;
         };
-        let engine = Engine::new().unwrap();
+        let mut engine = Engine::new().unwrap();
         assert_eq!(
             engine.ctx.shader_loop_limit(),
             headless.shader_loop_limit(),
@@ -394,7 +441,7 @@ mod tests {
         let scene = renderer.upload_scene(&engine.ctx, &floor()).unwrap();
         let lights = Lights::rows(max as usize + 1);
         match frame(
-            &engine,
+            &mut engine,
             &mut renderer,
             &scene,
             &lights,

@@ -71,7 +71,9 @@
 //!   transform that maps the axis to zero (a zero scale, a singular matrix) leaves no direction,
 //!   and the warning says that.
 //! * **Left out, with a warning:** skins (meshes are drawn at their node's transform),
-//!   morph targets, animations, UV sets other than `TEXCOORD_0`, vertex colours.
+//!   morph targets, animations, UV sets other than `TEXCOORD_0`, vertex colours, and any
+//!   extension in `extensionsUsed` but `KHR_lights_punctual` and
+//!   `KHR_materials_emissive_strength` (one warning names them all).
 //! * **Out-of-range values the spec forbids are clamped and reported**, not fatal, since the
 //!   model stays usable: material factors outside [0, 1] (base colour, metallic, roughness,
 //!   emissive; a negative `alphaCutoff` or `emissiveStrength` becomes 0), a spot's inner cone
@@ -202,6 +204,9 @@ impl Model {
         })
     }
 }
+
+/// The glTF extensions the loader reads; any other in `extensionsUsed` is warned about.
+const READ_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
 fn load(
     bytes: &[u8],
@@ -346,6 +351,21 @@ fn load(
         if n > 0 {
             loader.model.warnings.push(format!("ignored {n} {what}"));
         }
+    }
+    // Extensions the file uses that the loader does not read: what they change is not drawn
+    // (Sponza's breakfast room uses KHR_materials_specular, review). Required ones the `gltf`
+    // crate already refused above, unless it reads them itself.
+    let unread: Vec<&str> = root
+        .extensions_used
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !READ_EXTENSIONS.contains(e))
+        .collect();
+    if !unread.is_empty() {
+        loader.model.warnings.push(format!(
+            "extensionsUsed: ignored {} (not read; what they change is not drawn)",
+            unread.join(", ")
+        ));
     }
     // Finite positions under finite transforms can still overflow f32 in world space (3e38
     // scaled by 10): the bounds, the camera and the light fields would all be infinite.
