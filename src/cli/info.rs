@@ -43,7 +43,9 @@ fn nums(v: [f32; 3]) -> [f64; 3] {
     v.map(num)
 }
 
+/// To three decimals, with no "-0.000" for a value that rounds to zero from below.
 fn vec3(v: [f32; 3]) -> String {
+    let v = v.map(|x| if x.abs() < 5e-4 { 0.0 } else { x });
     format!("[{:.3}, {:.3}, {:.3}]", v[0], v[1], v[2])
 }
 
@@ -172,7 +174,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
 #[cfg(test)]
 mod tests {
-    use super::grouped;
+    use super::{grouped, vec3};
+
+    #[test]
+    fn bounds_show_no_negative_zero() {
+        assert_eq!(vec3([-1.7774, -0.0, -1e-7]), "[-1.777, 0.000, 0.000]");
+        assert_eq!(vec3([2.4016, -0.0005, 0.0]), "[2.402, -0.001, 0.000]");
+    }
 
     #[test]
     fn groups_thousands() {
