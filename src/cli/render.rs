@@ -673,6 +673,28 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
             )?
         }
     };
+    // A camera from a scene file or a preset, over a model of the user's: it may well not be
+    // inside it (the `paper` preset's eye is 0.28 m under Sponza's floor, review).
+    if args.gltf.is_some() && (args.scene.is_some() || args.preset.is_some()) {
+        let bounds = model.bounds();
+        let eye = scene.camera.position;
+        if !bounds.is_empty() && !bounds.contains(eye) {
+            eprintln!(
+                "warning: {}: the camera at [{}, {}, {}] is outside {model_name}'s bounds \
+                 [{}, {}, {}] .. [{}, {}, {}]: the image shows the model from outside it",
+                scene.name,
+                eye.x,
+                eye.y,
+                eye.z,
+                bounds.min.x,
+                bounds.min.y,
+                bounds.min.z,
+                bounds.max.x,
+                bounds.max.y,
+                bounds.max.z
+            );
+        }
+    }
     if let Some((w, h)) = size {
         scene = scene.with_size(w, h);
     }

@@ -1246,3 +1246,49 @@ fn render_times_the_prepass_and_mask_of_the_skips_column_only_where_its_savings_
         );
     }
 }
+
+/// A scene file's or a preset's camera over a model of the user's is warned about when it is
+/// outside the model's bounds (the `paper` preset's eye is under Sponza's floor, and the image
+/// showed the floor's underside with no word, review); inside them, nothing is said.
+#[test]
+fn a_camera_outside_the_models_bounds_is_warned_about() {
+    if !gpu_available() {
+        return;
+    }
+    let dir = work_dir("camera_outside_model");
+    let model = dir.join("atrium.glb");
+    myriad_ok(&["atrium".as_ref(), "--out".as_ref(), model.as_os_str()]);
+    let render = |scene: &Path| {
+        let out = myriad(&[
+            "render".as_ref(),
+            "--gltf".as_ref(),
+            model.as_os_str(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--size".as_ref(),
+            "32x16".as_ref(),
+            "--runs".as_ref(),
+            "1".as_ref(),
+            "--out".as_ref(),
+            dir.join("out").as_os_str(),
+        ]);
+        assert!(out.status.success(), "{}", all_output(&out));
+        stderr(&out)
+    };
+    let outside = write(
+        &dir,
+        "outside.json",
+        &GOOD_SCENE.replace("[0, 2, 10]", "[0, 2, 100]"),
+    );
+    assert_mentions(
+        &render(&outside),
+        &["warning:", "the camera at [0, 2, 100] is outside", "bounds"],
+    );
+    let inside = write(
+        &dir,
+        "inside.json",
+        &GOOD_SCENE.replace("[0, 2, 10]", "[0, 2, 5]"),
+    );
+    let text = render(&inside);
+    assert!(!text.contains("is outside"), "{text}");
+}
