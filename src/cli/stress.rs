@@ -266,16 +266,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
             settings: viewer.settings,
             ..FrameDesc::clustered(&scene.camera, &grid, light_columns(&scene.lights), no_lists)
         };
-        viewer
-            .renderer
-            .render(&viewer.ctx, &viewer.scene, &warm_up, &viewer.target.view)
-            .map_err(|e| {
-                let hint = render_hint(&e, grid.dims() != scene.grid.dims());
-                anyhow::Error::new(e).context(format!(
-                    "the warm-up frame of {} lights{hint}",
-                    scene.lights.len()
-                ))
-            })?;
+        let what = format!("the warm-up frame of {} lights", scene.lights.len());
+        render_explained(
+            &mut viewer,
+            &warm_up,
+            &what,
+            grid.dims() != scene.grid.dims(),
+        )?;
         myriad::profiling::frame_mark();
         viewer.ctx.wait_idle()?;
         Ok(viewer)
@@ -300,16 +297,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
             cluster_lists(&lists),
         )
     };
-    let report = viewer
-        .renderer
-        .render(&viewer.ctx, &viewer.scene, &frame, &viewer.target.view)
-        .map_err(|e| {
-            let hint = render_hint(&e, grid.dims() != scene.grid.dims());
-            anyhow::Error::new(e).context(format!(
-                "rendering {} lights clustered{hint}",
-                scene.lights.len()
-            ))
-        })?;
+    let what = format!("rendering {} lights clustered", scene.lights.len());
+    let report = render_explained(&mut viewer, &frame, &what, grid.dims() != scene.grid.dims())?;
     // The GPU may be at work already: the wait below counts from here, not from after the
     // progress lines.
     let submitted = Instant::now();
@@ -400,6 +389,29 @@ pub fn run(args: Args) -> Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Renders `frame`; a refusal says `what` was refused and, from [`render_hint`], what `stress`
+/// can change.
+fn render_explained(
+    viewer: &mut Viewer,
+    frame: &FrameDesc<'_>,
+    what: &str,
+    coarsened: bool,
+) -> Result<myriad::gpu::FrameReport> {
+    let Viewer {
+        ctx,
+        renderer,
+        scene,
+        target,
+        ..
+    } = viewer;
+    renderer
+        .render(ctx, scene, frame, &target.view)
+        .map_err(|e| {
+            let hint = render_hint(&e, coarsened);
+            anyhow::Error::new(e).context(format!("{what}{hint}"))
+        })
 }
 
 /// What `stress` can change when the render is refused: the advice after "rendering N lights
