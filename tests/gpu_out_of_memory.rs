@@ -5,13 +5,25 @@
 //!
 //! On llvmpipe device memory is the process's, so the test lowers its own address-space limit
 //! (`prlimit`, util-linux) just before the frame: the 128 MB indices buffer (llvmpipe's largest
-//! storage binding) cannot be made in the 48 MB left, while everything else the frame needs can. Its own test binary, since the limit holds for the whole
-//! process.
+//! storage binding) cannot be made in the 48 MB left, while everything else the frame needs can.
+//! The same limit runs the host out of memory for a frame's staging copy, which the belt maps
+//! before the GPU copies it. Its own test binary, since the limit holds for the whole process,
+//! and the tests take turns ([`LIMIT`]): each one's allocations must happen under its own limit.
 
 use myriad::assignment::Method;
-use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
+use myriad::gpu::{
+    ClusterLists, FrameDesc, GBuffer, GpuContext, GpuError, HeadlessTarget, TextureRgba8,
+};
 use myriad::render::{RenderScene, Shading, Viewer};
 use std::process::Command;
+use std::sync::Mutex;
+
+/// Held by a test for its whole run: the address-space limit is the process's.
+static LIMIT: Mutex<()> = Mutex::new(());
+
+/// Headroom left above the address space in use when a limit is set: every small buffer and
+/// staging chunk of a frame fits in it, a 100 MB one does not.
+const HEADROOM: u64 = 48 << 20;
 
 /// The process's address space in bytes (`VmSize`).
 fn address_space() -> u64 {
@@ -42,6 +54,7 @@ fn limit_address_space(bytes: Option<u64>) {
 
 #[test]
 fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
+    let _turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
     let Some(ctx) = GpuContext::headless_for_tests() else {
         return;
     };
@@ -74,7 +87,7 @@ fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
         target,
         ..
     } = &mut viewer;
-    limit_address_space(Some(address_space() + (48 << 20)));
+    limit_address_space(Some(address_space() + HEADROOM));
     let refused = renderer.render(ctx, geometry, &frame, &target.view);
     limit_address_space(None);
     match refused {
@@ -95,4 +108,130 @@ fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
         .render(ctx, geometry, &frame, &target.view)
         .unwrap();
     assert_eq!(again.lights, lights);
+}
+
+/// Every cluster lists lights `0..per_cluster`: the largest lists a frame can hold.
+struct FullLists {
+    offsets: Vec<u32>,
+    counts: Vec<u32>,
+    indices: Vec<u32>,
+}
+
+impl FullLists {
+    fn new(clusters: usize, per_cluster: u32) -> Self {
+        Self {
+            counts: vec![per_cluster; clusters],
+            offsets: (0..clusters as u32).map(|c| c * per_cluster).collect(),
+            indices: (0..clusters).flat_map(|_| 0..per_cluster).collect(),
+        }
+    }
+
+    fn lists(&self) -> ClusterLists<'_> {
+        ClusterLists {
+            offsets: &self.offsets,
+            counts: &self.counts,
+            indices: &self.indices,
+        }
+    }
+}
+
+/// The device buffer already holds the frame, but its staging copy needs a new chunk of host
+/// memory the process does not have: an error, not a panic inside wgpu's `StagingBelt` (it
+/// was, review), and the next frame renders.
+#[test]
+fn staging_past_the_host_memory_is_an_error_and_the_renderer_recovers() {
+    let _turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let lights = 6_500;
+    let scene = RenderScene::default_scene(lights, 64, 32).unwrap();
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let clusters = scene.grid.cluster_count();
+    // 4608 × 5400 indices (99.5 MB) grow the indices buffer to 128 MB and stage through a
+    // 99.5 MB chunk; 4608 × 6500 (119.8 MB) then fit the buffer but no chunk the belt has.
+    let first = FullLists::new(clusters, 5_400);
+    let second = FullLists::new(clusters, lights as u32);
+    let columns = myriad::render::light_columns(&scene.lights);
+    let Viewer {
+        ctx,
+        renderer,
+        scene: geometry,
+        target,
+        ..
+    } = &mut viewer;
+    let frame = |lists| FrameDesc::clustered(&scene.camera, &scene.grid, columns, lists);
+    renderer
+        .render(ctx, geometry, &frame(first.lists()), &target.view)
+        .unwrap();
+    ctx.wait_idle().unwrap();
+    limit_address_space(Some(address_space() + HEADROOM));
+    let refused = renderer.render(ctx, geometry, &frame(second.lists()), &target.view);
+    limit_address_space(None);
+    match refused {
+        Err(GpuError::OutOfMemory(message)) => {
+            assert!(
+                message.contains("the staging copy of the light indices buffer"),
+                "{message}"
+            );
+        }
+        other => panic!("want an out-of-memory error, got {:?}", other.map(|_| ())),
+    }
+    let again = renderer
+        .render(ctx, geometry, &frame(second.lists()), &target.view)
+        .unwrap();
+    assert_eq!(again.lights, lights);
+}
+
+/// Geometry, textures and targets larger than the memory left are errors too, and nothing the
+/// renderer holds is lost: wgpu's `create_buffer_init` and `create_texture_with_data` panicked
+/// on the mapped buffer or the texture they could not make (an engine loading a scene too big
+/// for its GPU lost the process).
+#[test]
+fn scenes_and_targets_past_the_memory_are_errors() {
+    let _turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(10, 64, 32).unwrap();
+    let viewer = Viewer::new(ctx, &scene).unwrap();
+    // 3.2 M vertices (102 MB) and a 4096² texture (67 MB), each alone past the headroom.
+    let mut huge_vertices = scene.geometry.clone();
+    let vertex = huge_vertices.vertices[0];
+    huge_vertices.vertices.resize(3_200_000, vertex);
+    let mut huge_texture = scene.geometry.clone();
+    let side = 4096;
+    huge_texture.textures.push(TextureRgba8 {
+        width: side,
+        height: side,
+        pixels: vec![128; (side * side * 4) as usize],
+    });
+    let (ctx, renderer) = (&viewer.ctx, &viewer.renderer);
+    limit_address_space(Some(address_space() + HEADROOM));
+    let vertices = renderer.upload_scene(ctx, &huge_vertices).map(|_| ());
+    let texture = renderer.upload_scene(ctx, &huge_texture).map(|_| ());
+    let gbuffer = GBuffer::new(&ctx.device, side, side).map(|_| ());
+    let target = HeadlessTarget::new(&ctx.device, 8192, 8192).map(|_| ());
+    limit_address_space(None);
+    for (refused, what) in [
+        (vertices, "the scene vertices buffer"),
+        (texture, "a 4096x4096 base-colour texture"),
+        (gbuffer, "the gbuffer"),
+        (target, "the headless target texture"),
+    ] {
+        match refused {
+            Err(GpuError::OutOfMemory(message)) => {
+                assert!(message.contains(what), "want {what:?} in {message:?}")
+            }
+            other => panic!("{what}: want an out-of-memory error, got {other:?}"),
+        }
+    }
+    // With the memory back, the same uploads succeed and the viewer still renders.
+    let uploaded = renderer.upload_scene(ctx, &huge_vertices).unwrap();
+    assert_eq!(uploaded.triangle_count(), scene.geometry.indices.len() / 3);
+    renderer.upload_scene(ctx, &huge_texture).unwrap();
+    let mut viewer = viewer;
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
 }

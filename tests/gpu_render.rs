@@ -484,6 +484,50 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
 /// The uploaded scene counts its triangles and knows whether it has blended draws, and those are
 /// drawn: the atrium's frame runs the forward pass and differs from the same scene without its
 /// blended draws, whose frame runs none.
+/// A base-colour texture reaches the G-buffer as authored: every opaque material samples a 3×2
+/// texture of one colour (rows of 12 bytes, not a multiple of wgpu's 256-byte copy alignment),
+/// and every drawn pixel's albedo is that colour times the material's factor. The texture is
+/// written by the renderer's own upload, made to return out of memory as an error
+/// (`tests/gpu_out_of_memory.rs`).
+#[test]
+fn base_colour_textures_reach_the_gbuffer() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut scene = RenderScene::default_scene(10, 64, 32).unwrap();
+    // Pure red, sRGB: the albedo's green and blue are 0 whatever the factor.
+    scene.geometry.textures.push(myriad::gpu::TextureRgba8 {
+        width: 3,
+        height: 2,
+        pixels: [255, 0, 0, 255].repeat(6),
+    });
+    let red = scene.geometry.textures.len() as u32 - 1;
+    for material in &mut scene.geometry.materials {
+        material.base_color_texture = Some(red);
+        material.uniforms.base_color = [1.0, 1.0, 1.0, 1.0];
+    }
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    let gbuffer = viewer
+        .renderer
+        .gbuffer()
+        .expect("a frame drew the G-buffer");
+    let albedo = myriad::gpu::read_rgba8(&viewer.ctx, &gbuffer.albedo.texture()).unwrap();
+    let depth = myriad::gpu::read_depth(&viewer.ctx, &gbuffer.depth_texture).unwrap();
+    let drawn: Vec<&[u8]> = albedo
+        .chunks_exact(4)
+        .zip(&depth)
+        .filter(|(_, d)| **d > 0.0)
+        .map(|(texel, _)| texel)
+        .collect();
+    assert!(drawn.len() > 64 * 32 / 2, "{} pixels drawn", drawn.len());
+    for texel in drawn {
+        assert_eq!(texel[..3], [255, 0, 0], "albedo {texel:?}");
+    }
+}
+
 #[test]
 fn an_uploaded_scene_counts_its_triangles_and_draws_its_blended_geometry() {
     use myriad::gpu::Blend;

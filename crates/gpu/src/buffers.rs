@@ -7,6 +7,7 @@
 //! bind is an error ([`GpuError::BufferTooLarge`]), never a cut list.
 
 use crate::GpuError;
+use crate::out_of_memory::catching;
 use std::num::NonZeroU64;
 
 /// The smallest buffer created: storage bindings may not be empty.
@@ -69,30 +70,10 @@ impl GrowableBuffer {
             return Ok(false);
         }
         let size = grown_size(bytes, storage_capacity(&device.limits()));
-        // Past the device's memory wgpu raises an out-of-memory error, which panics unless a
-        // scope catches it (a frame of a million lights' lists on a GPU with little memory).
-        let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let buffer = Self::create(device, self.label, size);
-        if let Some(error) = ready(scope.pop()).flatten() {
-            return Err(GpuError::OutOfMemory(format!(
-                "the {} buffer of {size} bytes: {error}",
-                self.label
-            )));
-        }
-        self.buffer = buffer;
+        // A frame of a million lights' lists on a GPU with little memory.
+        let what = || format!("the {} buffer of {size} bytes", self.label);
+        self.buffer = catching(device, what, || Self::create(device, self.label, size))?;
         Ok(true)
-    }
-}
-
-/// The output of `future` if it is ready when first polled, else `None`. wgpu's error scopes
-/// resolve at once on native backends (an error is raised as the call is made), so a frame can
-/// read one without an executor.
-fn ready<F: std::future::Future>(future: F) -> Option<F::Output> {
-    let mut future = std::pin::pin!(future);
-    let mut context = std::task::Context::from_waker(std::task::Waker::noop());
-    match future.as_mut().poll(&mut context) {
-        std::task::Poll::Ready(output) => Some(output),
-        std::task::Poll::Pending => None,
     }
 }
 
@@ -126,22 +107,42 @@ fn grown_size(bytes: u64, capacity: u64) -> u64 {
 
 /// Writes `data` into `target` at offset 0 through the staging belt; returns the bytes staged.
 /// Empty data stages nothing.
+///
+/// A frame larger than any free chunk of the belt gets a new mapped chunk of its size, host
+/// memory the process may not have (a million lights' lists are hundreds of megabytes). wgpu
+/// raises that as an out-of-memory error, and `StagingBelt::write_buffer` then panics on the
+/// chunk it could not map; so the chunk is allocated here inside an error scope, and running out
+/// is [`GpuError::OutOfMemory`]. The belt then holds a chunk that was never made: the caller
+/// replaces the belt (the renderer's `forget_uploads`).
 pub fn stage<T: bytemuck::Pod>(
+    device: &wgpu::Device,
     belt: &mut wgpu::util::StagingBelt,
     encoder: &mut wgpu::CommandEncoder,
     target: &GrowableBuffer,
     data: &[T],
-) -> u64 {
+) -> Result<u64, GpuError> {
     let bytes: &[u8] = bytemuck::cast_slice(data);
     let padded = (bytes.len() as u64).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
     let Some(size) = NonZeroU64::new(padded) else {
-        return 0;
+        return Ok(0);
     };
     debug_assert!(padded <= target.capacity(), "reserve before staging");
-    let mut view = belt.write_buffer(encoder, target.buffer(), 0, size);
+    let what = || {
+        format!(
+            "the staging copy of the {} buffer ({padded} bytes of host memory)",
+            target.label
+        )
+    };
+    let alignment = const { NonZeroU64::new(wgpu::COPY_BUFFER_ALIGNMENT).unwrap() };
+    let slice = catching(device, what, || belt.allocate(size, alignment))?;
+    let mut view = slice
+        .get_mapped_range_mut()
+        .map_err(|error| GpuError::OutOfMemory(format!("{}: {error}", what())))?;
     view.slice(..bytes.len()).copy_from_slice(bytes);
     view.slice(bytes.len()..).fill(0);
-    padded
+    drop(view);
+    encoder.copy_buffer_to_buffer(slice.buffer(), slice.offset(), target.buffer(), 0, padded);
+    Ok(padded)
 }
 
 #[cfg(test)]

@@ -3,11 +3,11 @@
 //! `ClusterGrid::cluster_of_pixel` sample by sample.
 
 use crate::layout::ClusterCheckUniforms;
+use crate::out_of_memory::{buffer_init, catching};
 use crate::readback::map_and_read;
 use crate::shaders::PassShader;
 use crate::{GpuContext, GpuError};
 use myriad_cluster_math::{Camera, ClusterGrid};
-use wgpu::util::DeviceExt;
 
 /// What the sample depths of a check are.
 #[derive(Clone, Copy, Debug)]
@@ -100,35 +100,33 @@ pub fn gpu_cluster_ids_of(
         grid_dims: [grid.dims().x, grid.dims().y, grid.dims().z, 0],
         near_far,
     };
-    let init = |label, contents: &[u8], usage| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents,
-            usage,
-        })
-    };
+    let init = |label, contents: &[u8], usage| buffer_init(device, label, contents, usage);
     let storage = wgpu::BufferUsages::STORAGE;
     let params = init(
         "check params",
         bytemuck::bytes_of(&uniforms),
         wgpu::BufferUsages::UNIFORM,
-    );
-    let pixel_buffer = init("check pixels", bytemuck::cast_slice(pixels), storage);
-    let depth_buffer = init("check depths", bytemuck::cast_slice(depths), storage);
-    let edge_buffer = init("check edges", bytemuck::cast_slice(&edges), storage);
+    )?;
+    let pixel_buffer = init("check pixels", bytemuck::cast_slice(pixels), storage)?;
+    let depth_buffer = init("check depths", bytemuck::cast_slice(depths), storage)?;
+    let edge_buffer = init("check edges", bytemuck::cast_slice(&edges), storage)?;
     let bytes = pixels.len() as u64 * 4;
-    let out = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("check ids"),
-        size: bytes,
-        usage: storage | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("check readback"),
-        size: bytes,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+    let buffer = |label: &'static str, usage| {
+        let what = || format!("the {label} buffer ({bytes} bytes)");
+        catching(device, what, || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            })
+        })
+    };
+    let out = buffer("check ids", storage | wgpu::BufferUsages::COPY_SRC)?;
+    let readback = buffer(
+        "check readback",
+        wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+    )?;
     let module = PassShader::ClusterIndexCheck.module(device);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("cluster index check"),

@@ -84,10 +84,10 @@ pub enum GpuError {
     /// context of another device than the renderer's.
     #[error("invalid input: {0}")]
     InvalidInput(String),
-    /// The device ran out of memory growing one of the frame's buffers (wgpu's out-of-memory
-    /// error, which would otherwise panic): nothing was drawn, and the next frame must upload its
-    /// lights and lists again. (Host memory for the staging copies is wgpu's `StagingBelt`'s to
-    /// allocate; running out of that still panics inside wgpu.)
+    /// The device ran out of memory growing one of the frame's buffers, or the host ran out of
+    /// memory for the staging copy of its lights and lists (wgpu's out-of-memory error, which
+    /// would otherwise panic): nothing was drawn, and the next frame must upload its lights and
+    /// lists again.
     #[error(
         "the GPU ran out of memory for {0}; nothing was drawn: fewer lights, a coarser grid or a \
          pair budget need less"

@@ -50,6 +50,7 @@ mod frame_input;
 pub mod layout;
 pub mod legend;
 pub mod loop_budget;
+mod out_of_memory;
 mod pipelines;
 mod profiling;
 mod readback;

@@ -1,5 +1,6 @@
 //! Reading a rendered texture back to the CPU and saving it as PNG.
 
+use crate::out_of_memory::catching;
 use crate::{GpuContext, GpuError};
 
 /// Copies an RGBA8 (`Rgba8Unorm` or `Rgba8UnormSrgb`) texture into a tightly packed
@@ -85,12 +86,15 @@ fn copy_texels(
              this device's max_buffer_size ({limit} bytes)"
         )));
     }
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
+    let what = || format!("the read-back buffer of a {width} × {height} texture ({size} bytes)");
+    let buffer = catching(&ctx.device, what, || {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        })
+    })?;
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {

@@ -4,7 +4,9 @@
 //! The renderer takes plain arrays ([`SceneGeometry`]) rather than a glTF model so that it does
 //! not depend on `myriad-scene`; the facade flattens a model into them.
 
+use crate::GpuError;
 use crate::layout::{MaterialUniforms, Vertex};
+use crate::out_of_memory::{buffer_init, catching};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
@@ -219,12 +221,13 @@ pub struct GpuScene {
 
 impl GpuScene {
     /// Uploads `geometry`; `material_layout` is the renderer's material bind group layout.
+    /// Geometry or textures past the device's memory are [`GpuError::OutOfMemory`].
     pub(crate) fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         material_layout: &wgpu::BindGroupLayout,
         geometry: &SceneGeometry,
-    ) -> Self {
+    ) -> Result<Self, GpuError> {
         // Buffers may not be empty; a scene with no geometry still gets valid (unused) ones.
         let vertices: &[Vertex] = if geometry.vertices.is_empty() {
             &[Vertex::default()]
@@ -236,21 +239,23 @@ impl GpuScene {
         } else {
             &geometry.indices
         };
-        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("scene vertices"),
-            contents: bytemuck::cast_slice(vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("scene indices"),
-            contents: bytemuck::cast_slice(indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
-        let textures: Vec<wgpu::TextureView> = geometry
+        let vertex_buffer = buffer_init(
+            device,
+            "scene vertices",
+            bytemuck::cast_slice(vertices),
+            wgpu::BufferUsages::VERTEX,
+        )?;
+        let index_buffer = buffer_init(
+            device,
+            "scene indices",
+            bytemuck::cast_slice(indices),
+            wgpu::BufferUsages::INDEX,
+        )?;
+        let textures = geometry
             .textures
             .iter()
             .map(|t| upload_texture(device, queue, t))
-            .collect();
+            .collect::<Result<Vec<_>, _>>()?;
         let white = upload_texture(
             device,
             queue,
@@ -259,7 +264,7 @@ impl GpuScene {
                 height: 1,
                 pixels: vec![255; 4],
             },
-        );
+        )?;
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("material sampler"),
             address_mode_u: wgpu::AddressMode::Repeat,
@@ -304,7 +309,7 @@ impl GpuScene {
             .draws
             .iter()
             .partition(|d| geometry.materials[d.material as usize].blend == Blend::Blended);
-        Self {
+        Ok(Self {
             device: device.clone(),
             vertex_buffer,
             index_buffer,
@@ -312,7 +317,7 @@ impl GpuScene {
             blended,
             material_groups,
             triangles: geometry.indices.len() / 3,
-        }
+        })
     }
 
     /// Whether the forward pass has anything to draw.
@@ -338,32 +343,53 @@ impl GpuScene {
     }
 }
 
+/// A base-colour texture holding `texture`'s pixels.
 fn upload_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     texture: &TextureRgba8,
-) -> wgpu::TextureView {
-    device
-        .create_texture_with_data(
-            queue,
-            &wgpu::TextureDescriptor {
-                label: Some("base colour"),
-                size: wgpu::Extent3d {
-                    width: texture.width,
-                    height: texture.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8UnormSrgb,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            &texture.pixels,
+) -> Result<wgpu::TextureView, GpuError> {
+    let size = wgpu::Extent3d {
+        width: texture.width,
+        height: texture.height,
+        depth_or_array_layers: 1,
+    };
+    let what = || {
+        format!(
+            "a {}x{} base-colour texture ({} bytes)",
+            texture.width,
+            texture.height,
+            texture.pixels.len()
         )
-        .create_view(&wgpu::TextureViewDescriptor::default())
+    };
+    // Made, then written, each in its own scope (wgpu's `create_texture_with_data` does both,
+    // and writing into a texture that could not be made is a second, uncaught error).
+    let made = catching(device, what, || {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("base colour"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    })?;
+    // The queue stages the pixels in host memory of its own until the next submit.
+    catching(device, what, || {
+        queue.write_texture(
+            made.as_image_copy(),
+            &texture.pixels,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * texture.width),
+                rows_per_image: None,
+            },
+            size,
+        )
+    })?;
+    Ok(made.create_view(&wgpu::TextureViewDescriptor::default()))
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Render targets: the G-buffer the deferred pass reads, and a headless colour target.
 
 use crate::GpuError;
+use crate::out_of_memory::catching;
 
 /// G-buffer formats. Albedo is sRGB-encoded (8 bits are enough after encoding); the normal is
 /// octahedral in two 16-bit floats; roughness and metallic in 8-bit unorm; depth in f32 so the
@@ -40,7 +41,8 @@ pub struct GBuffer {
 
 impl GBuffer {
     /// Creates the textures for a `width × height` target. A size of 0 or beyond the device's
-    /// largest 2D texture is [`GpuError::InvalidInput`] (wgpu would panic on it).
+    /// largest 2D texture is [`GpuError::InvalidInput`] (wgpu would panic on it), one the device
+    /// has no memory for [`GpuError::OutOfMemory`].
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, GpuError> {
         check_target_size(device, width, height)?;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
@@ -48,14 +50,14 @@ impl GBuffer {
             | wgpu::TextureUsages::COPY_SRC;
         let texture = |label, format| texture_2d(device, label, (width, height), format, usage);
         let view = |label, format| {
-            texture(label, format).create_view(&wgpu::TextureViewDescriptor::default())
+            texture(label, format).map(|t| t.create_view(&wgpu::TextureViewDescriptor::default()))
         };
-        let depth_texture = texture("gbuffer depth", DEPTH_FORMAT);
+        let depth_texture = texture("gbuffer depth", DEPTH_FORMAT)?;
         Ok(Self {
             size: (width, height),
-            albedo: view("gbuffer albedo", ALBEDO_FORMAT),
-            normal: view("gbuffer normal", NORMAL_FORMAT),
-            material: view("gbuffer material", MATERIAL_FORMAT),
+            albedo: view("gbuffer albedo", ALBEDO_FORMAT)?,
+            normal: view("gbuffer normal", NORMAL_FORMAT)?,
+            material: view("gbuffer material", MATERIAL_FORMAT)?,
             depth: depth_texture.create_view(&wgpu::TextureViewDescriptor::default()),
             depth_texture,
         })
@@ -73,12 +75,13 @@ pub struct HeadlessTarget {
 
 impl HeadlessTarget {
     /// A `width × height` [`HEADLESS_FORMAT`] target. A size of 0 or beyond the device's
-    /// largest 2D texture is [`GpuError::InvalidInput`] (wgpu would panic on it).
+    /// largest 2D texture is [`GpuError::InvalidInput`] (wgpu would panic on it), one the device
+    /// has no memory for [`GpuError::OutOfMemory`].
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, GpuError> {
         check_target_size(device, width, height)?;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let size = (width, height);
-        let texture = texture_2d(device, "headless target", size, HEADLESS_FORMAT, usage);
+        let texture = texture_2d(device, "headless target", size, HEADLESS_FORMAT, usage)?;
         let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
         Ok(Self { texture, view })
     }
@@ -106,19 +109,22 @@ fn texture_2d(
     (width, height): (u32, u32),
     format: wgpu::TextureFormat,
     usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
+) -> Result<wgpu::Texture, GpuError> {
+    let what = || format!("the {label} texture ({width}x{height} {format:?})");
+    catching(device, what, || {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
     })
 }

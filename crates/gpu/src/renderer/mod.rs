@@ -254,7 +254,8 @@ impl Renderer {
         }
     }
 
-    /// Uploads scene geometry for this renderer's pipelines.
+    /// Uploads scene geometry for this renderer's pipelines. Geometry the device has no memory
+    /// for is [`GpuError::OutOfMemory`].
     pub fn upload_scene(
         &self,
         ctx: &GpuContext,
@@ -265,12 +266,12 @@ impl Renderer {
         geometry
             .check_limits(&ctx.device.limits())
             .map_err(GpuError::InvalidInput)?;
-        Ok(GpuScene::new(
+        GpuScene::new(
             &ctx.device,
             &ctx.queue,
             &self.pipelines.material_layout,
             geometry,
-        ))
+        )
     }
 
     /// Builds ahead the pipelines [`Renderer::render`] will use for `frame` on `scene` drawn into
@@ -761,8 +762,13 @@ impl Renderer {
             );
             let bytes = std::mem::size_of_val(self.scratch_lights.as_slice()) as u64;
             rebind_lights |= self.lights.reserve(device, bytes)?;
-            report.upload_bytes +=
-                stage(&mut self.belt, encoder, &self.lights, &self.scratch_lights);
+            report.upload_bytes += stage(
+                device,
+                &mut self.belt,
+                encoder,
+                &self.lights,
+                &self.scratch_lights,
+            )?;
             self.light_count = columns.len();
             self.lights_camera = Some(camera_position);
             self.has_spots = columns.spot.is_some();
@@ -777,7 +783,7 @@ impl Renderer {
                 (&mut self.indices, lists.indices),
             ] {
                 rebind_lights |= buffer.reserve(device, std::mem::size_of_val(data) as u64)?;
-                report.upload_bytes += stage(&mut self.belt, encoder, buffer, data);
+                report.upload_bytes += stage(device, &mut self.belt, encoder, buffer, data)?;
             }
             self.lists_uploaded = Some(UploadedLists {
                 grid: *frame.grid,
@@ -800,11 +806,12 @@ impl Renderer {
             let bytes = std::mem::size_of_val(self.scratch_edges.as_slice()) as u64;
             rebind_lights |= self.slice_edges.reserve(device, bytes)?;
             report.upload_bytes += stage(
+                device,
                 &mut self.belt,
                 encoder,
                 &self.slice_edges,
                 &self.scratch_edges,
-            );
+            )?;
             self.edges_uploaded = Some(*frame.grid);
         }
         Ok((report, rebind_lights, max_count))
