@@ -514,7 +514,7 @@ fn base_colour_textures_reach_the_gbuffer() {
         .renderer
         .gbuffer()
         .expect("a frame drew the G-buffer");
-    let albedo = myriad::gpu::read_rgba8(&viewer.ctx, &gbuffer.albedo.texture()).unwrap();
+    let albedo = myriad::gpu::read_rgba8(&viewer.ctx, gbuffer.albedo.texture()).unwrap();
     let depth = myriad::gpu::read_depth(&viewer.ctx, &gbuffer.depth_texture).unwrap();
     let drawn: Vec<&[u8]> = albedo
         .chunks_exact(4)
