@@ -66,6 +66,18 @@ struct ClusterCheck {
     near_far: vec4<f32>,
 }
 
+// One case of the lighting check pass (`lighting_check.wgsl`): a light and the surface point it
+// shades, camera-relative. Its Rust twin is `ShadeCase`.
+struct ShadeCase {
+    light: Light,
+    position: vec3<f32>,
+    roughness: f32,
+    normal: vec3<f32>,
+    metallic: f32,
+    albedo: vec3<f32>,
+    _pad: f32,
+}
+
 // One scene vertex, world space (vertex buffer of the G-buffer and forward passes; its Rust twin
 // is `Vertex`, whose attribute layout `Vertex::LAYOUT` names these locations).
 struct VertexIn {

@@ -115,6 +115,28 @@ pub struct ClusterCheckUniforms {
     pub near_far: [f32; 4],
 }
 
+/// One case of the lighting check pass (`ShadeCase` in WGSL): a light and the surface point it
+/// shades, both camera-relative, as `shade_light` in `shaders/common/lighting.wgsl` takes them
+/// ([`crate::lighting_check`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadeCase {
+    /// The light, as the renderer uploads it.
+    pub light: GpuLight,
+    /// The surface point: world position minus camera position.
+    pub position: [f32; 3],
+    /// Perceptual roughness in [0, 1].
+    pub roughness: f32,
+    /// Unit normal (any value: the shader must stay finite for a zero or NaN one).
+    pub normal: [f32; 3],
+    /// Metallic in [0, 1].
+    pub metallic: f32,
+    /// Linear albedo.
+    pub albedo: [f32; 3],
+    /// Padding to 16 bytes.
+    pub _pad: f32,
+}
+
 /// One vertex of the scene geometry, world space (vertex buffer, not a WGSL struct: its layout
 /// is [`Vertex::LAYOUT`]).
 #[repr(C)]
@@ -141,9 +163,10 @@ impl Vertex {
 }
 
 /// The WGSL struct names and their Rust sizes, for the layout test.
-pub const WGSL_STRUCTS: [(&str, usize); 4] = [
+pub const WGSL_STRUCTS: [(&str, usize); 5] = [
     ("Frame", std::mem::size_of::<FrameUniforms>()),
     ("Light", std::mem::size_of::<GpuLight>()),
     ("Material", std::mem::size_of::<MaterialUniforms>()),
     ("ClusterCheck", std::mem::size_of::<ClusterCheckUniforms>()),
+    ("ShadeCase", std::mem::size_of::<ShadeCase>()),
 ];

@@ -49,6 +49,7 @@ mod error;
 mod frame_input;
 pub mod layout;
 pub mod legend;
+pub mod lighting_check;
 pub mod loop_budget;
 mod out_of_memory;
 mod pipelines;

@@ -48,15 +48,18 @@ pub enum PassShader {
     Forward,
     /// `cluster_index_check.wgsl` (test pass).
     ClusterIndexCheck,
+    /// `lighting_check.wgsl` (test pass).
+    LightingCheck,
 }
 
 impl PassShader {
     /// Every pass.
-    pub const ALL: [PassShader; 4] = [
+    pub const ALL: [PassShader; 5] = [
         PassShader::GBuffer,
         PassShader::Deferred,
         PassShader::Forward,
         PassShader::ClusterIndexCheck,
+        PassShader::LightingCheck,
     ];
 
     /// File name under `shaders/`.
@@ -66,6 +69,7 @@ impl PassShader {
             PassShader::Deferred => "deferred.wgsl",
             PassShader::Forward => "forward.wgsl",
             PassShader::ClusterIndexCheck => "cluster_index_check.wgsl",
+            PassShader::LightingCheck => "lighting_check.wgsl",
         }
     }
 
@@ -87,6 +91,9 @@ impl PassShader {
                     "/cluster_index_check.wgsl"
                 ))
             }
+            PassShader::LightingCheck => {
+                include_str!(concat!(env!("MYRIAD_SHADER_DIR"), "/lighting_check.wgsl"))
+            }
         }
     }
 
@@ -97,6 +104,7 @@ impl PassShader {
             PassShader::Deferred => &[0, 1, 2, 3],
             PassShader::Forward => &[0, 1, 2, 3, 4],
             PassShader::ClusterIndexCheck => &[0, 1],
+            PassShader::LightingCheck => &[0, 3],
         }
     }
 

@@ -2,7 +2,7 @@
 //! for its WGSL twin in `shaders/common/layout.wgsl`.
 
 use myriad_gpu::layout::{
-    ClusterCheckUniforms, FrameUniforms, GpuLight, MaterialUniforms, WGSL_STRUCTS,
+    ClusterCheckUniforms, FrameUniforms, GpuLight, MaterialUniforms, ShadeCase, WGSL_STRUCTS,
 };
 use myriad_gpu::shaders::COMMON;
 use std::mem::{offset_of, size_of};
@@ -61,6 +61,11 @@ fn structs_match_naga_layout() {
             "ClusterCheck",
             size_of::<ClusterCheckUniforms>(),
             rust_offsets!(ClusterCheckUniforms: target_size, sample_count, from_stored_depth, grid_dims, near_far),
+        ),
+        (
+            "ShadeCase",
+            size_of::<ShadeCase>(),
+            rust_offsets!(ShadeCase: light, position, roughness, normal, metallic, albedo, _pad),
         ),
     ];
     assert_eq!(
