@@ -96,8 +96,9 @@ fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
         }
         other => panic!("want an out-of-memory error, got {:?}", other.map(|_| ())),
     }
-    // Nothing of that frame is kept: a frame that keeps the lists is refused, and one that
-    // uploads them again renders.
+    // Nothing of that frame is kept: no lists to read back, a frame that keeps the lists is
+    // refused, and one that uploads them again renders.
+    assert_eq!(renderer.read_back_lists(ctx).unwrap(), None);
     let mut kept = frame;
     (kept.lights, kept.lists) = (None, None);
     assert!(matches!(

@@ -343,6 +343,8 @@ fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
     let small = RenderScene::default_scene(100, w, h).unwrap();
     let large = RenderScene::default_scene(8_000, w, h).unwrap();
     let mut viewer = Viewer::new(ctx, &small).unwrap();
+    // Nothing uploaded yet: nothing to read back.
+    assert_eq!(viewer.renderer.read_back_lists(&viewer.ctx).unwrap(), None);
     let mut capacities = Vec::new();
     for scene in [&small, &large, &small] {
         let frame = viewer
@@ -360,6 +362,16 @@ fn buffers_grow_with_the_frame_and_nothing_is_truncated() {
         );
         assert!(indices >= 4 * pairs, "{indices} B for {pairs} pairs");
         capacities.push((lights, indices));
+        // And hold exactly the frame's lists (a smaller frame's inside the grown buffers).
+        let back = viewer.renderer.read_back_lists(&viewer.ctx).unwrap();
+        let back = back.expect("a clustered frame uploaded lists");
+        let cpu = viewer.lists();
+        assert_eq!(back.indices.len() as u64, pairs);
+        assert!(
+            back.offsets == cpu.offsets && back.counts == cpu.counts && back.indices == cpu.indices,
+            "{} lights: the GPU's lists differ from the uploaded ones",
+            scene.lights.len()
+        );
         let clustered = viewer.image().unwrap();
         viewer
             .frame(scene, Shading::BruteForce, Method::Refined, false)

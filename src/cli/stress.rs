@@ -1,5 +1,5 @@
-//! `myriad stress --lights N`: one frame with very many lights, end to end, every stage timed
-//! and the lists proven against the exact oracle.
+//! `myriad stress --lights N`: one frame with very many lights, end to end, every stage timed,
+//! the lists proven against the exact oracle and the GPU's copy against them.
 //!
 //! Why it exists: the benches time the assignment alone and the render tests use at most 100k
 //! lights at tiny sizes; nothing else pushes a million lights through scene generation,
@@ -26,7 +26,10 @@
 //! 5. **GPU render**, clustered only: pass timestamps where the adapter has them, and the wall
 //!    time from encoding to idle. (Brute force and one-slice tiles are not attempted: on llvmpipe
 //!    a pixel may loop over at most 65 534 lights and the renderer refuses more —
-//!    `GpuError::ShaderLoopLimit`; clustered lists stay far below that);
+//!    `GpuError::ShaderLoopLimit`; clustered lists stay far below that); then the lists the
+//!    GPU shaded with are read back (`Renderer::read_back_lists`) and compared with the uploaded
+//!    ones array by array: the oracle below proves the CPU's lists, this that the GPU got them
+//!    whole through the staging ring (at 1M lights, 88 MiB in chunks of their own size);
 //! 6. **oracle check** (`oracle_check.rs`): up to `--exact-up-to` lights (200k), **every
 //!    cluster** through the `exact` method's lists; above, **`--sample K` clusters** (2000,
 //!    seeded), each checked independently against every light in its depth window. A miss names
@@ -60,7 +63,7 @@ use super::source::check_memory_for;
 use anyhow::{Result, ensure};
 use myriad::assignment::{Assigner, LightLists, Method};
 use myriad::gpu::layout::GpuLight;
-use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError};
+use myriad::gpu::{ClusterLists, FrameDesc, GpuContext, GpuError, ListsReadBack};
 use myriad::render::{RenderScene, Viewer, cluster_lists, light_columns};
 use myriad::scene::DepthSlicing;
 use serde::Serialize;
@@ -119,6 +122,8 @@ struct Stages {
     gpu_gbuffer_ms: Option<f64>,
     gpu_shading_ms: Option<f64>,
     gpu_forward_ms: Option<f64>,
+    /// Reading the lists back from the GPU and comparing them with the uploaded ones.
+    gpu_readback_ms: f64,
     check_ms: f64,
 }
 
@@ -158,6 +163,10 @@ struct Report {
     stages: Stages,
     assignment: Assignment,
     upload_bytes: u64,
+    /// Whether the lists read back from the GPU equal the lists uploaded, array by array.
+    gpu_lists_identical: bool,
+    /// Where they first differ, when they do.
+    gpu_lists_difference: Option<String>,
     check: CheckReport,
     /// VmHWM of this process; `null` where unknown.
     peak_memory_bytes: Option<u64>,
@@ -325,6 +334,16 @@ pub fn run(args: Args) -> Result<ExitCode> {
         stages.gpu_shading_ms = p.shading_ms;
         stages.gpu_forward_ms = p.forward_ms;
     }
+
+    // 5b. What the GPU shaded with: the lists read back, against the ones uploaded.
+    let (gpu_lists_difference, seconds) = progress.stage("GPU lists read back", || {
+        let back = viewer.renderer.read_back_lists(&viewer.ctx)?;
+        Ok(match back {
+            Some(back) => lists_difference(&back, &lists),
+            None => Some("the renderer holds no lists".to_string()),
+        })
+    })?;
+    stages.gpu_readback_ms = seconds * 1e3;
     drop(viewer);
 
     // 6. Oracle.
@@ -371,7 +390,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
         stages,
         assignment,
         upload_bytes: report.upload_bytes,
-        passed: check.misses == 0,
+        gpu_lists_identical: gpu_lists_difference.is_none(),
+        passed: check.misses == 0 && gpu_lists_difference.is_none(),
+        gpu_lists_difference,
         check,
         peak_memory_bytes: peak_memory_bytes(),
     };
@@ -388,7 +409,36 @@ pub fn run(args: Args) -> Result<ExitCode> {
         );
         return Ok(ExitCode::FAILURE);
     }
+    if let Some(difference) = &out.gpu_lists_difference {
+        eprintln!("error: the lists on the GPU are not the lists uploaded: {difference}");
+        return Ok(ExitCode::FAILURE);
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Where the lists read back from the GPU first differ from `lists`, or `None` when every
+/// array is equal.
+fn lists_difference(back: &ListsReadBack, lists: &LightLists) -> Option<String> {
+    [
+        ("offsets", &back.offsets, &lists.offsets),
+        ("counts", &back.counts, &lists.counts),
+        ("indices", &back.indices, &lists.indices),
+    ]
+    .into_iter()
+    .find_map(|(name, gpu, cpu)| {
+        if gpu.len() != cpu.len() {
+            return Some(format!(
+                "{name}: {} on the GPU, {} uploaded",
+                gpu.len(),
+                cpu.len()
+            ));
+        }
+        let i = gpu.iter().zip(cpu).position(|(g, c)| g != c)?;
+        Some(format!(
+            "{name}[{i}] is {} on the GPU, {} uploaded",
+            gpu[i], cpu[i]
+        ))
+    })
 }
 
 /// Renders `frame`; a refusal says `what` was refused and, from [`render_hint`], what `stress`
@@ -543,6 +593,15 @@ fn print_table(r: &Report) {
         format!("{:.2}", s.gpu_wall_ms),
         String::new(),
     );
+    let pairs = a.pairs;
+    row(
+        "GPU lists read back",
+        format!("{:.1}", s.gpu_readback_ms),
+        match &r.gpu_lists_difference {
+            None => format!("identical to the uploaded lists ({pairs} pairs)"),
+            Some(d) => format!("DIFFERENT from the uploaded lists: {d}"),
+        },
+    );
     row(
         &format!("oracle check ({})", c.mode),
         format!("{:.1}", s.check_ms),
@@ -562,15 +621,48 @@ fn print_table(r: &Report) {
             .map_or("unknown".to_string(), |b| format!("{:.1} MiB", mib(b)))
     );
     if r.passed {
-        println!("PASS: no light missing from any checked cluster");
-    } else {
+        println!(
+            "PASS: no light missing from any checked cluster, and the GPU holds the lists as \
+             uploaded"
+        );
+    } else if c.misses > 0 {
         println!("FAIL: {} miss(es)", c.misses);
+    } else {
+        println!("FAIL: the GPU's lists differ from the uploaded ones");
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The comparison names the first array and position where the GPU's copy differs, and
+    /// finds nothing in an equal copy.
+    #[test]
+    fn a_difference_in_the_read_back_lists_is_named() {
+        let mut lists = LightLists::new();
+        lists.offsets = vec![0, 2, 3];
+        lists.counts = vec![2, 1, 0];
+        lists.indices = vec![4, 7, 4];
+        let same = ListsReadBack {
+            offsets: lists.offsets.clone(),
+            counts: lists.counts.clone(),
+            indices: lists.indices.clone(),
+        };
+        assert_eq!(lists_difference(&same, &lists), None);
+        let mut changed = same.clone();
+        changed.indices[2] = 5;
+        assert_eq!(
+            lists_difference(&changed, &lists).as_deref(),
+            Some("indices[2] is 5 on the GPU, 4 uploaded")
+        );
+        let mut short = same.clone();
+        short.counts.pop();
+        assert_eq!(
+            lists_difference(&short, &lists).as_deref(),
+            Some("counts: 2 on the GPU, 3 uploaded")
+        );
+    }
 
     #[test]
     fn a_refused_render_says_what_to_change() {

@@ -640,7 +640,7 @@ fn assert_plot_shows(svg: &str, rows: &[Value], scenes: &[&str], methods: &[&str
 }
 
 /// The stage times every `myriad stress --json` report carries.
-const STRESS_STAGES: [&str; 8] = [
+const STRESS_STAGES: [&str; 9] = [
     "scene_ms",
     "assign_ms",
     "assign_again_ms",
@@ -648,6 +648,7 @@ const STRESS_STAGES: [&str; 8] = [
     "upload_ms",
     "encode_ms",
     "gpu_wall_ms",
+    "gpu_readback_ms",
     "check_ms",
 ];
 
@@ -696,6 +697,9 @@ fn stress_checks_every_cluster_against_the_oracle() {
         (Some(64), Some(36))
     );
     assert_eq!(r["passed"], true);
+    // The GPU shaded with the lists uploaded: read back, every array equal.
+    assert_eq!(r["gpu_lists_identical"], true);
+    assert_eq!(r["gpu_lists_difference"], Value::Null);
     let check = &r["check"];
     assert_eq!(check["mode"], "full");
     assert_eq!(check["misses"], 0);
@@ -927,6 +931,7 @@ fn stress_reports_the_stage_times_its_progress_lines_announced() {
         ms("gpu_wall_ms") - ms("encode_ms"),
         "GPU render (clustered)",
     );
+    same(ms("gpu_readback_ms"), "GPU lists read back");
     same(ms("check_ms"), "oracle check (every cluster, exact lists)");
     // Each stage is announced as it begins, before its time; the note under the upload carries
     // the report's byte count.
@@ -983,7 +988,10 @@ fn stress_without_json_prints_the_table_and_its_verdict() {
             "4608 of 4608 clusters",
             "0 misses",
             "peak memory (VmHWM): ",
-            "PASS: no light missing from any checked cluster",
+            "GPU lists read back",
+            "identical to the uploaded lists",
+            "PASS: no light missing from any checked cluster, and the GPU holds the lists as \
+             uploaded",
         ],
     );
     // The lists' size in MiB: 4 bytes for each of 2 × 4608 clusters' offset and count, and for

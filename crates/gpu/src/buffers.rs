@@ -13,7 +13,7 @@ use std::num::NonZeroU64;
 /// The smallest buffer created: storage bindings may not be empty.
 const MIN_BYTES: u64 = 256;
 
-/// A `STORAGE | COPY_DST` buffer that is replaced by a larger one when needed.
+/// A `STORAGE | COPY_DST | COPY_SRC` buffer that is replaced by a larger one when needed.
 #[derive(Debug)]
 pub struct GrowableBuffer {
     label: &'static str,
@@ -33,7 +33,10 @@ impl GrowableBuffer {
         device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            // COPY_SRC: the renderer reads its lists back on request (`read_back_lists`).
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         })
     }

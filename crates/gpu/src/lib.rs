@@ -76,7 +76,9 @@ pub use pipelines::{ShadingMode, encodes_srgb};
 #[cfg(feature = "image")]
 pub use readback::{encode_png, save_png};
 pub use readback::{read_depth, read_rgba8, read_texels};
-pub use renderer::{FrameDesc, FrameReport, Renderer, ShadingSettings, frame_uniforms};
+pub use renderer::{
+    FrameDesc, FrameReport, ListsReadBack, Renderer, ShadingSettings, frame_uniforms,
+};
 pub use scene::{Blend, Draw, GpuScene, MaterialDesc, SceneGeometry, TextureRgba8};
 pub use targets::{DEPTH_FORMAT, GBuffer, HEADLESS_FORMAT, HeadlessTarget};
 pub use timing::PassTimes;

@@ -1,8 +1,11 @@
 //! The frame: upload what changed, G-buffer, deferred shading (clustered, tiled, brute force or
 //! heat map), forward pass for blended geometry, pass timestamps.
 
+mod lists_readback;
 mod passes;
 mod target_check;
+
+pub use lists_readback::ListsReadBack;
 
 use crate::buffers::{GrowableBuffer, stage};
 use crate::frame_input::{ClusterLists, LightColumns, fill_gpu_lights};
@@ -790,6 +793,7 @@ impl Renderer {
                 camera: *frame.camera,
                 max_count: lists.max_count(),
                 lights_named: lists.lights_named(),
+                pairs: lists.indices.len(),
             });
         }
         // Once per frame, however much it uploads: the generation counts frames.
@@ -853,6 +857,8 @@ struct UploadedLists {
     max_count: u32,
     /// One more than the largest light index.
     lights_named: usize,
+    /// Light indices uploaded.
+    pairs: usize,
 }
 
 /// The error of a clustered frame without lists for its grid (none uploaded, or for another grid).
