@@ -115,7 +115,7 @@ enum Caller<'a> {
 
 /// A thread of the benchmark's own that is also worker 0 of a pool of one worker per core
 /// (`ThreadPoolBuilder::use_current_thread`): an engine's main thread made a member of its job
-/// pool, as README's "Things to know" suggests. Its calls start their parallel regions on the
+/// pool, as "Things to know" in docs/engine-guide.md suggests. Its calls start their parallel regions on the
 /// spot, as a worker's do, with no hand-off. It owns its scene, assigner and lists (a thread
 /// that joins a pool stays in it, so the timed loop runs there, not on criterion's thread).
 struct PoolMember {
@@ -242,7 +242,7 @@ fn targets(c: &mut Criterion) {
     let (all_cores, one_thread) = (pool(TARGET_THREADS), pool(1));
     let worker = Caller::Worker(&all_cores);
     // A parallel timing follows the link between the workers' cores, which a shared machine
-    // changes from minute to minute (README, "Measured"): print it with the timings.
+    // changes from minute to minute (docs/results.md, "Measured"): print it with the timings.
     let link = || all_cores.install(myriad::core_link::measure);
     eprintln!("targets: thread link before {:?}", link());
 

@@ -1,5 +1,5 @@
 //! The assignment dump: the JSON file `myriad assign` writes and `myriad check` reads
-//! (format in the README, "`myriad assign`": `grid`, the plane edges and the CSR lists).
+//! (format in docs/cli.md, "`myriad assign`": `grid`, the plane edges and the CSR lists).
 //!
 //! The reader is strict where the format's description is silent, by decision: an unknown key is an error (a
 //! misspelt `offests` would otherwise leave the lists unchecked behind a default), and counts and

@@ -4,7 +4,7 @@
 //! Where shading dominates — a software rasteriser, long lists, many lights per pixel — they save
 //! more than they cost: on llvmpipe, Sponza's frame loses 12%. On a fast GPU they cost more: on an
 //! H100 the prepass and read-back added 1.5–1.8 ms and the CPU mask 0.4–1.0 ms, to save at most
-//! 0.3 ms of shading (README, "On a real GPU"). Which side a frame falls on depends on the GPU,
+//! 0.3 ms of shading (docs/results.md, "On a real GPU"). Which side a frame falls on depends on the GPU,
 //! the scene and the view, none of which the renderer can predict, so it is measured instead:
 //!
 //! 1. **Probe**: frames alternate without and with the prepass (without first) until each side

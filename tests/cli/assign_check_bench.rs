@@ -24,7 +24,7 @@ fn every_method_passes_the_oracle_check() {
                 assert_eq!(u64_field(&cmp, "false_positives"), 0, "{context}");
                 assert_eq!(cmp["false_positive_ratio"].as_f64(), Some(0.0), "{context}");
             }
-            // The dump has the documented shape (README, "`myriad assign`").
+            // The dump has the documented shape (docs/cli.md, "`myriad assign`").
             let d = read_json(&dump);
             assert_eq!(d["grid"], serde_json::json!([24, 12, 16]));
             assert_eq!(d["x_edges"].as_array().unwrap().len(), 25);

@@ -259,7 +259,7 @@ impl std::error::Error for InvalidFrame {}
 /// frame itself alongside helper jobs it spawns on the global pool ([`OutsideCalls::Join`]:
 /// a few small allocations: rayon's boxed jobs) or hands the frame to a worker
 /// ([`OutsideCalls::HandOff`]: no allocation, two cross-thread wake-ups); made a member of the
-/// pool (`ThreadPoolBuilder::use_current_thread`) it starts its frames as a worker does (README,
+/// pool (`ThreadPoolBuilder::use_current_thread`) it starts its frames as a worker does (docs/engine-guide.md,
 /// "Things to know", has the three timed side by side).
 #[derive(Default)]
 pub struct Assigner {

@@ -240,7 +240,7 @@ fn one_assigner_switching_methods_and_grids_lists_as_fresh_ones_do() {
 }
 
 /// An engine's main thread made worker 0 of its own pool (`ThreadPoolBuilder::use_current_thread`,
-/// as README's "Things to know" describes) assigns on that pool, with no hand-off:
+/// as "Things to know" in docs/engine-guide.md describes) assigns on that pool, with no hand-off:
 /// the frame is split for the pool's seven threads (a count no CI machine's global pool has) and
 /// runs on them, and the lists are the ones a one-thread pool writes. The thread is spawned for
 /// the test, since a thread that joins a pool stays in it.

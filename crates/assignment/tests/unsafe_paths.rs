@@ -7,7 +7,7 @@
 //! Natively these frames take milliseconds and only repeat what `determinism.rs` and
 //! `outside_calls.rs` check at larger sizes. Their point is the interpreter, which checks every
 //! pointer use of those abstractions for undefined behaviour and every cross-thread access for
-//! data races (minutes; README, "Reliability"). Whether a helper job enters a region here is up
+//! data races (minutes; docs/reliability.md, "Miri"). Whether a helper job enters a region here is up
 //! to the scheduler; `fan_out`'s unit test `a_panicking_item_panics_the_caller` makes one take an
 //! item in every run, so run those too:
 //!

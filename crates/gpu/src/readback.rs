@@ -127,6 +127,16 @@ fn copy_texels(
 
 /// Maps a `MAP_READ` buffer, waits, and returns a copy of its contents.
 pub(crate) fn map_and_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    map_and_read_with(ctx, buffer, <[u8]>::to_vec)
+}
+
+/// Maps a `MAP_READ` buffer, waits, and returns what `read` makes of its contents (without the
+/// whole copy [`map_and_read`] makes first: a million lights' lists are 88 MiB).
+pub(crate) fn map_and_read_with<T>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    read: impl FnOnce(&[u8]) -> T,
+) -> Result<T, GpuError> {
     let slice = buffer.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |result| {
@@ -136,12 +146,13 @@ pub(crate) fn map_and_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Ve
     rx.recv()
         .map_err(|e| GpuError::Readback(e.to_string()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let bytes = slice
+    let view = slice
         .get_mapped_range()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .to_vec();
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let out = read(&view);
+    drop(view);
     buffer.unmap();
-    Ok(bytes)
+    Ok(out)
 }
 
 #[cfg(feature = "image")]

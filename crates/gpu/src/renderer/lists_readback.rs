@@ -4,7 +4,7 @@
 
 use super::Renderer;
 use crate::out_of_memory::catching;
-use crate::readback::map_and_read;
+use crate::readback::map_and_read_with;
 use crate::{ClusterLists, GpuContext, GpuError};
 
 /// A copy of the lists on the GPU ([`Renderer::read_back_lists`]), CSR as uploaded.
@@ -60,25 +60,27 @@ impl Renderer {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("lists read-back"),
         });
-        let mut at = 0;
-        for (source, size) in [&self.offsets, &self.counts, &self.indices]
-            .into_iter()
-            .zip(sizes)
-        {
+        let starts = [0, sizes[0], sizes[0] + sizes[1]];
+        let sources = [&self.offsets, &self.counts, &self.indices];
+        for ((source, start), size) in sources.into_iter().zip(starts).zip(sizes) {
             if size > 0 {
-                encoder.copy_buffer_to_buffer(source.buffer(), 0, &buffer, at, size);
+                encoder.copy_buffer_to_buffer(source.buffer(), 0, &buffer, start, size);
             }
-            at += size;
         }
         ctx.queue.submit([encoder.finish()]);
-        let bytes = map_and_read(ctx, &buffer)?;
-        let words: &[u32] = bytemuck::cast_slice(&bytes[..total as usize]);
-        let (offsets, rest) = words.split_at(clusters as usize);
-        let (counts, indices) = rest.split_at(clusters as usize);
-        Ok(Some(ListsReadBack {
-            offsets: offsets.to_vec(),
-            counts: counts.to_vec(),
-            indices: indices.to_vec(),
-        }))
+        // Each array copied straight out of the mapping (`pod_collect_to_vec` whatever the
+        // mapping's alignment).
+        let read = |bytes: &[u8]| {
+            let [offsets, counts, indices] = [0, 1, 2].map(|i| {
+                let range = starts[i] as usize..(starts[i] + sizes[i]) as usize;
+                bytemuck::pod_collect_to_vec::<u8, u32>(&bytes[range])
+            });
+            ListsReadBack {
+                offsets,
+                counts,
+                indices,
+            }
+        };
+        Ok(Some(map_and_read_with(ctx, &buffer, read)?))
     }
 }
