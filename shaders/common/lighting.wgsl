@@ -56,6 +56,8 @@ fn shininess(roughness: f32) -> f32 {
 }
 
 // Radiance from one light reflected toward the camera (at the origin of camera-relative space).
+// Its Rust twin is `myriad_gpu::lighting_check::shade_light`; `crates/gpu/tests/lighting.rs` runs
+// this one in a compute pass and compares the two.
 fn shade_light(light: Light, s: Surface) -> vec3<f32> {
     let to_light = light.position - s.position;
     let dist2 = dot(to_light, to_light);
