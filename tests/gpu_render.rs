@@ -493,13 +493,11 @@ fn textures_beyond_the_device_limit_are_refused_or_scaled_down() {
         .unwrap();
 }
 
-/// The uploaded scene counts its triangles and knows whether it has blended draws, and those are
-/// drawn: the atrium's frame runs the forward pass and differs from the same scene without its
-/// blended draws, whose frame runs none.
 /// A base-colour texture reaches the G-buffer as authored: every opaque material samples a 3×2
-/// texture of one colour (rows of 12 bytes, not a multiple of wgpu's 256-byte copy alignment),
-/// and every drawn pixel's albedo is that colour times the material's factor. The texture is
-/// written by the renderer's own upload, made to return out of memory as an error
+/// texture of one colour, and every drawn pixel's albedo is that colour times the material's
+/// factor. Its rows of 12 bytes are padded to wgpu's 256-byte copy alignment in the staging copy
+/// (zeros between them: a wrong row stride would read them as black). The texture goes through
+/// the renderer's own upload, made to return out of memory as an error
 /// (`tests/gpu_out_of_memory.rs`).
 #[test]
 fn base_colour_textures_reach_the_gbuffer() {
@@ -540,6 +538,9 @@ fn base_colour_textures_reach_the_gbuffer() {
     }
 }
 
+/// The uploaded scene counts its triangles and knows whether it has blended draws, and those are
+/// drawn: the atrium's frame runs the forward pass and differs from the same scene without its
+/// blended draws, whose frame runs none.
 #[test]
 fn an_uploaded_scene_counts_its_triangles_and_draws_its_blended_geometry() {
     use myriad::gpu::Blend;

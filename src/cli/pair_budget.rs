@@ -24,10 +24,12 @@ pub const ASSIGN_BYTES_PER_PAIR: u64 = 24;
 /// (`/usr/bin/time -v`) for 92.16 M pairs of every method, 13.3 bytes a pair.
 pub const COMPARE_BYTES_PER_PAIR: u64 = 16;
 
-/// What a pair costs `stress` at its peak, with room: the lists (4 bytes), the `exact` method's
-/// for the full check (4), the upload's staging copy and, on a software adapter, the GPU buffer
-/// in the same memory (8). Measured: 3.49 GB peak for 728 M pairs before the upload, 4.8 bytes a
-/// pair.
+/// What a pair costs `stress` at its peak, with room: the lists (4 bytes); then the upload's
+/// staging copy and, on a software adapter, the GPU buffer in the same memory (8), and while the
+/// GPU's lists are compared, their read-back buffer and the array read from it (8: 20 in all);
+/// after the GPU is dropped, the `exact` method's lists for the full check (4). Measured: 3.49 GB
+/// peak for 728 M pairs before the upload, 4.8 bytes a pair; the read-back raised a million
+/// lights' run (22.9 M pairs) from 634 to 809 MiB, 8 bytes a pair.
 pub const STRESS_BYTES_PER_PAIR: u64 = 24;
 
 /// What u32 offsets hold: the assigner's own limit.

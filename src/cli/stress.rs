@@ -263,13 +263,16 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // 3. GPU set-up and a warm-up frame (same lights, empty lists).
     let (mut viewer, seconds) = progress.stage("GPU setup (geometry, warm-up)", || {
         let mut viewer = Viewer::new(ctx, &scene)?;
-        // Empty lists over the real indices: every buffer the measured frame needs is grown
-        // here (the indices' is the largest), and no pixel shades a light.
+        // Empty lists over as many zero indices: every buffer the measured frame needs is
+        // grown here (the indices' is the largest), and no pixel shades a light. Zeros, not the
+        // real indices, so that the read-back after the measured frame would see it had the
+        // measured upload of the indices been lost.
         let empty = vec![0u32; grid.cluster_count()];
+        let zeros = vec![0u32; lists.indices.len()];
         let no_lists = ClusterLists {
             offsets: &empty,
             counts: &empty,
-            indices: &lists.indices,
+            indices: &zeros,
         };
         let warm_up = FrameDesc {
             settings: viewer.settings,

@@ -41,6 +41,11 @@ impl GrowableBuffer {
         })
     }
 
+    /// What the buffer holds, for messages ("light indices").
+    pub fn label(&self) -> &'static str {
+        self.label
+    }
+
     /// The current buffer.
     pub fn buffer(&self) -> &wgpu::Buffer {
         &self.buffer

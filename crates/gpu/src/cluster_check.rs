@@ -2,9 +2,9 @@
 //! many (pixel, view depth) samples, so tests can compare the GPU's answer with
 //! `ClusterGrid::cluster_of_pixel` sample by sample.
 
+use crate::check_pass;
 use crate::layout::ClusterCheckUniforms;
-use crate::out_of_memory::{buffer_init, catching};
-use crate::readback::map_and_read;
+use crate::out_of_memory::buffer_init;
 use crate::shaders::PassShader;
 use crate::{GpuContext, GpuError};
 use myriad_cluster_math::{Camera, ClusterGrid};
@@ -82,15 +82,7 @@ pub fn gpu_cluster_ids_of(
         )));
     }
     let device = &ctx.device;
-    let groups = (pixels.len() as u64).div_ceil(64);
-    let max_groups = device.limits().max_compute_workgroups_per_dimension as u64;
-    if groups > max_groups {
-        return Err(GpuError::InvalidInput(format!(
-            "{} samples need {groups} workgroups, more than the {max_groups} of one dispatch",
-            pixels.len()
-        )));
-    }
-    let groups = groups as u32;
+    let groups = check_pass::workgroups(ctx, pixels.len(), "samples")?;
     let mut edges = Vec::new();
     grid.fill_slice_edges(&mut edges);
     let uniforms = ClusterCheckUniforms {
@@ -100,7 +92,8 @@ pub fn gpu_cluster_ids_of(
         grid_dims: [grid.dims().x, grid.dims().y, grid.dims().z, 0],
         near_far,
     };
-    let init = |label, contents: &[u8], usage| buffer_init(device, label, contents, usage);
+    let init =
+        |label, contents: &[u8], usage| buffer_init(device, &ctx.queue, label, contents, usage);
     let storage = wgpu::BufferUsages::STORAGE;
     let params = init(
         "check params",
@@ -110,67 +103,8 @@ pub fn gpu_cluster_ids_of(
     let pixel_buffer = init("check pixels", bytemuck::cast_slice(pixels), storage)?;
     let depth_buffer = init("check depths", bytemuck::cast_slice(depths), storage)?;
     let edge_buffer = init("check edges", bytemuck::cast_slice(&edges), storage)?;
+    let inputs = [&params, &pixel_buffer, &depth_buffer, &edge_buffer];
     let bytes = pixels.len() as u64 * 4;
-    let buffer = |label: &'static str, usage| {
-        let what = || format!("the {label} buffer ({bytes} bytes)");
-        catching(device, what, || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage,
-                mapped_at_creation: false,
-            })
-        })
-    };
-    let out = buffer("check ids", storage | wgpu::BufferUsages::COPY_SRC)?;
-    let readback = buffer(
-        "check readback",
-        wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-    )?;
-    let module = PassShader::ClusterIndexCheck.module(device);
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("cluster index check"),
-        layout: None,
-        module: &module,
-        entry_point: Some("cs_main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("cluster index check"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: pixel_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: depth_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: edge_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: out.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(groups, 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&out, 0, &readback, 0, bytes);
-    ctx.queue.submit([encoder.finish()]);
-    let data = map_and_read(ctx, &readback)?;
-    Ok(bytemuck::cast_slice(&data).to_vec())
+    let data = check_pass::run(ctx, PassShader::ClusterIndexCheck, &inputs, bytes, groups)?;
+    Ok(bytemuck::pod_collect_to_vec(&data))
 }

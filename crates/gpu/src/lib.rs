@@ -43,6 +43,7 @@
 #![warn(missing_docs)]
 
 mod buffers;
+mod check_pass;
 pub mod cluster_check;
 mod context;
 mod error;

@@ -4,86 +4,28 @@
 //! hit exactly (a light right behind the point on the view ray, a zero or NaN normal, a light at
 //! the point, a surface on the light's range).
 
+use crate::check_pass;
 use crate::layout::ShadeCase;
-use crate::out_of_memory::{buffer_init, catching};
-use crate::readback::map_and_read;
+use crate::out_of_memory::buffer_init;
 use crate::shaders::PassShader;
 use crate::{GpuContext, GpuError};
 use glam::Vec3;
 
 /// The radiance `shade_light` returns on the GPU for each case. Blocks until done. No cases, or
-/// more than one dispatch holds, is a [`GpuError::InvalidInput`].
+/// more than one dispatch or one storage binding holds, is a [`GpuError::InvalidInput`].
 pub fn gpu_shade_light(ctx: &GpuContext, cases: &[ShadeCase]) -> Result<Vec<[f32; 3]>, GpuError> {
-    let device = &ctx.device;
-    let groups = (cases.len() as u64).div_ceil(64);
-    let max_groups = u64::from(device.limits().max_compute_workgroups_per_dimension);
-    if cases.is_empty() || groups > max_groups {
-        return Err(GpuError::InvalidInput(format!(
-            "{} cases: need 1 to {} (64 per workgroup, {max_groups} workgroups)",
-            cases.len(),
-            64 * max_groups
-        )));
-    }
+    let groups = check_pass::workgroups(ctx, cases.len(), "cases")?;
+    check_pass::check_binding(ctx, std::mem::size_of_val(cases) as u64, "the cases")?;
     let input = buffer_init(
-        device,
+        &ctx.device,
+        &ctx.queue,
         "lighting check cases",
         bytemuck::cast_slice(cases),
         wgpu::BufferUsages::STORAGE,
     )?;
     let bytes = cases.len() as u64 * 16;
-    let buffer = |label: &'static str, usage| {
-        let what = || format!("the {label} buffer ({bytes} bytes)");
-        catching(device, what, || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage,
-                mapped_at_creation: false,
-            })
-        })
-    };
-    let out = buffer(
-        "lighting check radiance",
-        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-    )?;
-    let readback = buffer(
-        "lighting check readback",
-        wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-    )?;
-    let module = PassShader::LightingCheck.module(device);
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("lighting check"),
-        layout: None,
-        module: &module,
-        entry_point: Some("cs_main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("lighting check"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: out.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(groups as u32, 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&out, 0, &readback, 0, bytes);
-    ctx.queue.submit([encoder.finish()]);
-    let data = map_and_read(ctx, &readback)?;
-    let texels: &[[f32; 4]] = bytemuck::cast_slice(&data);
+    let data = check_pass::run(ctx, PassShader::LightingCheck, &[&input], bytes, groups)?;
+    let texels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&data);
     Ok(texels.iter().map(|t| [t[0], t[1], t[2]]).collect())
 }
 

@@ -6,9 +6,8 @@
 
 use crate::GpuError;
 use crate::layout::{MaterialUniforms, Vertex};
-use crate::out_of_memory::{buffer_init, catching};
+use crate::out_of_memory::{buffer_init, catching, texture_init};
 use glam::Vec3;
-use wgpu::util::DeviceExt;
 
 /// One draw: a range of the index buffer with one material.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -241,12 +240,14 @@ impl GpuScene {
         };
         let vertex_buffer = buffer_init(
             device,
+            queue,
             "scene vertices",
             bytemuck::cast_slice(vertices),
             wgpu::BufferUsages::VERTEX,
         )?;
         let index_buffer = buffer_init(
             device,
+            queue,
             "scene indices",
             bytemuck::cast_slice(indices),
             wgpu::BufferUsages::INDEX,
@@ -273,15 +274,31 @@ impl GpuScene {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        // Every material's uniforms in one buffer, each at an offset a uniform binding may
+        // start at: one allocation and one upload for any number of materials.
+        let size = std::mem::size_of::<MaterialUniforms>();
+        let stride =
+            size.next_multiple_of(device.limits().min_uniform_buffer_offset_alignment as usize);
+        let mut bytes = vec![0u8; stride * geometry.materials.len()];
+        for (m, at) in geometry
+            .materials
+            .iter()
+            .zip(bytes.chunks_exact_mut(stride))
+        {
+            at[..size].copy_from_slice(bytemuck::bytes_of(&m.uniforms));
+        }
+        let uniforms = buffer_init(
+            device,
+            queue,
+            "materials",
+            &bytes,
+            wgpu::BufferUsages::UNIFORM,
+        )?;
         let material_groups = geometry
             .materials
             .iter()
-            .map(|m| {
-                let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("material"),
-                    contents: bytemuck::bytes_of(&m.uniforms),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
+            .enumerate()
+            .map(|(i, m)| {
                 let texture = m
                     .base_color_texture
                     .map_or(&white, |t| &textures[t as usize]);
@@ -291,7 +308,11 @@ impl GpuScene {
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 0,
-                            resource: uniforms.as_entire_binding(),
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: &uniforms,
+                                offset: (i * stride) as u64,
+                                size: wgpu::BufferSize::new(size as u64),
+                            }),
                         },
                         wgpu::BindGroupEntry {
                             binding: 1,
@@ -362,8 +383,8 @@ fn upload_texture(
             texture.pixels.len()
         )
     };
-    // Made, then written, each in its own scope (wgpu's `create_texture_with_data` does both,
-    // and writing into a texture that could not be made is a second, uncaught error).
+    // Made, then written (wgpu's `create_texture_with_data` does both, and writing into a
+    // texture that could not be made is a second, uncaught error).
     let made = catching(device, what, || {
         device.create_texture(&wgpu::TextureDescriptor {
             label: Some("base colour"),
@@ -376,19 +397,7 @@ fn upload_texture(
             view_formats: &[],
         })
     })?;
-    // The queue stages the pixels in host memory of its own until the next submit.
-    catching(device, what, || {
-        queue.write_texture(
-            made.as_image_copy(),
-            &texture.pixels,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * texture.width),
-                rows_per_image: None,
-            },
-            size,
-        )
-    })?;
+    texture_init(device, queue, &made, &texture.pixels, &what)?;
     Ok(made.create_view(&wgpu::TextureViewDescriptor::default()))
 }
 

@@ -130,6 +130,14 @@ fn random_lights_and_surfaces_shade_as_the_rust_twin() {
     assert!(lit > cases.len() / 4, "{lit} of {} cases lit", cases.len());
 }
 
+/// What an edge case must shade to.
+enum Want {
+    /// Exactly nothing.
+    Dark,
+    /// Its diffuse term, plus any part of its highlight (whose half vector has no direction).
+    DiffuseAndAtMostTheHighlight,
+}
+
 #[test]
 fn edge_cases_stay_finite_and_dark_where_they_must() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
@@ -139,34 +147,27 @@ fn edge_cases_stay_finite_and_dark_where_they_must() {
     let point = Vec3::new(0.0, 0.0, -2.0);
     let behind = gpu_light(Vec3::new(0.0, 0.0, -3.0), 5.0, white, None);
     let facing_light = Vec3::NEG_Z;
-    let named: Vec<(&str, ShadeCase, Option<[f32; 3]>)> = vec![
+    let named: Vec<(&str, ShadeCase, Want)> = vec![
         // l + v = 0 exactly: the half vector has no direction. WGSL leaves `normalize` of a
         // zero vector undefined (llvmpipe returns a finite vector; drivers that return NaN made
-        // the whole pixel NaN). Lit by its diffuse term alone.
+        // the whole pixel NaN). Lit by its diffuse term, and by a full highlight where a
+        // driver's rounding leaves l + v a step off zero.
         (
             "a light right behind the point on the view ray",
             case(behind, point, facing_light),
-            None,
+            Want::DiffuseAndAtMostTheHighlight,
         ),
-        (
-            "a NaN normal",
-            case(behind, point, Vec3::NAN),
-            Some([0.0; 3]),
-        ),
-        (
-            "a zero normal",
-            case(behind, point, Vec3::ZERO),
-            Some([0.0; 3]),
-        ),
+        ("a NaN normal", case(behind, point, Vec3::NAN), Want::Dark),
+        ("a zero normal", case(behind, point, Vec3::ZERO), Want::Dark),
         (
             "a surface facing away from the light",
             case(behind, point, -facing_light),
-            Some([0.0; 3]),
+            Want::Dark,
         ),
         (
             "the light at the point",
             case(gpu_light(point, 5.0, white, None), point, facing_light),
-            Some([0.0; 3]),
+            Want::Dark,
         ),
         (
             "a surface on the light's range",
@@ -175,7 +176,7 @@ fn edge_cases_stay_finite_and_dark_where_they_must() {
                 point,
                 facing_light,
             ),
-            Some([0.0; 3]),
+            Want::Dark,
         ),
         (
             "a spot aimed away from the point",
@@ -189,7 +190,7 @@ fn edge_cases_stay_finite_and_dark_where_they_must() {
                 point,
                 facing_light,
             ),
-            Some([0.0; 3]),
+            Want::Dark,
         ),
         (
             "a spot aimed at the point, the same light as the first case inside its inner cone",
@@ -203,7 +204,7 @@ fn edge_cases_stay_finite_and_dark_where_they_must() {
                 point,
                 facing_light,
             ),
-            None,
+            Want::DiffuseAndAtMostTheHighlight,
         ),
     ];
     let cases: Vec<ShadeCase> = named.iter().map(|(_, c, _)| *c).collect();
@@ -212,13 +213,21 @@ fn edge_cases_stay_finite_and_dark_where_they_must() {
         let cpu = shade_light(c);
         assert!(g.iter().all(|v| v.is_finite()), "{what}: GPU {g:?}");
         match want {
-            Some(exact) => {
-                assert_eq!(g, exact, "{what}: GPU");
-                assert_eq!(&cpu, exact, "{what}: Rust");
+            Want::Dark => {
+                assert_eq!(g, &[0.0; 3], "{what}: GPU");
+                assert_eq!(cpu, [0.0; 3], "{what}: Rust");
             }
-            None => {
+            Want::DiffuseAndAtMostTheHighlight => {
+                // The Rust twin's l + v is exactly zero: the diffuse term alone (albedo 0.8 in
+                // red). A highlight adds at most the dielectric's 4% of the light, every channel.
                 assert!(cpu[0] > 0.0, "{what}: Rust {cpu:?}");
-                assert!(close(*g, cpu), "{what}: GPU {g:?}, Rust {cpu:?}");
+                let highlight = 0.04 * cpu[0] / 0.8;
+                for (g, c) in g.iter().zip(cpu) {
+                    assert!(
+                        *g >= c * (1.0 - 2e-3) && *g <= c + highlight * (1.0 + 2e-3),
+                        "{what}: GPU {g}, Rust (diffuse alone) {c}, highlight up to {highlight}"
+                    );
+                }
             }
         }
     }

@@ -38,49 +38,49 @@ impl Renderer {
         let Some(uploaded) = self.lists_uploaded else {
             return Ok(None);
         };
-        let clusters = uploaded.grid.cluster_count() as u64;
         let word = std::mem::size_of::<u32>() as u64;
-        let sizes = [
-            clusters * word,
-            clusters * word,
-            uploaded.pairs as u64 * word,
+        let clusters = uploaded.grid.cluster_count() as u64;
+        let arrays = [
+            (&self.offsets, clusters * word),
+            (&self.counts, clusters * word),
+            (&self.indices, uploaded.pairs as u64 * word),
         ];
-        // One read-back buffer, each array at a 4-byte-aligned offset (copies need that much).
-        let total: u64 = sizes.iter().sum();
+        // A read-back buffer per array: each is no larger than the buffer it copies, so within
+        // the device's buffer limit (one for all three could pass it).
         let device = &ctx.device;
-        let what = || format!("the lists' read-back buffer ({total} bytes)");
-        let buffer = catching(device, what, || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("lists read-back"),
-                size: total.max(wgpu::COPY_BUFFER_ALIGNMENT),
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            })
-        })?;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("lists read-back"),
         });
-        let starts = [0, sizes[0], sizes[0] + sizes[1]];
-        let sources = [&self.offsets, &self.counts, &self.indices];
-        for ((source, start), size) in sources.into_iter().zip(starts).zip(sizes) {
-            if size > 0 {
-                encoder.copy_buffer_to_buffer(source.buffer(), 0, &buffer, start, size);
+        let mut copies = Vec::with_capacity(arrays.len());
+        for (source, bytes) in arrays {
+            let size = bytes.max(wgpu::COPY_BUFFER_ALIGNMENT);
+            let what = || format!("the read-back of the {} ({size} bytes)", source.label());
+            let copy = catching(device, what, || {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("lists read-back"),
+                    size,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                })
+            })?;
+            if bytes > 0 {
+                encoder.copy_buffer_to_buffer(source.buffer(), 0, &copy, 0, bytes);
             }
+            copies.push((copy, bytes as usize));
         }
         ctx.queue.submit([encoder.finish()]);
-        // Each array copied straight out of the mapping (`pod_collect_to_vec` whatever the
+        // Each array copied straight out of its mapping (`pod_collect_to_vec` whatever the
         // mapping's alignment).
-        let read = |bytes: &[u8]| {
-            let [offsets, counts, indices] = [0, 1, 2].map(|i| {
-                let range = starts[i] as usize..(starts[i] + sizes[i]) as usize;
-                bytemuck::pod_collect_to_vec::<u8, u32>(&bytes[range])
-            });
-            ListsReadBack {
-                offsets,
-                counts,
-                indices,
-            }
-        };
-        Ok(Some(map_and_read_with(ctx, &buffer, read)?))
+        let mut read = copies.iter().map(|(copy, bytes)| {
+            map_and_read_with(ctx, copy, |mapped| {
+                bytemuck::pod_collect_to_vec::<u8, u32>(&mapped[..*bytes])
+            })
+        });
+        let mut next = || read.next().expect("three arrays");
+        Ok(Some(ListsReadBack {
+            offsets: next()?,
+            counts: next()?,
+            indices: next()?,
+        }))
     }
 }
