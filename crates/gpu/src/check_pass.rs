@@ -3,7 +3,7 @@
 //! after them, `cs_main` dispatched in workgroups of 64, the output read back.
 
 use crate::out_of_memory::catching;
-use crate::readback::map_and_read;
+use crate::readback::{map_and_read, readback_buffer};
 use crate::shaders::PassShader;
 use crate::{GpuContext, GpuError};
 
@@ -46,19 +46,16 @@ pub(crate) fn run(
 ) -> Result<Vec<u8>, GpuError> {
     let device = &ctx.device;
     let label = shader.file_name();
-    let buffer = |usage| {
-        let what = || format!("the output of {label} ({out_bytes} bytes)");
-        catching(device, what, || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: out_bytes,
-                usage,
-                mapped_at_creation: false,
-            })
+    let what = || format!("the output of {label} ({out_bytes} bytes)");
+    let out = catching(device, what, || {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
         })
-    };
-    let out = buffer(wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC)?;
-    let readback = buffer(wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ)?;
+    })?;
+    let readback = readback_buffer(device, out_bytes, what)?;
     let module = shader.module(device);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(label),

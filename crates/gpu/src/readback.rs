@@ -87,14 +87,7 @@ fn copy_texels(
         )));
     }
     let what = || format!("the read-back buffer of a {width} × {height} texture ({size} bytes)");
-    let buffer = catching(&ctx.device, what, || {
-        ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        })
-    })?;
+    let buffer = readback_buffer(&ctx.device, size, what)?;
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -123,6 +116,23 @@ fn copy_texels(
         out.extend_from_slice(&bytes[start..start + row as usize]);
     }
     Ok(out)
+}
+
+/// A `COPY_DST | MAP_READ` buffer of `size` bytes (at least 4) to copy GPU data into and map;
+/// running out of memory for it is [`GpuError::OutOfMemory`] naming `what`.
+pub(crate) fn readback_buffer(
+    device: &wgpu::Device,
+    size: u64,
+    what: impl FnOnce() -> String,
+) -> Result<wgpu::Buffer, GpuError> {
+    catching(device, what, || {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read-back"),
+            size: size.max(wgpu::COPY_BUFFER_ALIGNMENT),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        })
+    })
 }
 
 /// Maps a `MAP_READ` buffer, waits, and returns a copy of its contents.

@@ -3,8 +3,7 @@
 //! through the staging ring whole (`myriad stress` compares them with the CPU's, pair by pair).
 
 use super::Renderer;
-use crate::out_of_memory::catching;
-use crate::readback::map_and_read_with;
+use crate::readback::{map_and_read_with, readback_buffer};
 use crate::{ClusterLists, GpuContext, GpuError};
 
 /// A copy of the lists on the GPU ([`Renderer::read_back_lists`]), CSR as uploaded.
@@ -53,16 +52,8 @@ impl Renderer {
         });
         let mut copies = Vec::with_capacity(arrays.len());
         for (source, bytes) in arrays {
-            let size = bytes.max(wgpu::COPY_BUFFER_ALIGNMENT);
-            let what = || format!("the read-back of the {} ({size} bytes)", source.label());
-            let copy = catching(device, what, || {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("lists read-back"),
-                    size,
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                })
-            })?;
+            let what = || format!("the read-back of the {} ({bytes} bytes)", source.label());
+            let copy = readback_buffer(device, bytes, what)?;
             if bytes > 0 {
                 encoder.copy_buffer_to_buffer(source.buffer(), 0, &copy, 0, bytes);
             }
