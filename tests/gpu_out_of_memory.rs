@@ -80,11 +80,14 @@ struct AddressLimit {
 }
 
 impl AddressLimit {
-    fn new() -> Self {
-        Self::with_headroom(HEADROOM)
+    fn new(ctx: &GpuContext) -> Self {
+        Self::with_headroom(ctx, HEADROOM)
     }
 
-    fn with_headroom(headroom: u64) -> Self {
+    /// First waits for the device: wgpu frees dropped buffers (an earlier test's hundreds of
+    /// megabytes) only when it is polled, and freed inside the window they would widen it.
+    fn with_headroom(ctx: &GpuContext, headroom: u64) -> Self {
+        ctx.wait_idle().expect("the device is idle");
         let before = soft_address_limit();
         set_soft_address_limit(&(address_space() + headroom).to_string());
         Self { before }
@@ -124,20 +127,12 @@ fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
         .frame(&scene, Shading::Clustered, Method::Refined, false)
         .unwrap();
     // Every cluster lists every light: 4608 × 5400 indices, 99.5 MB (a 128 MB buffer).
-    let clusters = scene.grid.cluster_count();
-    let counts = vec![lights as u32; clusters];
-    let offsets: Vec<u32> = (0..clusters as u32).map(|c| c * lights as u32).collect();
-    let indices: Vec<u32> = (0..clusters).flat_map(|_| 0..lights as u32).collect();
-    let huge = ClusterLists {
-        offsets: &offsets,
-        counts: &counts,
-        indices: &indices,
-    };
+    let huge = FullLists::new(scene.grid.cluster_count(), lights as u32);
     let frame = FrameDesc::clustered(
         &scene.camera,
         &scene.grid,
         myriad::render::light_columns(&scene.lights),
-        huge,
+        huge.lists(),
     );
     let Viewer {
         ctx,
@@ -146,7 +141,7 @@ fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
         target,
         ..
     } = &mut viewer;
-    let limit = AddressLimit::new();
+    let limit = AddressLimit::new(ctx);
     let refused = renderer.render(ctx, geometry, &frame, &target.view);
     drop(limit);
     match refused {
@@ -225,7 +220,7 @@ fn staging_past_the_host_memory_is_an_error_and_the_renderer_recovers() {
         .render(ctx, geometry, &frame(first.lists()), &target.view)
         .unwrap();
     ctx.wait_idle().unwrap();
-    let limit = AddressLimit::new();
+    let limit = AddressLimit::new(ctx);
     let refused = renderer.render(ctx, geometry, &frame(second.lists()), &target.view);
     drop(limit);
     match refused {
@@ -267,7 +262,7 @@ fn scenes_and_targets_past_the_memory_are_errors() {
         pixels: vec![128; (side * side * 4) as usize],
     });
     let (ctx, renderer) = (&viewer.ctx, &viewer.renderer);
-    let limit = AddressLimit::new();
+    let limit = AddressLimit::new(ctx);
     let vertices = renderer.upload_scene(ctx, &huge_vertices).map(|_| ());
     let texture = renderer.upload_scene(ctx, &huge_texture).map(|_| ());
     let gbuffer = GBuffer::new(&ctx.device, side, side).map(|_| ());
@@ -275,16 +270,35 @@ fn scenes_and_targets_past_the_memory_are_errors() {
     drop(limit);
     // Room for the 102 MB vertex buffer but not for its staging copy as well: wgpu's own
     // `create_buffer_init` staged through a buffer of its own whose failure lost the device
-    // (every later call silently did nothing); the renderer's staging copy is an error.
-    let limit = AddressLimit::with_headroom(160 << 20);
-    let staged = renderer.upload_scene(ctx, &huge_vertices).map(|_| ());
-    drop(limit);
+    // (every later call silently did nothing); the renderer's staging copy is an error. How
+    // much room that takes depends on the blocks the allocator already holds (a freed buffer's
+    // block may be reused without growing the address space), so the room is swept: every
+    // attempt is made or refused as out of memory, and one is refused for the staging copy.
+    let mut staged = Vec::new();
+    for room in (112..=272).step_by(16) {
+        let limit = AddressLimit::with_headroom(ctx, room << 20);
+        let made = renderer.upload_scene(ctx, &huge_vertices).map(|_| ());
+        drop(limit);
+        staged.push((room, made));
+    }
+    let staging_refused = |m: &str| m.contains("the staging copy of the scene vertices buffer");
+    for (room, made) in &staged {
+        assert!(
+            matches!(made, Ok(()) | Err(GpuError::OutOfMemory(_))),
+            "{room} MiB of room: {made:?}"
+        );
+    }
+    assert!(
+        staged
+            .iter()
+            .any(|(_, made)| matches!(made, Err(GpuError::OutOfMemory(m)) if staging_refused(m))),
+        "no room between 112 and 272 MiB refused the staging copy alone: {staged:?}"
+    );
     for (refused, what) in [
         (vertices, "the scene vertices buffer"),
         (texture, "a 4096x4096 base-colour texture"),
         (gbuffer, "the gbuffer"),
         (target, "the headless target texture"),
-        (staged, "the staging copy of the scene vertices buffer"),
     ] {
         match refused {
             Err(GpuError::OutOfMemory(message)) => {
