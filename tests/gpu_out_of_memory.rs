@@ -22,7 +22,7 @@ use myriad::gpu::{
 };
 use myriad::render::{RenderScene, Shading, Viewer};
 use std::process::Command;
-use std::sync::Mutex;
+use std::sync::{Mutex, MutexGuard};
 
 /// Held by a test for its whole run: the address-space limit is the process's.
 static LIMIT: Mutex<()> = Mutex::new(());
@@ -114,15 +114,22 @@ fn software_device() -> Option<GpuContext> {
     Some(ctx)
 }
 
+/// This test's turn ([`LIMIT`], held until the guard drops), then the default scene with `lights`
+/// lights at 64×32 on the software device; `None` without one.
+fn atrium_viewer(lights: usize) -> Option<(MutexGuard<'static, ()>, RenderScene, Viewer)> {
+    let turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
+    let ctx = software_device()?;
+    let scene = RenderScene::default_scene(lights, 64, 32).unwrap();
+    let viewer = Viewer::new(ctx, &scene).unwrap();
+    Some((turn, scene, viewer))
+}
+
 #[test]
 fn lists_past_the_device_memory_are_an_error_and_the_renderer_recovers() {
-    let _turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(ctx) = software_device() else {
+    let lights = 5_400;
+    let Some((_turn, scene, mut viewer)) = atrium_viewer(lights) else {
         return;
     };
-    let lights = 5_400;
-    let scene = RenderScene::default_scene(lights, 64, 32).unwrap();
-    let mut viewer = Viewer::new(ctx, &scene).unwrap();
     viewer
         .frame(&scene, Shading::Clustered, Method::Refined, false)
         .unwrap();
@@ -195,13 +202,10 @@ impl FullLists {
 /// was, review), and the next frame renders.
 #[test]
 fn staging_past_the_host_memory_is_an_error_and_the_renderer_recovers() {
-    let _turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(ctx) = software_device() else {
+    let lights = 6_500;
+    let Some((_turn, scene, mut viewer)) = atrium_viewer(lights) else {
         return;
     };
-    let lights = 6_500;
-    let scene = RenderScene::default_scene(lights, 64, 32).unwrap();
-    let mut viewer = Viewer::new(ctx, &scene).unwrap();
     let clusters = scene.grid.cluster_count();
     // 4608 × 5400 indices (99.5 MB) grow the indices buffer to 128 MB and stage through a
     // 99.5 MB chunk; 4608 × 6500 (119.8 MB) then fit the buffer but no chunk the belt has.
@@ -244,12 +248,9 @@ fn staging_past_the_host_memory_is_an_error_and_the_renderer_recovers() {
 /// for its GPU lost the process).
 #[test]
 fn scenes_and_targets_past_the_memory_are_errors() {
-    let _turn = LIMIT.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(ctx) = software_device() else {
+    let Some((_turn, scene, viewer)) = atrium_viewer(10) else {
         return;
     };
-    let scene = RenderScene::default_scene(10, 64, 32).unwrap();
-    let viewer = Viewer::new(ctx, &scene).unwrap();
     // 3.2 M vertices (102 MB) and a 4096² texture (67 MB), each alone past the headroom.
     let mut huge_vertices = scene.geometry.clone();
     let vertex = huge_vertices.vertices[0];
