@@ -66,6 +66,11 @@ pub struct Args {
     /// surfaces: distance of the lights from the surface in metres [default: 0.2].
     #[arg(long, conflicts_with = "preset")]
     offset: Option<f32>,
+    /// surfaces: place lights on every face, also those whose lights would lie outside the
+    /// model's bounds [default, with the camera inside the bounds: only faces whose lights stay
+    /// inside, none on the outside of its outer walls].
+    #[arg(long, conflicts_with = "preset")]
+    all_faces: bool,
     /// clumps: number of clumps [default: 16].
     #[arg(long, conflicts_with = "preset")]
     clumps: Option<usize>,
@@ -145,6 +150,7 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     // An option of another field would be ignored, silently (audit g2): refused instead.
     for (given, option, field) in [
         (args.offset.is_some(), "--offset", "surfaces"),
+        (args.all_faces, "--all-faces", "surfaces"),
         (args.clumps.is_some(), "--clumps", "clumps"),
         (args.spread.is_some(), "--spread", "clumps"),
     ] {
@@ -157,11 +163,28 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
         args.spot_angles.is_none() || args.spots.is_some_and(|f| f != 0.0),
         "--spot-angles only applies with --spots F (a fraction of spot lights above 0)"
     );
+    // What the surface field left out, said in the summary line.
+    let mut faces_left_out = String::new();
     let placement = match field_name {
-        "surfaces" => Placement::Surfaces {
-            surfaces: SurfaceSampler::new(&model),
-            offset: args.offset.unwrap_or(0.2),
-        },
+        "surfaces" => {
+            let offset = args.offset.unwrap_or(0.2);
+            let all = SurfaceSampler::new(&model);
+            let surfaces = if args.all_faces {
+                all
+            } else {
+                let kept = SurfaceSampler::for_view(&model, camera.position, offset);
+                let dropped = all.triangle_count() - kept.triangle_count();
+                if dropped > 0 {
+                    faces_left_out = format!(
+                        " ({dropped} of {} faces left out: their lights would lie outside the \
+                         model's bounds, and the camera is inside them; --all-faces keeps them)",
+                        all.triangle_count()
+                    );
+                }
+                kept
+            };
+            Placement::Surfaces { surfaces, offset }
+        }
         "box" => Placement::Box(bounds),
         "frustum" => Placement::Frustum(camera),
         "clumps" => Placement::Clumps {
@@ -246,7 +269,7 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
         _ => String::new(),
     };
     let what = format!(
-        "{}{} lights, field {} in {}, camera {camera_name}, seed {}{suns}",
+        "{}{} lights, field {}{faces_left_out} in {}, camera {camera_name}, seed {}{suns}",
         if args.model_lights {
             format!("{own} of the model's own + ")
         } else {

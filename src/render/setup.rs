@@ -88,9 +88,12 @@ impl RenderScene {
         }
         let extra = lights - all.len();
         if extra > 0 {
+            // Only faces whose lights stay in the model when the camera is inside it (none on
+            // the outside of the atrium's outer walls), as `myriad scene` places them.
+            let offset = 0.2;
             let field = LightField::new(Placement::Surfaces {
-                surfaces: SurfaceSampler::new(model),
-                offset: 0.2,
+                surfaces: SurfaceSampler::for_view(model, camera.position, offset),
+                offset,
             })
             .with_radius(RadiusRule::Uniform { min: 0.5, max: 3.0 });
             if let Some(problem) = field.problem() {

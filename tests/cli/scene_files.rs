@@ -95,6 +95,44 @@ fn generated_scenes_validate() {
 }
 
 #[test]
+fn surface_lights_stay_inside_the_atrium_seen_from_inside_unless_all_faces_are_asked_for() {
+    let dir = work_dir("scene_all_faces");
+    let atrium = format!("{}/assets/atrium.glb", env!("CARGO_MANIFEST_DIR"));
+    // The atrium's bounds (outer walls, the floor slab's underside, the walls' tops).
+    let inside = |p: &Value| {
+        let c: Vec<f64> = (0..3).map(|i| p[i].as_f64().unwrap()).collect();
+        c[0].abs() <= 15.0 && (-0.2..=13.0).contains(&c[1]) && c[2].abs() <= 7.5
+    };
+    let outside_count = |extra: &[&str]| {
+        let scene = dir.join("s.scene");
+        let args = [
+            &["scene", "--gltf", &atrium, "--lights", "1000"][..],
+            extra,
+            &["--out", scene.to_str().unwrap()],
+        ]
+        .concat();
+        let said = stdout(&myriad_ok(&args));
+        let lights = read_json(&scene)["lights"].as_array().unwrap().clone();
+        assert_eq!(lights.len(), 1000);
+        let outside = lights.iter().filter(|l| !inside(&l["position"])).count();
+        (said, outside)
+    };
+    let (said, outside) = outside_count(&[]);
+    assert_eq!(outside, 0, "{said}");
+    assert_mentions(
+        &said,
+        &[
+            "34 of 11048 faces left out",
+            "outside the model's bounds",
+            "--all-faces",
+        ],
+    );
+    let (said, outside) = outside_count(&["--all-faces"]);
+    assert!(outside > 200, "{outside} of 1000 outside with --all-faces");
+    assert!(!said.contains("left out"), "{said}");
+}
+
+#[test]
 fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
     let dir = work_dir("scene_source");
     let out_file = dir.join("s.scene");
@@ -123,6 +161,10 @@ fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
         (
             &[&base[..], &["--field", "frustum", "--offset", "1"]].concat(),
             &["--offset only applies to --field surfaces"],
+        ),
+        (
+            &[&base[..], &["--field", "box", "--all-faces"]].concat(),
+            &["--all-faces only applies to --field surfaces"],
         ),
         (
             &[&base[..], &["--spot-angles", "10..20"]].concat(),

@@ -25,7 +25,9 @@
 //! area table: a triangle is picked with probability proportional to its area (binary search),
 //! a point uniformly inside it (square-root barycentrics), and the light is lifted off the
 //! surface along the triangle's geometric normal (the counter-clockwise front side) by an offset.
-//! Spot lights on surfaces point along that normal.
+//! Spot lights on surfaces point along that normal. [`SurfaceSampler::for_view`] keeps, for a camera
+//! inside the model's bounds, only the faces whose lights stay inside them (none on the outside
+//! of its outer walls); the command line and the renderer's default scene use it.
 
 use crate::lights::{LightRecord, Lights};
 use crate::model::{Aabb, Model};
@@ -77,6 +79,47 @@ impl SurfaceSampler {
             s.cumulative.push(total);
         }
         s
+    }
+
+    /// The surfaces a view from `eye` wants lights on, lifted by `offset`. With the eye inside
+    /// the model's bounds, only the triangles whose lights stay inside them
+    /// ([`SurfaceSampler::lifted_inside`]): an outer wall's exterior face, a floor slab's
+    /// underside or a roof would take lights whose light never reaches the eye (in the default
+    /// atrium, 28 % of a surface field's lights). From outside the bounds every face can be
+    /// seen, so every face is kept; and so is every face when none stays inside (a closed shell
+    /// wound inside out, whose lights are all lifted outwards), rather than no surface at all.
+    pub fn for_view(model: &Model, eye: Vec3, offset: f32) -> Self {
+        Self::new(model).viewed_from(model.bounds(), eye, offset)
+    }
+
+    /// [`SurfaceSampler::for_view`]'s choice for a model with bounds `bounds`.
+    fn viewed_from(self, bounds: Aabb, eye: Vec3, offset: f32) -> Self {
+        if !bounds.contains(eye) {
+            return self;
+        }
+        let inside = self.lifted_inside(bounds, offset);
+        if inside.triangle_count() == 0 {
+            self
+        } else {
+            inside
+        }
+    }
+
+    /// Only the triangles whose three corners, lifted by `offset` along the normal, lie inside
+    /// `bounds` (boundary included). The box is convex, so every light placed on a kept
+    /// triangle lies inside it too; a triangle with a corner lifted out is dropped whole.
+    pub fn lifted_inside(&self, bounds: Aabb, offset: f32) -> Self {
+        Self::from_triangles(
+            self.corners
+                .iter()
+                .zip(&self.normals)
+                .filter(|&(corners, &normal)| {
+                    corners
+                        .iter()
+                        .all(|&p| bounds.contains(p + offset * normal))
+                })
+                .map(|(&corners, _)| corners),
+        )
     }
 
     /// Number of (non-degenerate) triangles.
@@ -761,6 +804,116 @@ mod tests {
         }
         // Expect 3000 on the wall; 4000 draws give a standard deviation of about 27.
         assert!((2850..3150).contains(&on_wall), "{on_wall}");
+    }
+
+    /// The twelve triangles of the box `min..max`, wound to face out (or in).
+    fn box_faces(min: Vec3, max: Vec3, facing_out: bool) -> Vec<[Vec3; 3]> {
+        let at = |i: usize| {
+            Vec3::new(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            )
+        };
+        // Each face's corners counter-clockwise seen from outside.
+        let quads = [
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+        ];
+        let mut triangles = Vec::new();
+        for [a, b, c, d] in quads {
+            for t in [[a, b, c], [a, c, d]] {
+                let mut t = t.map(at);
+                if !facing_out {
+                    t.swap(1, 2);
+                }
+                triangles.push(t);
+            }
+        }
+        triangles
+    }
+
+    #[test]
+    fn box_faces_face_the_way_they_are_asked_to() {
+        let faces = SurfaceSampler::from_triangles(box_faces(Vec3::ZERO, Vec3::ONE, true));
+        for (corners, normal) in faces.corners.iter().zip(&faces.normals) {
+            let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
+            assert!(
+                (centroid - Vec3::splat(0.5)).dot(*normal) > 0.0,
+                "{corners:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn only_faces_whose_lights_stay_inside_are_kept_for_an_eye_inside() {
+        // A room (faces looking in) inside a building's shell (faces looking out), both boxes.
+        let shell = Aabb::new(Vec3::splat(-10.0), Vec3::splat(10.0));
+        let room = box_faces(Vec3::splat(-9.0), Vec3::splat(9.0), false);
+        let outside = box_faces(shell.min, shell.max, true);
+        let all = SurfaceSampler::from_triangles(room.iter().chain(&outside).copied());
+        assert_eq!(all.triangle_count(), 24);
+        let inside = all.clone().viewed_from(shell, Vec3::ZERO, 0.2);
+        assert_eq!(inside.corners, room);
+        // Every light is then inside the shell, lifted off the room's walls.
+        let lights = LightField::new(Placement::Surfaces {
+            surfaces: inside,
+            offset: 0.2,
+        })
+        .generate(500, 4);
+        for l in lights.iter() {
+            let p = l.position.abs();
+            let lifted = p.to_array().iter().any(|c| (c - 8.8).abs() < 1e-5);
+            assert!(lifted && p.max_element() <= 9.0, "{}", l.position);
+        }
+        // An offset that lifts the room's lights through the shell drops them too: nothing
+        // stays inside, so every face is kept.
+        let through = all.clone().viewed_from(shell, Vec3::ZERO, 19.5);
+        assert_eq!(through.triangle_count(), 24);
+        // Seen from outside the shell, every face is kept.
+        let from_outside = all.viewed_from(shell, Vec3::splat(20.0), 0.2);
+        assert_eq!(from_outside.triangle_count(), 24);
+    }
+
+    #[test]
+    fn a_shell_wound_inside_out_keeps_every_face() {
+        let bounds = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let out = SurfaceSampler::from_triangles(box_faces(bounds.min, bounds.max, true));
+        assert_eq!(out.lifted_inside(bounds, 0.1).triangle_count(), 0);
+        let kept = out.viewed_from(bounds, Vec3::splat(0.5), 0.1);
+        assert_eq!(kept.triangle_count(), 12);
+    }
+
+    #[test]
+    fn the_atriums_surface_lights_stay_inside_it_seen_from_its_main_camera() {
+        let model = crate::atrium::atrium();
+        let bounds = model.bounds();
+        let eye = model.camera(0, 1536, 768).unwrap().position;
+        assert!(bounds.contains(eye));
+        let outside = |surfaces: SurfaceSampler| {
+            let lights = LightField::new(Placement::Surfaces {
+                surfaces,
+                offset: 0.2,
+            })
+            .generate(2000, 1);
+            lights
+                .iter()
+                .filter(|l| !bounds.contains(l.position))
+                .count()
+        };
+        // Every face: lights on the outer walls' exterior, under the floor and on the roof.
+        assert!(outside(SurfaceSampler::new(&model)) > 400);
+        assert_eq!(outside(SurfaceSampler::for_view(&model, eye, 0.2)), 0);
+        // From above the roof, every face again.
+        let above = SurfaceSampler::for_view(&model, Vec3::new(0.0, 40.0, 0.0), 0.2);
+        assert_eq!(
+            above.triangle_count(),
+            SurfaceSampler::new(&model).triangle_count()
+        );
     }
 
     #[test]
