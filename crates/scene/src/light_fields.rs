@@ -107,7 +107,8 @@ impl SurfaceSampler {
 
     /// Only the triangles whose three corners, lifted by `offset` along the normal, lie inside
     /// `bounds` (boundary included). The box is convex, so every light placed on a kept
-    /// triangle lies inside it too; a triangle with a corner lifted out is dropped whole.
+    /// triangle lies inside it too (up to f32 rounding of the point on the triangle); a triangle
+    /// with a corner lifted out is dropped whole.
     pub fn lifted_inside(&self, bounds: Aabb, offset: f32) -> Self {
         Self::from_triangles(
             self.corners
