@@ -51,9 +51,10 @@ fn engine_device() -> Result<&'static (wgpu::Device, wgpu::Queue), String> {
             let adapter =
                 pollster::block_on(engine_instance().request_adapter(&Default::default()))
                     .map_err(|e| e.to_string())?;
-            // What the renderer needs of the device, asked for up front.
+            // What the renderer needs of the device, raised to the adapter's texture and
+            // buffer sizes (the bare minimum caps targets at 2048 pixels a side).
             let descriptor = wgpu::DeviceDescriptor {
-                required_limits: Renderer::required_limits(),
+                required_limits: Renderer::required_limits_for(&adapter.limits()),
                 ..Default::default()
             };
             pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| e.to_string())

@@ -853,6 +853,38 @@ fn the_renderer_runs_on_a_device_with_only_its_required_limits() {
     let image = viewer.image().unwrap();
     let lit = lit_pixels(&image);
     assert!(lit > 192 * 96 / 8, "only {lit} lit pixels");
+    // The minimum refuses a target past 2048 pixels a side; the limits for the adapter draw
+    // what it can (2560x1440 panicked inside wgpu in an engine that followed the minimum).
+    let offered = adapter.limits();
+    let wide = (offered.max_texture_dimension_2d.min(4096), 8);
+    if wide.0 > 2048 {
+        let scene = RenderScene::default_scene(300, wide.0, wide.1).unwrap();
+        let minimum = Viewer::new(device_with(Renderer::required_limits()), &scene);
+        let error = minimum
+            .err()
+            .expect("a 2049+ pixel target on the minimum")
+            .to_string();
+        assert!(error.contains("2048 pixels a side"), "{error}");
+        let limits = Renderer::required_limits_for(&offered);
+        assert!(
+            Renderer::required_limits().check_limits(&limits),
+            "below the minimum"
+        );
+        assert!(
+            limits.check_limits(&offered),
+            "more than the adapter offers"
+        );
+        assert_eq!(
+            limits.max_texture_dimension_2d,
+            offered.max_texture_dimension_2d
+        );
+        let mut viewer = Viewer::new(device_with(limits), &scene).unwrap();
+        viewer
+            .frame(&scene, Shading::Clustered, Method::Refined, false)
+            .unwrap();
+        let pixels = (wide.0 * wide.1) as usize;
+        assert_eq!(viewer.image().unwrap().len(), 4 * pixels);
+    }
 }
 
 /// A frame refused for its slice edges, the one buffer that was checked only after the lights and

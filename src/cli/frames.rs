@@ -110,6 +110,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let (width, height) = parse_size(&args.size)?;
     super::source::check_image_memory(width, height)?;
     check_memory_for(DEFAULT_GRID, args.lights)?;
+    let atrium = myriad::scene::atrium();
+    super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
     let scene = RenderScene::default_scene(args.lights, width, height)?;
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);

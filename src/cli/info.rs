@@ -1,7 +1,7 @@
 //! `myriad info --gltf FILE [--json]`: what a glTF file holds, as the loader sees it.
 
 use anyhow::Result;
-use myriad::scene::{LoadOptions, Model, Projection};
+use myriad::scene::{LoadOptions, Model, Projection, printable};
 use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -146,7 +146,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let names = if s.cameras.is_empty() {
         "none".to_string()
     } else {
-        s.cameras.join(", ")
+        // The file's own text: control characters escaped (`printable`).
+        let shown: Vec<_> = s.cameras.iter().map(|n| printable(n)).collect();
+        shown.join(", ")
     };
     println!("  cameras     {}: {names}", s.cameras.len());
     match bounds {

@@ -13,31 +13,72 @@
 //! else cannot be the same file as a regular output, and the readers refuse a non-regular input
 //! with their own message.
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use std::path::Path;
 
 /// Refuses when `output` is the same file as one of `inputs` (an output that does not exist yet,
 /// or is no regular file, is never an input). Never opens a path that is not a regular file.
 pub fn refuse_overwriting_inputs(output: &Path, inputs: &[&Path]) -> Result<()> {
-    if !is_regular_file(output) {
-        return Ok(());
-    }
-    for input in inputs {
-        if is_regular_file(input) && same_file::is_same_file(input, output).unwrap_or(false) {
-            bail!(
-                "the output {} is the input {}: refusing to overwrite it (name another output)",
-                output.display(),
-                input.display()
-            );
-        }
+    if let Some(input) = the_input(output, inputs) {
+        bail!(
+            "the output {} is the input {}: refusing to overwrite it (name another output)",
+            output.display(),
+            input.display()
+        );
     }
     Ok(())
+}
+
+/// Refuses when `output` is one of the files a glTF model `model` is made of (`Model::files`:
+/// its external buffers and images), as [`refuse_overwriting_inputs`] does for named inputs.
+pub fn refuse_overwriting_model_files(output: &Path, model: &Path, files: &[&Path]) -> Result<()> {
+    if let Some(file) = the_input(output, files) {
+        bail!(
+            "the output {} is {}, a file of the model {}: refusing to overwrite it (name another \
+             output)",
+            output.display(),
+            file.display(),
+            model.display()
+        );
+    }
+    Ok(())
+}
+
+/// The first of `inputs` that is the same file as `output`, if any (an output that does not
+/// exist yet, or is no regular file, is never an input).
+fn the_input<'a>(output: &Path, inputs: &[&'a Path]) -> Option<&'a Path> {
+    if !is_regular_file(output) {
+        return None;
+    }
+    inputs.iter().copied().find(|input| {
+        is_regular_file(input) && same_file::is_same_file(input, output).unwrap_or(false)
+    })
 }
 
 /// Whether `path`, links followed, is a regular file: `metadata` is a `stat`, which never opens
 /// (and so never waits on) a FIFO or a device.
 fn is_regular_file(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.is_file())
+}
+
+/// Creates the `--out` folder `out` (and its parents). A file in its place is named as such,
+/// where `create_dir_all` said only "cannot create afile: File exists (os error 17)"
+/// (hostile-input hunt, session 38).
+pub fn create_out_folder(out: &Path) -> Result<()> {
+    check_out_folder(out)?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("cannot create the folder {}", out.display()))
+}
+
+/// Refuses an `--out` folder `out` that is something else (a file), before any work.
+pub fn check_out_folder(out: &Path) -> Result<()> {
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "--out {}: is a file, not a folder (the run writes its files into it)",
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 /// Says what a command wrote to `output`: on stdout, unless the output is not a regular file

@@ -208,7 +208,9 @@ struct Source {
     note: Option<String>,
 }
 
-fn find_source(assets: Option<&Path>) -> Result<Source> {
+/// The scene: Sponza from `assets` if it is there, else the atrium. `outputs`: the files the run
+/// writes, which must not be Sponza's own.
+fn find_source(assets: Option<&Path>, outputs: &[&Path]) -> Result<Source> {
     let (dir, explicit) = match assets {
         Some(dir) => (dir.to_path_buf(), true),
         None => (PathBuf::from("../shared/assets"), false),
@@ -221,7 +223,7 @@ fn find_source(assets: Option<&Path>) -> Result<Source> {
     }
     let sponza = dir.join(SPONZA);
     if sponza.is_file() {
-        let model = super::source::load_model(&sponza, &LoadOptions::default())?;
+        let model = super::source::load_model(&sponza, &LoadOptions::default(), outputs)?;
         return Ok(Source {
             model,
             name: format!("Sponza ({})", sponza.display()),
@@ -234,8 +236,13 @@ fn find_source(assets: Option<&Path>) -> Result<Source> {
         name: "default scene (atrium)".into(),
         sponza: false,
         note: Some(format!(
-            "{} not found, so not the paper's scene (Crytek Sponza); pass --assets DIR",
-            sponza.display()
+            "{} {}, so not the paper's scene (Crytek Sponza); pass --assets DIR",
+            sponza.display(),
+            if sponza.exists() {
+                "is not a file"
+            } else {
+                "not found"
+            }
         )),
     })
 }
@@ -352,7 +359,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if args.runs == 0 {
         bail!("--runs 0: expected at least 1 timed frame per configuration");
     }
-    let source = find_source(args.assets.as_deref())?;
+    let heat_path = args.out.join("paper_heatmap.png");
+    let json_path = args.out.join("paper.json");
+    let source = find_source(args.assets.as_deref(), &[&heat_path, &json_path])?;
     let camera = match &args.camera {
         Some(name) => name.clone(),
         None => source
@@ -361,6 +370,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
             .first()
             .map_or_else(|| "(none)".into(), |c| c.name.clone()),
     };
+    super::source::note_model_scene(
+        &source.model,
+        &source.name,
+        args.camera.as_deref(),
+        LIGHT_COUNTS[0],
+    );
     let scenes: Vec<RenderScene> = LIGHT_COUNTS
         .iter()
         .map(|&n| {
@@ -382,11 +397,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
         check_slicing(slicing, z, scene.grid.near(), scene.grid.far())?;
     }
 
-    let heat_path = args.out.join("paper_heatmap.png");
-    let json_path = args.out.join("paper.json");
     // The heat map and the JSON describe one run: a target neither can replace (a folder, a
     // read-only file) is said before the minutes of rendering, and both are written at the end
     // as one set.
+    super::outputs::check_out_folder(&args.out)?;
     check_replaceable(&[&heat_path, &json_path])?;
 
     let ctx = GpuContext::headless()?;
@@ -497,8 +511,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         rows,
         heat_map,
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    super::outputs::create_out_folder(&args.out)?;
     let json = serde_json::to_string_pretty(&report)?;
     replace_files(&[(&heat_path, &heat_png), (&json_path, json.as_bytes())])?;
     print_report(&report, source.note.as_deref());

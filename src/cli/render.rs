@@ -420,6 +420,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         super::outputs::refuse_overwriting_inputs(output, &inputs)?;
     }
     // A folder or a read-only file in the set's place: said now, not after the render.
+    super::outputs::check_out_folder(&args.out)?;
     check_replaceable(&outputs.each_ref().map(|p| p.as_path()))?;
     let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
@@ -428,7 +429,18 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let ctx = GpuContext::headless()?;
     let adapter = ctx.describe();
     let timestamps = ctx.has_timestamps();
-    let mut viewer = Viewer::new(ctx, &scene)?;
+    // Named: a scene file's camera sets the size, and "a 20000x2 target" alone did not say whose.
+    let mut viewer = Viewer::new(ctx, &scene).with_context(|| {
+        format!(
+            "{} at {width}x{height}{}",
+            scene.name,
+            if args.size.is_none() {
+                " (--size WxH renders another size)"
+            } else {
+                ""
+            }
+        )
+    })?;
 
     let mut strategies = Vec::new();
     let mut first_stats = None;
@@ -569,8 +581,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         json_path.clone(),
         serde_json::to_string_pretty(&stats)?.into_bytes(),
     ));
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    super::outputs::create_out_folder(&args.out)?;
     let set: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (p.as_path(), &b[..])).collect();
     replace_files(&set)?;
     print_table(&stats);
@@ -616,10 +627,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
 /// (skipped).
 fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
     let (model, model_name) = match &args.gltf {
-        Some(path) => (
-            super::source::load_model(path, &LoadOptions::default())?,
-            path.display().to_string(),
-        ),
+        Some(path) => {
+            let outputs = OUTPUTS.map(|output| args.out.join(output));
+            let outputs = outputs.each_ref().map(|p| p.as_path());
+            (
+                super::source::load_model(path, &LoadOptions::default(), &outputs)?,
+                path.display().to_string(),
+            )
+        }
         None => (
             myriad::scene::atrium(),
             "default scene (atrium)".to_string(),
@@ -656,12 +671,7 @@ fn load_scene(args: &Args) -> Result<(RenderScene, usize)> {
                 None => DEFAULT_GRID,
             };
             check_memory_for(dims, lights)?;
-            if lights < model.lights.len() {
-                eprintln!(
-                    "note: --lights {lights} keeps the first {lights} of the model's {} own lights",
-                    model.lights.len()
-                );
-            }
+            super::source::note_model_scene(&model, &model_name, args.camera.as_deref(), lights);
             RenderScene::from_model(
                 &model,
                 &model_name,

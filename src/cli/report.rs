@@ -109,8 +109,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     for &dims in &grids {
         check_memory_for(dims, args.lights)?;
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    super::outputs::create_out_folder(&args.out)?;
     let paths = [
         args.out.join("report.md"),
         args.out.join("report.json"),

@@ -7,7 +7,7 @@ use super::source::{check_memory, parse_preset};
 use anyhow::{Context, Result, bail, ensure};
 use myriad::scene::{
     ClusterGrid, LightField, Lights, LoadOptions, Placement, RadiusRule, Scene, SpotRule,
-    SurfaceSampler,
+    SurfaceSampler, printable,
 };
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -17,6 +17,9 @@ const FIELDS: [&str; 5] = ["surfaces", "box", "frustum", "clumps", "sphere"];
 
 #[derive(clap::Args, Debug)]
 #[command(group = clap::ArgGroup::new("source").required(true).args(["preset", "gltf"]))]
+// `--offset -1` reaches the field's own check ("must be finite and >= 0"), where clap said only
+// "unexpected argument '-1' found" (hostile-input hunt, session 38).
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// A standard scene: paper, uniform or sphere.
     #[arg(long)]
@@ -48,20 +51,20 @@ pub struct Args {
     #[arg(long, conflicts_with = "preset")]
     depth: Option<String>,
     /// Light radii, uniform in MIN..MAX metres [default: 0.5..3].
-    #[arg(long, conflicts_with_all = ["preset", "cutoff"])]
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["preset", "cutoff"])]
     radii: Option<String>,
     /// Instead of --radii: each radius from its intensity, where intensity·max(colour)/d²
     /// falls to this cut-off.
     #[arg(long, conflicts_with = "preset")]
     cutoff: Option<f32>,
     /// Light intensities, uniform in MIN..MAX (one number: constant) [default: 1].
-    #[arg(long, conflicts_with = "preset")]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "preset")]
     intensity: Option<String>,
     /// Fraction of the lights that are spot lights, 0 to 1 [default: 0].
     #[arg(long, conflicts_with = "preset")]
     spots: Option<f32>,
     /// Spot outer half angles in degrees, MIN..MAX [default: 20..45].
-    #[arg(long, conflicts_with = "preset")]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "preset")]
     spot_angles: Option<String>,
     /// surfaces: distance of the lights from the surface in metres [default: 0.2].
     #[arg(long, conflicts_with = "preset")]
@@ -111,7 +114,7 @@ fn parse_range(text: &str, what: &str) -> Result<[f32; 2]> {
 fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let (width, height) = (args.width.unwrap_or(1536), args.height.unwrap_or(768));
     let field_name = args.field.as_deref().unwrap_or("surfaces");
-    let model = super::source::load_model(path, &LoadOptions::without_images())?;
+    let model = super::source::load_model(path, &LoadOptions::without_images(), &[&args.out])?;
     let bounds = model.bounds();
     if bounds.is_empty() {
         bail!(
@@ -122,7 +125,7 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let (camera, camera_name) = match &args.camera {
         Some(name) => {
             let index = model.camera_index(name).with_context(|| {
-                let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
+                let names: Vec<_> = model.cameras.iter().map(|c| printable(&c.name)).collect();
                 format!(
                     "{}: no camera named {name:?}; it has {}",
                     path.display(),
@@ -134,7 +137,10 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
                 )
             })?;
             let camera = model.camera(index, width, height).with_context(|| {
-                format!("camera {name:?} is orthographic; a perspective one is needed")
+                format!(
+                    "{}: camera {name:?} is orthographic; a perspective one is needed",
+                    path.display()
+                )
             })?;
             (camera, name.clone())
         }
@@ -142,6 +148,8 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
             .camera_or_view(0, width, height)
             .expect("the bounds are not empty"),
     };
+    // A model's camera name is the file's text: printed with its control characters escaped.
+    let camera_name = printable(&camera_name).into_owned();
     let slicing = parse_slicing(args.depth.as_deref().unwrap_or("log"))?;
     let dims = parse_grid("--grid", args.grid.as_deref().unwrap_or("24x12x16"))?;
     check_slicing(slicing, dims.z, camera.near, camera.far)?;
@@ -174,7 +182,16 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
             } else {
                 let kept = SurfaceSampler::for_view(&model, camera.position, offset);
                 let dropped = all.triangle_count() - kept.triangle_count();
-                if dropped > 0 {
+                let inside = SurfaceSampler::seen_from_inside(bounds, camera.position);
+                if inside && dropped == 0 && all.lifted_inside(bounds, offset).triangle_count() == 0
+                {
+                    // `for_view` fell back to every face: said, or the lights all lie outside
+                    // while the summary reads as if the filter had applied (hostile-input hunt).
+                    faces_left_out = format!(
+                        " (on every face: at --offset {offset} no face keeps its lights inside \
+                         the model's bounds, where the camera is)"
+                    );
+                } else if dropped > 0 {
                     faces_left_out = format!(
                         " ({dropped} of {} faces left out: their lights would lie outside the \
                          model's bounds, and the camera is inside them; --all-faces keeps them)",

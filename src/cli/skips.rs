@@ -291,10 +291,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let ctx = GpuContext::headless()?;
     let mut scenes = Vec::new();
     if args.gltf.is_empty() {
+        let atrium = myriad::scene::atrium();
+        super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
         scenes.push(RenderScene::default_scene(args.lights, width, height)?);
         let sponza = PathBuf::from(SPONZA);
         if sponza.is_file() {
-            let model = super::source::load_model(&sponza, &LoadOptions::default())?;
+            let model = super::source::load_model(&sponza, &LoadOptions::default(), &[])?;
             scenes.push(RenderScene::from_model(
                 &model,
                 "Sponza",
@@ -309,8 +311,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     } else {
         for path in &args.gltf {
-            let model = super::source::load_model(path, &LoadOptions::default())?;
+            let model = super::source::load_model(path, &LoadOptions::default(), &[])?;
             let name = path.display().to_string();
+            super::source::note_model_scene(&model, &name, None, args.lights);
             scenes.push(RenderScene::from_model(
                 &model,
                 &name,

@@ -87,12 +87,45 @@ pub fn report_skipped(path: &Path, scene: &Scene) {
 /// Loads a glTF model and says on stderr what the loader changed or left out (`Model::warnings`:
 /// clamped material factors, lights without a usable radius, …), so `render`, `scene`, `paper`
 /// and `skips` lose nothing silently. `info` lists the warnings itself.
-pub fn load_model(path: &Path, options: &LoadOptions) -> Result<Model> {
+///
+/// Refuses when one of the command's `outputs` is one of the model's files (`Model::files`):
+/// the glTF file was checked before the load, but its external buffers and images were not,
+/// and `render --out` replaced a `.gltf`'s buffer named `heatmap.png` with the heat map
+/// (hostile-input hunt, session 38). Checked here, before any work on the model.
+pub fn load_model(path: &Path, options: &LoadOptions, outputs: &[&Path]) -> Result<Model> {
     let model = Model::load(path, options)?;
+    let files: Vec<&Path> = model.files.iter().map(PathBuf::as_path).collect();
+    for output in outputs {
+        super::outputs::refuse_overwriting_model_files(output, path, &files)?;
+    }
     for w in &model.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
     Ok(model)
+}
+
+/// Says on stderr what a model's scene (`RenderScene::from_model` with `camera` and `lights`)
+/// leaves out, so no command drops part of a model silently: the model's own lights past
+/// `--lights`, and a first camera that is orthographic (the scene then shows a view down the
+/// bounds' long axis; `scene` names that view in its summary line instead).
+pub fn note_model_scene(model: &Model, name: &str, camera: Option<&str>, lights: usize) {
+    if lights < model.lights.len() {
+        eprintln!(
+            "note: {name}: {lights} lights keep only the first {lights} of the model's {} own \
+             lights",
+            model.lights.len()
+        );
+    }
+    if camera.is_none()
+        && let Some(first) = model.cameras.first()
+        && model.camera(0, 1, 1).is_none()
+    {
+        eprintln!(
+            "note: {name}: its first camera {:?} is orthographic; showing a view down the bounds' \
+             long axis instead (--camera NAME picks a perspective one)",
+            first.name
+        );
+    }
 }
 
 /// The most worker threads `--threads` may ask for (more only costs memory and start-up).

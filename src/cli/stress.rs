@@ -209,8 +209,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     // 1. Scene.
     let (scene, seconds) = progress.stage("scene generation", || {
+        let atrium = myriad::scene::atrium();
+        super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
         RenderScene::from_model(
-            &myriad::scene::atrium(),
+            &atrium,
             "default scene (atrium)",
             None,
             args.lights,

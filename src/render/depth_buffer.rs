@@ -51,7 +51,9 @@ fn box_depths(camera: &Camera, b: &Aabb) -> Option<(f32, f32, [f32; 4])> {
     Some((dmin.max(camera.near), dmax.min(camera.far), ndc))
 }
 
-/// The scene grid over the depth range that holds every covered pixel and every blended draw.
+/// The scene grid over the depth range that holds every covered pixel and every blended draw
+/// (`blended`: their world bounds, [`crate::render::blended_bounds`]; the depth buffer does not
+/// hold them).
 pub fn fitted_grid(
     grid: &ClusterGrid,
     camera: &Camera,
@@ -183,7 +185,8 @@ impl SliceEdgesNdc {
 }
 
 /// Marks the clusters of every covered pixel (both sides of a slice edge within
-/// 1e-5 relative) and of every blended draw's screen box.
+/// 1e-5 relative) and of every blended draw's screen box (`blended`: their world bounds,
+/// [`crate::render::blended_bounds`]).
 pub fn mark_active(
     mask: &mut ActiveClusters,
     grid: &ClusterGrid,

@@ -19,6 +19,6 @@ pub use image_difference::max_channel_difference;
 pub use pipelined::{FRAMES_IN_FLIGHT, GpuStage, LoopReport, StageTimes, run_frames};
 pub use pixel_stats::{PixelStats, pixel_stats};
 pub use prepass_tuner::{FramePlan, PrepassDecision, PrepassTuner, TunedFrame, TunerSettings};
-pub use setup::{DEFAULT_GRID, RenderScene};
+pub use setup::{DEFAULT_GRID, RenderScene, blended_bounds};
 pub use skips::{SkipFrame, Skips};
 pub use viewer::{Shading, Viewer, ViewerFrame, cluster_lists, light_columns};

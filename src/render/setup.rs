@@ -148,8 +148,12 @@ impl RenderScene {
     }
 }
 
-/// World bounds of every blended draw's vertices.
-fn blended_bounds(geometry: &SceneGeometry) -> Vec<Aabb> {
+/// World bounds of every blended draw's vertices: what [`crate::render::fitted_grid`] and
+/// [`crate::render::mark_active`] need besides the depth buffer, which blended geometry is not
+/// drawn into. An engine running the prepass savings itself passes these; an empty slice is
+/// right only when nothing is blended (the atrium's glass and banners were left unlit, 109/255
+/// off, in a drop-in review that passed `&[]`).
+pub fn blended_bounds(geometry: &SceneGeometry) -> Vec<Aabb> {
     geometry
         .draws
         .iter()

@@ -249,3 +249,35 @@ fn dump_lights(dump: &Value) -> Vec<u64> {
     lights.dedup();
     lights
 }
+
+/// A `.gltf` of one triangle, slanted so that its bounds have a volume, seen by `cameras` (JSON objects, each placed by a node at z = 3 looking down −z).
+fn gltf_with_cameras(dir: &Path, name: &str, cameras: &[&str]) -> PathBuf {
+    let mut bytes = Vec::new();
+    for c in [0f32, 0.0, 0.0, 4.0, 0.0, 0.0, 0.0, 4.0, 4.0] {
+        bytes.extend_from_slice(&c.to_le_bytes());
+    }
+    let buffer = format!("{name}.bin");
+    std::fs::write(dir.join(&buffer), bytes).unwrap();
+    let nodes: Vec<String> = (0..cameras.len())
+        .map(|i| format!(r#"{{"camera": {i}, "translation": [1, 1, 3]}}"#))
+        .collect();
+    let camera_nodes: Vec<String> = (1..=cameras.len()).map(|i| i.to_string()).collect();
+    let gltf = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 36, "uri": "{buffer}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [4, 4, 4]}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+        "cameras": [{}],
+        "nodes": [{{"mesh": 0}}, {}], "scenes": [{{"nodes": [0, {}]}}], "scene": 0}}"#,
+        cameras.join(", "),
+        nodes.join(", "),
+        camera_nodes.join(", ")
+    );
+    write(dir, name, &gltf)
+}
+
+const PERSPECTIVE: &str =
+    r#""type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1, "zfar": 50}"#;
+const ORTHOGRAPHIC: &str =
+    r#""type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 50}"#;

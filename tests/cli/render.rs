@@ -347,7 +347,8 @@ fn render_with_fewer_lights_than_the_model_has_keeps_its_first_and_says_so() {
             out_dir.to_str().unwrap(),
         ]);
         let said = format!(
-            "note: --lights {lights} keeps the first {lights} of the model's 12 own lights"
+            "note: default scene (atrium): {lights} lights keep only the first {lights} of the \
+             model's 12 own lights"
         );
         assert_eq!(
             stderr(&out).contains(&said),
@@ -357,6 +358,12 @@ fn render_with_fewer_lights_than_the_model_has_keeps_its_first_and_says_so() {
         );
         assert_eq!(read_json(&out_dir.join("stats.json"))["lights"], lights);
     }
+    // `frames` (and `stress`, `skips`, `paper`: the same note) said nothing before.
+    let out = myriad_ok(&["frames", "--lights", "5", "--size", "8x8", "--frames", "2"]);
+    assert_mentions(
+        &stderr(&out),
+        &["default scene (atrium): 5 lights keep only the first 5 of the model's 12 own lights"],
+    );
 }
 
 /// A grid whose lists pass what the device binds in one buffer is rendered on a coarser grid,
@@ -570,6 +577,152 @@ fn frames_reports_times_in_milliseconds_that_fit_its_frames() {
             "{sequential}"
         );
     }
+}
+
+/// A `.gltf` whose one triangle is in the external buffer `buffer` and which names the image
+/// file `image` if any (not an image: `scene` never decodes it), written into `dir` with its
+/// files.
+fn gltf_with_files(dir: &Path, name: &str, buffer: &str, image: Option<&str>) -> PathBuf {
+    let mut bytes = Vec::new();
+    for c in [0f32, 0.0, 0.0, 4.0, 0.0, 0.0, 0.0, 4.0, 0.0] {
+        bytes.extend_from_slice(&c.to_le_bytes());
+    }
+    std::fs::write(dir.join(buffer), bytes).unwrap();
+    let images = match image {
+        Some(image) => {
+            std::fs::write(dir.join(image), b"not decoded").unwrap();
+            format!(r#""images": [{{"uri": "{image}"}}],"#)
+        }
+        None => String::new(),
+    };
+    let gltf = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": 36, "uri": "{buffer}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [4, 4, 0]}}],
+        {images}
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+        "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}], "scene": 0}}"#
+    );
+    write(dir, name, &gltf)
+}
+
+#[test]
+fn outputs_never_replace_a_models_buffer_or_image_files() {
+    let dir = work_dir("outputs_vs_model_files");
+    let model = gltf_with_files(&dir, "m.gltf", "m.bin", Some("m.dat"));
+    let files = |names: &[&str]| -> Vec<Vec<u8>> {
+        names
+            .iter()
+            .map(|n| std::fs::read(dir.join(n)).unwrap())
+            .collect()
+    };
+    let before = files(&["m.gltf", "m.bin", "m.dat"]);
+    // `scene --out` naming the buffer or the image (through another spelling of the path):
+    // refused, the model intact (the buffer was replaced by a scene file, audit of session 38).
+    for out in [dir.join("m.bin"), dir.join(".").join("m.dat")] {
+        let text = myriad_fails(&[
+            "scene".as_ref(),
+            "--gltf".as_ref(),
+            model.as_os_str(),
+            "--lights".as_ref(),
+            "5".as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        assert_mentions(
+            &text,
+            &["a file of the model", "m.gltf", "refusing to overwrite it"],
+        );
+        assert_eq!(files(&["m.gltf", "m.bin", "m.dat"]), before);
+    }
+    // `render --out` into the model's folder, whose buffer is named like the heat map: refused
+    // before the GPU is asked for anything, the buffer intact.
+    let render_model = gltf_with_files(&dir, "r.gltf", "heatmap.png", None);
+    let buffer = files(&["heatmap.png"]);
+    let text = myriad_fails(&[
+        "render".as_ref(),
+        "--gltf".as_ref(),
+        render_model.as_os_str(),
+        "--size".as_ref(),
+        "16x8".as_ref(),
+        "--out".as_ref(),
+        dir.as_os_str(),
+    ]);
+    assert_mentions(&text, &["heatmap.png", "a file of the model", "r.gltf"]);
+    assert_eq!(files(&["heatmap.png"]), buffer);
+    assert!(!dir.join("frame.png").exists(), "nothing is written");
+}
+
+#[test]
+fn a_first_camera_that_cannot_be_used_is_said() {
+    let dir = work_dir("render_ortho_first");
+    let model = gltf_with_cameras(
+        &dir,
+        "ortho_first.gltf",
+        &[
+            &format!(r#"{{"name": "Flat", {ORTHOGRAPHIC}}}"#),
+            &format!(r#"{{"name": "Eye", {PERSPECTIVE}}}"#),
+        ],
+    );
+    let render = |camera: &[&str]| {
+        let args = [
+            &["render", "--gltf", model.to_str().unwrap()][..],
+            camera,
+            &[
+                "--lights",
+                "3",
+                "--size",
+                "16x8",
+                "--runs",
+                "1",
+                "--skips",
+                "none",
+                "--out",
+                dir.to_str().unwrap(),
+            ],
+        ]
+        .concat();
+        stderr(&myriad_ok(&args))
+    };
+    let said = render(&[]);
+    assert_mentions(
+        &said,
+        &[
+            "ortho_first.gltf: its first camera \"Flat\" is orthographic",
+            "--camera NAME",
+        ],
+    );
+    assert!(!render(&["--camera", "Eye"]).contains("orthographic"));
+}
+
+#[test]
+fn a_scene_files_camera_too_wide_for_the_device_is_named() {
+    let dir = work_dir("render_wide_camera");
+    let scene = write(
+        &dir,
+        "wide.json",
+        &GOOD_SCENE.replace(
+            r#""width": 1536, "height": 768"#,
+            r#""width": 70000, "height": 2"#,
+        ),
+    );
+    let text = myriad_fails(&[
+        "render".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--runs".as_ref(),
+        "1".as_ref(),
+        "--skips".as_ref(),
+        "none".as_ref(),
+        "--out".as_ref(),
+        dir.as_os_str(),
+    ]);
+    // Whose size it is, and how to render another; then the device's limit.
+    assert_mentions(
+        &text,
+        &["wide.json", "at 70000x2", "--size WxH", "a 70000x2 target"],
+    );
 }
 
 #[test]

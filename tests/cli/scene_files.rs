@@ -130,6 +130,87 @@ fn surface_lights_stay_inside_the_atrium_seen_from_inside_unless_all_faces_are_a
     let (said, outside) = outside_count(&["--all-faces"]);
     assert!(outside > 200, "{outside} of 1000 outside with --all-faces");
     assert!(!said.contains("left out"), "{said}");
+    // An offset that lifts every face's lights out of the atrium: every face is used, and said.
+    let (said, outside) = outside_count(&["--offset", "31"]);
+    assert_eq!(outside, 1000);
+    assert_mentions(
+        &said,
+        &["on every face: at --offset 31 no face keeps its lights inside"],
+    );
+}
+
+#[test]
+fn a_models_names_reach_the_terminal_escaped_and_shared_names_are_said() {
+    let dir = work_dir("model_names");
+    let hostile = r#"Ma\u001b[2J\u001b[31mIN\r\nerror: fake"#;
+    let model = gltf_with_cameras(
+        &dir,
+        "names.gltf",
+        &[
+            &format!(r#"{{"name": "{hostile}", {PERSPECTIVE}}}"#),
+            &format!(r#"{{"name": "Twin", {PERSPECTIVE}}}"#),
+            &format!(r#"{{"name": "Twin", {PERSPECTIVE}}}"#),
+        ],
+    );
+    let out = myriad_ok(&["info".as_ref(), "--gltf".as_ref(), model.as_os_str()]);
+    let text = all_output(&out);
+    assert!(!text.contains('\u{1b}') && !text.contains('\r'), "{text:?}");
+    assert_mentions(
+        &text,
+        &[
+            "Ma\\u{1b}[2J\\u{1b}[31mIN\\r\\nerror: fake",
+            "2 cameras are named \"Twin\"; looked up by that name, the first is used",
+        ],
+    );
+    let out_file = dir.join("s.json");
+    let text = myriad_fails(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        model.as_os_str(),
+        "--camera".as_ref(),
+        "nope".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    assert!(!text.contains('\u{1b}') && !text.contains('\r'), "{text:?}");
+    assert_mentions(&text, &["no camera named \"nope\"", "\\u{1b}[2J"]);
+    // Its first camera, by default: named in the summary line, escaped.
+    let out = myriad_ok(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        model.as_os_str(),
+        "--lights".as_ref(),
+        "3".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    let text = all_output(&out);
+    assert!(!text.contains('\u{1b}') && !text.contains('\r'), "{text:?}");
+    assert_mentions(&text, &["camera Ma\\u{1b}[2J"]);
+}
+
+#[test]
+fn an_orthographic_camera_chosen_by_name_is_refused_naming_the_model() {
+    let dir = work_dir("ortho_by_name");
+    let model = gltf_with_cameras(
+        &dir,
+        "ortho.gltf",
+        &[&format!(r#"{{"name": "Flat", {ORTHOGRAPHIC}}}"#)],
+    );
+    let out_file = dir.join("s.json");
+    let text = myriad_fails(&[
+        "scene".as_ref(),
+        "--gltf".as_ref(),
+        model.as_os_str(),
+        "--camera".as_ref(),
+        "Flat".as_ref(),
+        "--out".as_ref(),
+        out_file.as_os_str(),
+    ]);
+    assert_mentions(
+        &text,
+        &["ortho.gltf: camera \"Flat\" is orthographic", "perspective"],
+    );
 }
 
 #[test]
@@ -165,6 +246,15 @@ fn scene_rejects_a_missing_source_and_a_zero_size_clearly() {
         (
             &[&base[..], &["--field", "box", "--all-faces"]].concat(),
             &["--all-faces only applies to --field surfaces"],
+        ),
+        // Negative values reach the field's own checks, not clap's "unexpected argument".
+        (
+            &[&base[..], &["--offset", "-1"]].concat(),
+            &["surface offset must be finite and >= 0, got -1"],
+        ),
+        (
+            &[&base[..], &["--radii", "-1..2"]].concat(),
+            &["radii must satisfy 0 < min <= max, got -1..2"],
         ),
         (
             &[&base[..], &["--spot-angles", "10..20"]].concat(),

@@ -271,6 +271,13 @@ fn report_and_paper_refuse_a_set_they_cannot_write_whole_before_measuring() {
         // Refused up front: the measuring (minutes for `paper`), whose progress lines count
         // its configurations as "[1/N]", never started.
         assert!(!out.contains("[1/"), "{command} measured first:\n{out}");
+        // A file where the folder should be is named as such ("File exists (os error 17)"
+        // before).
+        let file = dir.join("a_file");
+        std::fs::write(&file, b"mine").unwrap();
+        let out = myriad_fails(&[command, "--out", file.to_str().unwrap()]);
+        assert_mentions(&out, &["a_file", "not a folder"]);
+        assert_eq!(std::fs::read(&file).unwrap(), b"mine");
     }
 }
 

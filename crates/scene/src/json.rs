@@ -186,6 +186,9 @@ impl<'p> Sink<'p> {
     /// shortened, so one bad key cannot make a message of megabytes.
     pub(crate) fn report(&mut self, at: &str, message: impl Into<String>) {
         let shortened;
+        // An unknown key is the file's text: its control characters are escaped.
+        let escaped = crate::printable(at);
+        let at = escaped.as_ref();
         let at = if at.len() > PATH_SHOWN {
             let mut end = PATH_SHOWN;
             while !at.is_char_boundary(end) {

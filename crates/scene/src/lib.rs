@@ -29,6 +29,8 @@
 //!   [`systems::cull_lights`], [`systems::lights_to_view`] — plain functions over column slices,
 //!   parallel with rayon above a few thousand lights.
 //! * [`Error`], [`Problem`], [`Result`] (`error.rs`): one error enum for the crate.
+//! * [`printable()`] (`printable.rs`): a file's own text (names, keys) with control characters
+//!   escaped, for every message that shows it.
 //! * Private: `json.rs` (a JSON tree that keeps duplicate keys and integer kinds, and typed field
 //!   readers), `read.rs` (the streaming reader), `checks.rs` (value checks shared by reader and
 //!   writer).
@@ -130,6 +132,7 @@ mod light_fields;
 mod lights;
 mod model;
 mod presets;
+mod printable;
 mod profiling;
 mod read;
 mod read_file;
@@ -154,6 +157,7 @@ pub use model::{
     PunctualKind, SkippedPunctualLight, TangentSource, TextureRef,
 };
 pub use presets::Preset;
+pub use printable::printable;
 pub use read_file::read_regular_file;
 pub use replace_file::replace_file;
 pub use replace_files::{ReplaceFilesError, check_replaceable, replace_files};

@@ -82,7 +82,8 @@ impl SurfaceSampler {
     }
 
     /// The surfaces a view from `eye` wants lights on, lifted by `offset`. With the eye inside
-    /// the model's bounds, only the triangles whose lights stay inside them
+    /// the model's bounds ([`SurfaceSampler::seen_from_inside`]), only the triangles whose
+    /// lights stay inside them
     /// ([`SurfaceSampler::lifted_inside`]): an outer wall's exterior face, a floor slab's
     /// underside or a roof would take lights whose light never reaches the eye (in the default
     /// atrium, 28 % of a surface field's lights). From outside the bounds every face can be
@@ -92,9 +93,17 @@ impl SurfaceSampler {
         Self::new(model).viewed_from(model.bounds(), eye, offset)
     }
 
+    /// Whether `eye` looks at a model with bounds `bounds` from inside, where
+    /// [`SurfaceSampler::for_view`] keeps only faces whose lights stay inside: the eye within
+    /// the bounds, and the bounds of some thickness on every axis (a flat model has no inside,
+    /// though an eye level with it lies within its bounds).
+    pub fn seen_from_inside(bounds: Aabb, eye: Vec3) -> bool {
+        bounds.contains(eye) && bounds.size().min_element() > 0.0
+    }
+
     /// [`SurfaceSampler::for_view`]'s choice for a model with bounds `bounds`.
     fn viewed_from(self, bounds: Aabb, eye: Vec3, offset: f32) -> Self {
-        if !bounds.contains(eye) {
+        if !Self::seen_from_inside(bounds, eye) {
             return self;
         }
         let inside = self.lifted_inside(bounds, offset);
@@ -878,6 +887,19 @@ mod tests {
         // Seen from outside the shell, every face is kept.
         let from_outside = all.viewed_from(shell, Vec3::splat(20.0), 0.2);
         assert_eq!(from_outside.triangle_count(), 24);
+        // A flat model has no inside: an eye level with it keeps both its faces.
+        let floor = [
+            [Vec3::ZERO, Vec3::Z, Vec3::X],
+            [Vec3::ZERO, Vec3::X, Vec3::Z],
+        ];
+        let flat = Aabb::from_points(floor.iter().flatten().copied());
+        let sheet = SurfaceSampler::from_triangles(floor);
+        assert!(!SurfaceSampler::seen_from_inside(
+            flat,
+            Vec3::new(0.5, 0.0, 0.5)
+        ));
+        let kept = sheet.viewed_from(flat, Vec3::new(0.5, 0.0, 0.5), 0.2);
+        assert_eq!(kept.triangle_count(), 2);
     }
 
     #[test]

@@ -493,6 +493,12 @@ pub struct Model {
     pub skipped_lights: Vec<SkippedPunctualLight>,
     /// Things the loader left out or changed, one sentence each (e.g. a primitive of lines).
     pub warnings: Vec<String>,
+    /// The files the model is made of: the glTF file itself ([`Model::load`]), then the external
+    /// buffer and image files its URIs name, resolved against its folder, in file order — the
+    /// images whether or not this load decoded them. Empty for a generated model. A program that
+    /// writes files must not write over any of them (`myriad render --out` once replaced a
+    /// model's `heatmap.png` buffer with the heat map).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 impl Model {
@@ -510,6 +516,7 @@ impl Model {
             directional_lights: Vec::new(),
             skipped_lights: Vec::new(),
             warnings: Vec::new(),
+            files: Vec::new(),
         }
     }
 

@@ -165,12 +165,38 @@ pub struct Renderer {
 impl Renderer {
     /// The device limits the renderer needs: wgpu's downlevel defaults, with five storage buffers
     /// per shader stage (the shading passes read the lights, offsets, counts, indices and slice
-    /// edges in the fragment stage; the downlevel defaults allow four). An engine creating its
-    /// device for the renderer can request these (or more); [`Renderer::try_new`] checks them.
+    /// edges in the fragment stage; the downlevel defaults allow four); [`Renderer::try_new`]
+    /// checks them. The minimum, not what to ask for: a device made with exactly these renders
+    /// targets of at most 2048 pixels a side and binds lists of at most 128 MiB (32 M pairs).
+    /// An engine creating its device for the renderer requests
+    /// [`Renderer::required_limits_for`] its adapter's limits (or more).
     pub fn required_limits() -> wgpu::Limits {
         wgpu::Limits {
             max_storage_buffers_per_shader_stage: 5,
             ..wgpu::Limits::downlevel_defaults()
+        }
+    }
+
+    /// [`Renderer::required_limits`] raised to what an adapter offers (`adapter`: its
+    /// `Adapter::limits()`) where the renderer's reach grows with the limit: the largest
+    /// texture (the target and the G-buffer; 2048 pixels a side in the minimum, 16 384 on
+    /// llvmpipe) and the largest storage binding and buffer (the light lists: 128 MiB in the
+    /// minimum). Following the minimum, an engine's 2560×1440 target was refused by wgpu
+    /// (session 38's drop-in review); these limits draw anything the adapter can.
+    pub fn required_limits_for(adapter: &wgpu::Limits) -> wgpu::Limits {
+        let min = Self::required_limits();
+        wgpu::Limits {
+            max_texture_dimension_1d: adapter
+                .max_texture_dimension_1d
+                .max(min.max_texture_dimension_1d),
+            max_texture_dimension_2d: adapter
+                .max_texture_dimension_2d
+                .max(min.max_texture_dimension_2d),
+            max_storage_buffer_binding_size: adapter
+                .max_storage_buffer_binding_size
+                .max(min.max_storage_buffer_binding_size),
+            max_buffer_size: adapter.max_buffer_size.max(min.max_buffer_size),
+            ..min
         }
     }
 

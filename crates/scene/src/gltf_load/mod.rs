@@ -186,7 +186,10 @@ impl Model {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
-        Self::from_gltf_slice(&bytes, &path.display().to_string(), Some(base), options)
+        let mut model =
+            Self::from_gltf_slice(&bytes, &path.display().to_string(), Some(base), options)?;
+        model.files.insert(0, path.to_path_buf());
+        Ok(model)
     }
 
     /// Loads glTF or GLB bytes. `origin` names the data in errors and becomes
@@ -235,6 +238,8 @@ fn load(
 
     // 2. Buffers.
     let mut buffers = Vec::with_capacity(root.buffers.len());
+    // The external files, for `Model::files`.
+    let mut files = Vec::new();
     for (i, buffer) in document.buffers().enumerate() {
         let declared = &root.buffers[i];
         let name = match &declared.uri {
@@ -262,6 +267,7 @@ fn load(
         };
         let data = match external {
             Some(path) => {
+                files.push(path.clone());
                 // Only the declared length is needed (a shorter file is reported below).
                 let mut bytes =
                     crate::read_file::read_regular_file_up_to(&path, declared.byte_length.0)
@@ -308,6 +314,12 @@ fn load(
         options,
     };
     loader.model.warnings = warnings;
+    // Image files are the model's too, decoded or not: resolved as the decoder would.
+    files.extend(root.images.iter().filter_map(|image| {
+        let uri = image.uri.as_deref()?;
+        external_file(base?, uri).ok().flatten()
+    }));
+    loader.model.files = files;
     // 3. Materials and meshes.
     for (i, m) in root.materials.iter().enumerate() {
         let material = loader
@@ -337,6 +349,21 @@ fn load(
     }
     // 5. Nodes.
     loader.walk_nodes()?;
+    // A name shared by cameras picks the first of them (`Model::camera_index`): said, or
+    // `--camera Main` in a model of four cameras named Main shows one without a word.
+    let cameras = &loader.model.cameras;
+    for (i, camera) in cameras.iter().enumerate() {
+        let named = |c: &&crate::model::ModelCamera| c.name == camera.name;
+        if !cameras[..i].iter().any(|c| named(&c)) {
+            let shared = cameras[i..].iter().filter(named).count();
+            if shared > 1 {
+                loader.model.warnings.push(format!(
+                    "{shared} cameras are named \"{}\"; looked up by that name, the first is used",
+                    crate::printable(&camera.name)
+                ));
+            }
+        }
+    }
     let ignored = [
         (
             root.skins.len(),
@@ -395,7 +422,8 @@ fn load(
 
 /// ` "name"` for messages, or nothing.
 fn quoted(name: &Option<String>) -> String {
-    name.as_ref().map_or(String::new(), |n| format!(" \"{n}\""))
+    name.as_ref()
+        .map_or(String::new(), |n| format!(" \"{}\"", crate::printable(n)))
 }
 
 fn finite_vec3(v: [f32; 3], what: &str) -> Result<Vec3, String> {
