@@ -6,8 +6,8 @@
 //!   match `tests/golden/<camera>.png`. Run with `MYRIAD_BLESS=1` to (re)write the goldens
 //!   instead of comparing (the test says so on stderr); look at them before committing. Last
 //!   blessed when the surface lights stayed inside the atrium (2026-11-30, session 38): a view
-//!   from inside the model's bounds puts no lights on faces whose lights would lie outside them
-//!   (`SurfaceSampler::for_view`), so the 28 % of the lights that sat outside the outer walls,
+//!   from inside the model's bounds puts no lights on faces turned away from it whose lights
+//!   would lie outside them (`SurfaceSampler::for_view`), so the 28 % of the lights that sat outside the outer walls,
 //!   under the floor and on the roof now light the courtyard and galleries. Before that, when
 //!   spots kept their inner angles: the atrium's two lamps start their falloff at their glTF 25°
 //!   instead of 0.8 of 35°, which darkened `Main` by 5/255 on average.

@@ -74,7 +74,7 @@ pub fn create_out_folder(out: &Path) -> Result<()> {
 pub fn check_out_folder(out: &Path) -> Result<()> {
     if out.exists() && !out.is_dir() {
         bail!(
-            "--out {}: is a file, not a folder (the run writes its files into it)",
+            "--out {}: is not a folder (the run writes its files into it)",
             out.display()
         );
     }

@@ -364,11 +364,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let source = find_source(args.assets.as_deref(), &[&heat_path, &json_path])?;
     let camera = match &args.camera {
         Some(name) => name.clone(),
+        // The view `RenderScene::from_model` takes: the first camera, or (orthographic or
+        // none) a view of the bounds, named as such.
         None => source
             .model
-            .cameras
-            .first()
-            .map_or_else(|| "(none)".into(), |c| c.name.clone()),
+            .camera_or_view(0, width, height)
+            .map_or_else(|| "(none)".into(), |(_, name)| name),
     };
     super::source::note_model_scene(
         &source.model,
@@ -553,7 +554,10 @@ fn render_heat_map(
 fn print_report(r: &Report, note: Option<&str>) {
     println!(
         "scene: {}, camera {}, {}x{}",
-        r.scene, r.camera, r.width, r.height
+        r.scene,
+        myriad::scene::printable(&r.camera),
+        r.width,
+        r.height
     );
     if let Some(note) = note {
         println!("note: {note}");

@@ -7,7 +7,7 @@ use super::source::{check_memory, parse_preset};
 use anyhow::{Context, Result, bail, ensure};
 use myriad::scene::{
     ClusterGrid, LightField, Lights, LoadOptions, Placement, RadiusRule, Scene, SpotRule,
-    SurfaceSampler, printable,
+    SurfaceSampler, ViewFaces, printable,
 };
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -18,7 +18,9 @@ const FIELDS: [&str; 5] = ["surfaces", "box", "frustum", "clumps", "sphere"];
 #[derive(clap::Args, Debug)]
 #[command(group = clap::ArgGroup::new("source").required(true).args(["preset", "gltf"]))]
 // `--offset -1` reaches the field's own check ("must be finite and >= 0"), where clap said only
-// "unexpected argument '-1' found" (hostile-input hunt, session 38).
+// "unexpected argument '-1' found" (hostile-input hunt, session 38). Ranges (`--radii -1..2`)
+// are not numbers: those take `--radii=-1..2`, so that a forgotten value is still clap's
+// "a value is required" rather than the next option read as the range (review).
 #[command(allow_negative_numbers = true)]
 pub struct Args {
     /// A standard scene: paper, uniform or sphere.
@@ -51,20 +53,20 @@ pub struct Args {
     #[arg(long, conflicts_with = "preset")]
     depth: Option<String>,
     /// Light radii, uniform in MIN..MAX metres [default: 0.5..3].
-    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["preset", "cutoff"])]
+    #[arg(long, conflicts_with_all = ["preset", "cutoff"])]
     radii: Option<String>,
     /// Instead of --radii: each radius from its intensity, where intensity·max(colour)/d²
     /// falls to this cut-off.
     #[arg(long, conflicts_with = "preset")]
     cutoff: Option<f32>,
     /// Light intensities, uniform in MIN..MAX (one number: constant) [default: 1].
-    #[arg(long, allow_hyphen_values = true, conflicts_with = "preset")]
+    #[arg(long, conflicts_with = "preset")]
     intensity: Option<String>,
     /// Fraction of the lights that are spot lights, 0 to 1 [default: 0].
     #[arg(long, conflicts_with = "preset")]
     spots: Option<f32>,
     /// Spot outer half angles in degrees, MIN..MAX [default: 20..45].
-    #[arg(long, allow_hyphen_values = true, conflicts_with = "preset")]
+    #[arg(long, conflicts_with = "preset")]
     spot_angles: Option<String>,
     /// surfaces: distance of the lights from the surface in metres [default: 0.2].
     #[arg(long, conflicts_with = "preset")]
@@ -176,27 +178,30 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let placement = match field_name {
         "surfaces" => {
             let offset = args.offset.unwrap_or(0.2);
-            let all = SurfaceSampler::new(&model);
             let surfaces = if args.all_faces {
-                all
+                SurfaceSampler::new(&model)
             } else {
-                let kept = SurfaceSampler::for_view(&model, camera.position, offset);
-                let dropped = all.triangle_count() - kept.triangle_count();
-                let inside = SurfaceSampler::seen_from_inside(bounds, camera.position);
-                if inside && dropped == 0 && all.lifted_inside(bounds, offset).triangle_count() == 0
-                {
-                    // `for_view` fell back to every face: said, or the lights all lie outside
-                    // while the summary reads as if the filter had applied (hostile-input hunt).
-                    faces_left_out = format!(
-                        " (on every face: at --offset {offset} no face keeps its lights inside \
-                         the model's bounds, where the camera is)"
-                    );
-                } else if dropped > 0 {
-                    faces_left_out = format!(
-                        " ({dropped} of {} faces left out: their lights would lie outside the \
-                         model's bounds, and the camera is inside them; --all-faces keeps them)",
-                        all.triangle_count()
-                    );
+                let (kept, which) =
+                    SurfaceSampler::for_view_counted(&model, camera.position, offset);
+                match which {
+                    ViewFaces::SeenFromInside { left_out } if left_out > 0 => {
+                        faces_left_out = format!(
+                            " ({left_out} of {} faces left out: turned away from the camera, \
+                             which is inside the model's bounds, with lights that would lie \
+                             outside them; --all-faces keeps them)",
+                            kept.triangle_count() + left_out
+                        );
+                    }
+                    // Said, or the lights may all lie outside while the summary reads as if the
+                    // faces had been chosen (hostile-input hunt, session 38).
+                    ViewFaces::EveryForLackOfAny => {
+                        faces_left_out = format!(
+                            " (on every face: at --offset {offset} none is turned towards the \
+                             camera or keeps its lights inside the model's bounds, where the \
+                             camera is)"
+                        );
+                    }
+                    _ => {}
                 }
                 kept
             };

@@ -297,6 +297,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         let sponza = PathBuf::from(SPONZA);
         if sponza.is_file() {
             let model = super::source::load_model(&sponza, &LoadOptions::default(), &[])?;
+            super::source::note_model_scene(&model, "Sponza", None, args.lights);
             scenes.push(RenderScene::from_model(
                 &model,
                 "Sponza",

@@ -208,9 +208,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     );
 
     // 1. Scene.
+    // Said before the stage starts: a note inside it would print over the spinner.
+    let atrium = myriad::scene::atrium();
+    super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
     let (scene, seconds) = progress.stage("scene generation", || {
-        let atrium = myriad::scene::atrium();
-        super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
         RenderScene::from_model(
             &atrium,
             "default scene (atrium)",

@@ -52,7 +52,10 @@ impl RenderScene {
     }
 
     /// A model's scene: its camera `camera` (by name; default its first, or without a
-    /// perspective one [`Model::view_of_bounds`]) at `width × height`, its own lights then surface lights up to `lights` in all (drawn from `seed`).
+    /// perspective one [`Model::view_of_bounds`]) at `width × height`, its own lights then
+    /// surface lights up to `lights` in all (drawn from `seed`, on the faces
+    /// [`SurfaceSampler::for_view`] keeps for that camera: two cameras of a model may get
+    /// different lights).
     pub fn from_model(
         model: &Model,
         name: &str,
@@ -88,8 +91,9 @@ impl RenderScene {
         }
         let extra = lights - all.len();
         if extra > 0 {
-            // Only faces whose lights stay in the model when the camera is inside it (none on
-            // the outside of the atrium's outer walls), as `myriad scene` places them.
+            // With the camera inside the model, none on faces turned away from it whose lights
+            // would lie outside (the outside of the atrium's outer walls), as `myriad scene`
+            // places them.
             let offset = 0.2;
             let field = LightField::new(Placement::Surfaces {
                 surfaces: SurfaceSampler::for_view(model, camera.position, offset),

@@ -148,7 +148,8 @@ pub use error::{Error, Problem, Result};
 pub use glb_write::glb_container;
 pub use gltf_load::{DEFAULT_LIGHT_CUTOFF, ImageLoading, LoadOptions};
 pub use light_fields::{
-    ColorRule, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler, radius_from_intensity,
+    ColorRule, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler, ViewFaces,
+    radius_from_intensity,
 };
 pub use lights::{DEFAULT_SPOT_INNER_FRACTION, LightRecord, Lights, default_spot_inner_angle};
 pub use model::{

@@ -25,9 +25,10 @@
 //! area table: a triangle is picked with probability proportional to its area (binary search),
 //! a point uniformly inside it (square-root barycentrics), and the light is lifted off the
 //! surface along the triangle's geometric normal (the counter-clockwise front side) by an offset.
-//! Spot lights on surfaces point along that normal. [`SurfaceSampler::for_view`] keeps, for a camera
-//! inside the model's bounds, only the faces whose lights stay inside them (none on the outside
-//! of its outer walls); the command line and the renderer's default scene use it.
+//! Spot lights on surfaces point along that normal. [`SurfaceSampler::for_view`] drops, for a camera
+//! inside the model's bounds, the faces turned away from it whose lights would lie outside
+//! them (the outside of the outer walls); the command line and the renderer's default scene
+//! use it.
 
 use crate::lights::{LightRecord, Lights};
 use crate::model::{Aabb, Model};
@@ -51,6 +52,20 @@ pub struct SurfaceSampler {
     /// `cumulative[t]` = total area of triangles `0..=t` (f64 so a million small triangles do
     /// not lose the last ones to rounding).
     cumulative: Vec<f64>,
+}
+
+/// Which faces [`SurfaceSampler::for_view_counted`] kept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewFaces {
+    /// Every face: the eye is not inside the model's bounds (or they are flat).
+    Every,
+    /// The faces seen from inside; `left_out` of them were dropped (possibly none).
+    SeenFromInside {
+        /// Faces dropped.
+        left_out: usize,
+    },
+    /// Every face, because the rule would have kept none.
+    EveryForLackOfAny,
 }
 
 impl SurfaceSampler {
@@ -81,52 +96,64 @@ impl SurfaceSampler {
         s
     }
 
-    /// The surfaces a view from `eye` wants lights on, lifted by `offset`. With the eye inside
-    /// the model's bounds ([`SurfaceSampler::seen_from_inside`]), only the triangles whose
-    /// lights stay inside them
-    /// ([`SurfaceSampler::lifted_inside`]): an outer wall's exterior face, a floor slab's
-    /// underside or a roof would take lights whose light never reaches the eye (in the default
-    /// atrium, 28 % of a surface field's lights). From outside the bounds every face can be
-    /// seen, so every face is kept; and so is every face when none stays inside (a closed shell
-    /// wound inside out, whose lights are all lifted outwards), rather than no surface at all.
+    /// The surfaces a view from `eye` wants lights on, lifted by `offset`
+    /// ([`SurfaceSampler::for_view_counted`] also says which were kept). With the eye inside the
+    /// model's bounds ([`SurfaceSampler::seen_from_inside`]), a face is dropped when it faces
+    /// away from the eye and its lights would lie outside the bounds
+    /// ([`SurfaceSampler::seen_from`]): an outer wall's exterior face, a floor slab's underside,
+    /// a roof — whose lights light nothing the eye sees (in the default atrium, 28 % of a surface
+    /// field's lights). A face turned towards the eye is always kept: an object seen from a
+    /// corner of its bounds (a model without a camera gets such a view) keeps its near side.
+    /// From outside the bounds every face is kept; and so is every face when the rule would
+    /// keep none (a closed shell wound inside out), rather than no surface at all. So the
+    /// lights depend on the eye: two cameras of one model, with one seed, may place different
+    /// lights.
     pub fn for_view(model: &Model, eye: Vec3, offset: f32) -> Self {
+        Self::for_view_counted(model, eye, offset).0
+    }
+
+    /// [`SurfaceSampler::for_view`], and which faces it kept.
+    pub fn for_view_counted(model: &Model, eye: Vec3, offset: f32) -> (Self, ViewFaces) {
         Self::new(model).viewed_from(model.bounds(), eye, offset)
     }
 
     /// Whether `eye` looks at a model with bounds `bounds` from inside, where
-    /// [`SurfaceSampler::for_view`] keeps only faces whose lights stay inside: the eye within
-    /// the bounds, and the bounds of some thickness on every axis (a flat model has no inside,
-    /// though an eye level with it lies within its bounds).
+    /// [`SurfaceSampler::for_view`] drops faces: the eye within the bounds, and the bounds of
+    /// some thickness on every axis (a flat model has no inside, though an eye level with it
+    /// lies within its bounds).
     pub fn seen_from_inside(bounds: Aabb, eye: Vec3) -> bool {
         bounds.contains(eye) && bounds.size().min_element() > 0.0
     }
 
     /// [`SurfaceSampler::for_view`]'s choice for a model with bounds `bounds`.
-    fn viewed_from(self, bounds: Aabb, eye: Vec3, offset: f32) -> Self {
+    fn viewed_from(self, bounds: Aabb, eye: Vec3, offset: f32) -> (Self, ViewFaces) {
         if !Self::seen_from_inside(bounds, eye) {
-            return self;
+            return (self, ViewFaces::Every);
         }
-        let inside = self.lifted_inside(bounds, offset);
-        if inside.triangle_count() == 0 {
-            self
-        } else {
-            inside
+        let seen = self.seen_from(bounds, eye, offset);
+        match self.triangle_count() - seen.triangle_count() {
+            _ if seen.triangle_count() == 0 => (self, ViewFaces::EveryForLackOfAny),
+            left_out => (seen, ViewFaces::SeenFromInside { left_out }),
         }
     }
 
-    /// Only the triangles whose three corners, lifted by `offset` along the normal, lie inside
-    /// `bounds` (boundary included). The box is convex, so every light placed on a kept
-    /// triangle lies inside it too (up to f32 rounding of the point on the triangle); a triangle
+    /// The triangles whose lights an eye at `eye` inside `bounds` can be lit by: those turned
+    /// towards the eye (it lies on their front side), and those whose three corners, lifted by
+    /// `offset` along the normal, stay inside `bounds` (boundary included; the box is convex,
+    /// so every light on such a triangle does too, up to f32 rounding). A triangle turned away
     /// with a corner lifted out is dropped whole.
-    pub fn lifted_inside(&self, bounds: Aabb, offset: f32) -> Self {
+    pub fn seen_from(&self, bounds: Aabb, eye: Vec3, offset: f32) -> Self {
         Self::from_triangles(
             self.corners
                 .iter()
                 .zip(&self.normals)
                 .filter(|&(corners, &normal)| {
-                    corners
-                        .iter()
-                        .all(|&p| bounds.contains(p + offset * normal))
+                    // One corner decides the side: the triangle is planar.
+                    let towards = normal.dot(eye - corners[0]) > 0.0;
+                    towards
+                        || corners
+                            .iter()
+                            .all(|&p| bounds.contains(p + offset * normal))
                 })
                 .map(|(&corners, _)| corners),
         )
@@ -867,7 +894,8 @@ mod tests {
         let outside = box_faces(shell.min, shell.max, true);
         let all = SurfaceSampler::from_triangles(room.iter().chain(&outside).copied());
         assert_eq!(all.triangle_count(), 24);
-        let inside = all.clone().viewed_from(shell, Vec3::ZERO, 0.2);
+        let (inside, kept) = all.clone().viewed_from(shell, Vec3::ZERO, 0.2);
+        assert_eq!(kept, ViewFaces::SeenFromInside { left_out: 12 });
         assert_eq!(inside.corners, room);
         // Every light is then inside the shell, lifted off the room's walls.
         let lights = LightField::new(Placement::Surfaces {
@@ -880,13 +908,16 @@ mod tests {
             let lifted = p.to_array().iter().any(|c| (c - 8.8).abs() < 1e-5);
             assert!(lifted && p.max_element() <= 9.0, "{}", l.position);
         }
-        // An offset that lifts the room's lights through the shell drops them too: nothing
-        // stays inside, so every face is kept.
-        let through = all.clone().viewed_from(shell, Vec3::ZERO, 19.5);
-        assert_eq!(through.triangle_count(), 24);
+        // The room's faces are turned towards the eye: kept even where their lights would
+        // pass through the shell.
+        let (through, _) = all.clone().viewed_from(shell, Vec3::ZERO, 19.5);
+        assert_eq!(through.corners, room);
         // Seen from outside the shell, every face is kept.
-        let from_outside = all.viewed_from(shell, Vec3::splat(20.0), 0.2);
-        assert_eq!(from_outside.triangle_count(), 24);
+        let (from_outside, kept) = all.viewed_from(shell, Vec3::splat(20.0), 0.2);
+        assert_eq!(
+            (from_outside.triangle_count(), kept),
+            (24, ViewFaces::Every)
+        );
         // A flat model has no inside: an eye level with it keeps both its faces.
         let floor = [
             [Vec3::ZERO, Vec3::Z, Vec3::X],
@@ -898,7 +929,7 @@ mod tests {
             flat,
             Vec3::new(0.5, 0.0, 0.5)
         ));
-        let kept = sheet.viewed_from(flat, Vec3::new(0.5, 0.0, 0.5), 0.2);
+        let (kept, _) = sheet.viewed_from(flat, Vec3::new(0.5, 0.0, 0.5), 0.2);
         assert_eq!(kept.triangle_count(), 2);
     }
 
@@ -906,9 +937,50 @@ mod tests {
     fn a_shell_wound_inside_out_keeps_every_face() {
         let bounds = Aabb::new(Vec3::ZERO, Vec3::ONE);
         let out = SurfaceSampler::from_triangles(box_faces(bounds.min, bounds.max, true));
-        assert_eq!(out.lifted_inside(bounds, 0.1).triangle_count(), 0);
-        let kept = out.viewed_from(bounds, Vec3::splat(0.5), 0.1);
-        assert_eq!(kept.triangle_count(), 12);
+        let eye = Vec3::splat(0.5);
+        assert_eq!(out.seen_from(bounds, eye, 0.1).triangle_count(), 0);
+        let (kept, which) = out.viewed_from(bounds, eye, 0.1);
+        assert_eq!(
+            (kept.triangle_count(), which),
+            (12, ViewFaces::EveryForLackOfAny)
+        );
+    }
+
+    #[test]
+    fn an_object_seen_from_a_corner_of_its_bounds_keeps_the_faces_turned_to_the_eye() {
+        // An octahedron (corners ±1 on the axes), eye outside it but inside its bounds, as
+        // `Model::view_of_bounds` places the eye for a model without a camera.
+        let axis = |i: usize, s: f32| Vec3::AXES[i] * s;
+        let mut faces = Vec::new();
+        for (sx, sy, sz) in [-1.0f32, 1.0]
+            .into_iter()
+            .flat_map(|x| [-1.0f32, 1.0].map(|y| (x, y)))
+            .flat_map(|(x, y)| [-1.0f32, 1.0].map(|z| (x, y, z)))
+        {
+            let (a, b, c) = (axis(0, sx), axis(1, sy), axis(2, sz));
+            // Counter-clockwise seen from outside: flip on an odd number of negative signs.
+            faces.push(if sx * sy * sz > 0.0 {
+                [a, b, c]
+            } else {
+                [a, c, b]
+            });
+        }
+        let octahedron = SurfaceSampler::from_triangles(faces);
+        let bounds = Aabb::new(Vec3::NEG_ONE, Vec3::ONE);
+        let eye = Vec3::splat(0.8);
+        let seen = octahedron.seen_from(bounds, eye, 0.2);
+        // The face towards the eye, whose lights leave the bounds at its corners, is kept.
+        let facing = |s: &SurfaceSampler| {
+            s.normals
+                .iter()
+                .any(|n| n.dot(Vec3::ONE.normalize()) > 0.999)
+        };
+        assert!(facing(&seen));
+        // The faces turned away are dropped: every light of theirs leaves the bounds.
+        assert!(seen.triangle_count() < 8, "{}", seen.triangle_count());
+        for (corners, normal) in seen.corners.iter().zip(&seen.normals) {
+            assert!(normal.dot(eye - corners[0]) > 0.0, "{corners:?}");
+        }
     }
 
     #[test]
@@ -931,6 +1003,8 @@ mod tests {
         // Every face: lights on the outer walls' exterior, under the floor and on the roof.
         assert!(outside(SurfaceSampler::new(&model)) > 400);
         assert_eq!(outside(SurfaceSampler::for_view(&model, eye, 0.2)), 0);
+        let (_, kept) = SurfaceSampler::for_view_counted(&model, eye, 0.2);
+        assert_eq!(kept, ViewFaces::SeenFromInside { left_out: 34 });
         // From above the roof, every face again.
         let above = SurfaceSampler::for_view(&model, Vec3::new(0.0, 40.0, 0.0), 0.2);
         assert_eq!(

@@ -201,10 +201,19 @@ impl Model {
         base_dir: Option<&Path>,
         options: &LoadOptions,
     ) -> Result<Model> {
-        load(bytes, origin, base_dir, options).map_err(|message| Error::Gltf {
-            origin: origin.to_string(),
-            message,
-        })
+        // Messages quote the file's own text (URIs, names, extension names, the gltf crate's
+        // paths with their values): escaped once here, where they leave the loader.
+        let escaped = |text: String| crate::printable(&text).into_owned();
+        match load(bytes, origin, base_dir, options) {
+            Ok(mut model) => {
+                model.warnings = model.warnings.into_iter().map(escaped).collect();
+                Ok(model)
+            }
+            Err(message) => Err(Error::Gltf {
+                origin: origin.to_string(),
+                message: escaped(message),
+            }),
+        }
     }
 }
 
@@ -351,19 +360,28 @@ fn load(
     loader.walk_nodes()?;
     // A name shared by cameras picks the first of them (`Model::camera_index`): said, or
     // `--camera Main` in a model of four cameras named Main shows one without a word.
-    let cameras = &loader.model.cameras;
-    for (i, camera) in cameras.iter().enumerate() {
-        let named = |c: &&crate::model::ModelCamera| c.name == camera.name;
-        if !cameras[..i].iter().any(|c| named(&c)) {
-            let shared = cameras[i..].iter().filter(named).count();
-            if shared > 1 {
-                loader.model.warnings.push(format!(
-                    "{shared} cameras are named \"{}\"; looked up by that name, the first is used",
-                    crate::printable(&camera.name)
-                ));
-            }
-        }
+    // One pass with a map, in first-appearance order (a scan per camera took 31 s on 80 000
+    // camera nodes, review).
+    let mut shared: std::collections::HashMap<&str, (usize, usize)> = Default::default();
+    for (i, camera) in loader.model.cameras.iter().enumerate() {
+        shared.entry(camera.name.as_str()).or_insert((i, 0)).1 += 1;
     }
+    let mut repeated: Vec<(usize, &str, usize)> = shared
+        .into_iter()
+        .filter(|&(_, (_, count))| count > 1)
+        .map(|(name, (first, count))| (first, name, count))
+        .collect();
+    repeated.sort_unstable();
+    let said: Vec<String> = repeated
+        .into_iter()
+        .map(|(_, name, count)| {
+            format!(
+                "{count} cameras are named \"{}\"; looked up by that name, the first is used",
+                crate::printable(name)
+            )
+        })
+        .collect();
+    loader.model.warnings.extend(said);
     let ignored = [
         (
             root.skins.len(),
