@@ -9,7 +9,7 @@ use super::source::check_memory_for;
 use anyhow::Result;
 use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, HeadlessTarget, Renderer};
-use myriad::render::{DEFAULT_GRID, GpuStage, LoopReport, RenderScene, run_frames};
+use myriad::render::{DEFAULT_GRID, GpuStage, LoopReport, run_frames};
 use serde::Serialize;
 use std::process::ExitCode;
 
@@ -110,9 +110,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let (width, height) = parse_size(&args.size)?;
     super::source::check_image_memory(width, height)?;
     check_memory_for(DEFAULT_GRID, args.lights)?;
-    let atrium = myriad::scene::atrium();
-    super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
-    let scene = RenderScene::default_scene(args.lights, width, height)?;
+    let scene = super::source::noted_default_scene(args.lights, width, height)?;
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(&ctx, HEADLESS_FORMAT);
     let gpu_scene = renderer.upload_scene(&ctx, &scene.geometry)?;

@@ -291,9 +291,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let ctx = GpuContext::headless()?;
     let mut scenes = Vec::new();
     if args.gltf.is_empty() {
-        let atrium = myriad::scene::atrium();
-        super::source::note_model_scene(&atrium, "default scene (atrium)", None, args.lights);
-        scenes.push(RenderScene::default_scene(args.lights, width, height)?);
+        scenes.push(super::source::noted_default_scene(
+            args.lights,
+            width,
+            height,
+        )?);
         let sponza = PathBuf::from(SPONZA);
         if sponza.is_file() {
             let model = super::source::load_model(&sponza, &LoadOptions::default(), &[])?;

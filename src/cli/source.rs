@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result, bail, ensure};
 use myriad::cluster_math::glam::UVec3;
+use myriad::render::RenderScene;
 use myriad::scene::{ClusterGrid, LightPolicy, LoadOptions, Model, Preset, Scene};
 use std::path::{Path, PathBuf};
 
@@ -126,6 +127,15 @@ pub fn note_model_scene(model: &Model, name: &str, camera: Option<&str>, lights:
             first.name
         );
     }
+}
+
+/// The default scene (`RenderScene::default_scene`: the atrium, seed 1) with `lights` lights at
+/// `width × height`, after [`note_model_scene`]'s notes; the atrium is generated once.
+pub fn noted_default_scene(lights: usize, width: u32, height: u32) -> Result<RenderScene> {
+    let atrium = myriad::scene::atrium();
+    let name = "default scene (atrium)";
+    note_model_scene(&atrium, name, None, lights);
+    RenderScene::from_model(&atrium, name, None, lights, 1, width, height)
 }
 
 /// The most worker threads `--threads` may ask for (more only costs memory and start-up).
