@@ -300,7 +300,7 @@ mod tests {
     /// of the whole call, and a frame of a thousand lights takes more than 0.1 µs.
     #[test]
     fn measured_times_are_microseconds() {
-        let scene = crate::render::RenderScene::default_scene(1000, 64, 36).unwrap();
+        let scene = myriad_scene::Preset::Paper.generate(1000, 1);
         let input = crate::light_input(&scene.lights);
         let mut exact = LightLists::new();
         Assigner::new().assign(
@@ -331,7 +331,7 @@ mod tests {
     /// compared with: refused, naming the method, the limit and the grid. At the limit they pass.
     #[test]
     fn lists_past_the_pair_limit_are_refused() {
-        let scene = crate::render::RenderScene::default_scene(1000, 64, 36).unwrap();
+        let scene = myriad_scene::Preset::Paper.generate(1000, 1);
         let input = crate::light_input(&scene.lights);
         let mut exact = LightLists::new();
         let (camera, grid) = (&scene.camera, &scene.grid);

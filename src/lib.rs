@@ -10,10 +10,19 @@
 //! | `myriad-cluster-math` | [`cluster_math`] | camera, cluster grid, mappings, plane sets, the f64 oracle |
 //! | `myriad-assignment` | [`assignment`] | light → cluster assignment into CSR lists |
 //! | `myriad-scene` | [`scene`] | scene files, glTF loading, the generated atrium, light fields, frame systems |
-//! | `myriad-gpu` | [`gpu`] | the wgpu renderer |
+//! | `myriad-gpu` | `gpu` (feature `render`) | the wgpu renderer |
 //!
 //! Glue between them lives here and only here: the crates never depend on each other beyond
 //! `cluster-math` (see ARCHITECTURE.md).
+//!
+//! ## Features
+//! - `render` (in the default `cli`): the renderer glue — the `render` module, the `gpu`
+//!   re-export, `profiling::plot_pass_times` — and with it `myriad-gpu`, wgpu, naga and image.
+//!   Without it the facade is what joins scene and assignment ([`light_input`], [`dump`],
+//!   [`evaluate`], [`core_link`], [`profiling`]): an engine that renders itself but takes
+//!   myriad's lights and lists builds no GPU crate (`default-features = false`).
+//! - `cli` (default): the `myriad` binary and what only it uses.
+//! - `tracy`: Tracy spans, frame marks and plots (see [`profiling`]).
 // One `unsafe` call, with the `tracy` feature only: the profiler's shutdown (`profiling.rs`).
 #![cfg_attr(not(feature = "tracy"), forbid(unsafe_code))]
 #![cfg_attr(feature = "tracy", deny(unsafe_code))]
@@ -21,6 +30,7 @@
 
 pub use myriad_assignment as assignment;
 pub use myriad_cluster_math as cluster_math;
+#[cfg(feature = "render")]
 pub use myriad_gpu as gpu;
 pub use myriad_scene as scene;
 
@@ -28,6 +38,7 @@ pub mod core_link;
 pub mod dump;
 pub mod evaluate;
 pub mod profiling;
+#[cfg(feature = "render")]
 pub mod render;
 
 use myriad_assignment::{LightInput, SpotInput};

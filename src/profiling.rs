@@ -55,8 +55,8 @@ thread_local! {
     static FRAME_MARKS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
-/// The frame marks this thread has made so far (tests only).
-#[cfg(test)]
+/// The frame marks this thread has made so far (the renderer glue's tests only).
+#[cfg(all(test, feature = "render"))]
 pub(crate) fn frame_marks_on_this_thread() -> u64 {
     FRAME_MARKS.with(std::cell::Cell::get)
 }
@@ -66,6 +66,7 @@ pub(crate) fn frame_marks_on_this_thread() -> u64 {
 /// once a client runs: the GPU's side of the frame beside the CPU's spans. The loops that read
 /// the times anyway call it (`run_frames`, `myriad render`'s timed frames); reading them costs a
 /// wait for the GPU, so a loop that does not should not start to for this.
+#[cfg(feature = "render")]
 pub fn plot_pass_times(times: Option<&myriad_gpu::PassTimes>) {
     let Some(t) = times else {
         return;
