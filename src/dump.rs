@@ -159,8 +159,10 @@ impl AssignmentDump {
     }
 
     /// Checks that the dump belongs to a scene with `grid` and `lights` lights: the same grid,
-    /// the same edges and planes (exactly: `myriad assign` writes them from the same grid, and
-    /// JSON round-trips f32), every index a light of the scene, and no light twice in a cluster
+    /// the same edges and planes (to [`PLANE_ULPS`] units in the last place: `myriad assign`
+    /// writes the grid's own f32 values, which JSON round-trips, but a tool that evaluates
+    /// DESIGN.md's formulas in f64 and rounds lands an ulp or two away, and a dump of another
+    /// camera or slicing lands far more), every index a light of the scene, and no light twice in a cluster
     /// (a renderer would shade it twice). The first difference is the error; an inconsistent
     /// dump (see [`Self::validate`]) is one too.
     pub fn check_against(&self, grid: &ClusterGrid, lights: usize) -> Result<()> {
@@ -181,7 +183,7 @@ impl AssignmentDump {
             ("y_edges", &self.y_edges, &reference.y_edges),
             ("z_planes", &self.z_planes, &reference.z_planes),
         ] {
-            if let Some(i) = (0..want.len()).find(|&i| got[i] != want[i]) {
+            if let Some(i) = (0..want.len()).find(|&i| !same_plane(got[i], want[i])) {
                 bail!(
                     "{name}[{i}] is {}, but the scene's grid has {} (another camera or depth slicing?)",
                     got[i],
@@ -215,6 +217,24 @@ impl AssignmentDump {
             indices: self.indices.clone(),
         }
     }
+}
+
+/// How far, in units in the last place, a dump's edge or plane may be from the grid's own value
+/// ([`AssignmentDump::check_against`]).
+pub const PLANE_ULPS: u32 = 4;
+
+/// Are `got` and `want` within [`PLANE_ULPS`] of each other? Measured on the ordered integer
+/// line of f32 values, so it holds the same at any magnitude, and across zero (an NDC edge of 0
+/// computed as −1e-17 is a long way off in ulps: such an edge is written as the grid writes it,
+/// and −0 equals 0).
+fn same_plane(got: f32, want: f32) -> bool {
+    // The f32 values in order as integers: negatives mirrored below the positives.
+    let line = |v: f32| {
+        let bits = v.to_bits() as i32;
+        if bits < 0 { i32::MIN - bits } else { bits }
+    };
+    got == want
+        || (got.is_finite() && want.is_finite() && line(got).abs_diff(line(want)) <= PLANE_ULPS)
 }
 
 #[cfg(test)]
@@ -275,6 +295,35 @@ mod tests {
         dump.counts[7] = 1;
         let e = dump.validate().unwrap_err().to_string();
         assert_eq!(e, "cluster 7's list (indices[1..2]) overlaps cluster 5's");
+    }
+
+    /// A plane an ulp or a few off (another tool's f64 formula, rounded) is the same plane; one
+    /// further off is another grid's, named with both values.
+    #[test]
+    fn planes_a_few_ulps_off_are_the_grids_and_further_ones_are_not() {
+        let step = |v: f32, ulps: i32| f32::from_bits((v.to_bits() as i32 + ulps) as u32);
+        for ulps in [-4, -1, 1, 4] {
+            let mut dump = one_pair();
+            dump.z_planes[2] = step(dump.z_planes[2], ulps);
+            dump.x_edges[0] = step(dump.x_edges[0], -ulps);
+            dump.check_against(&grid(), 1).unwrap();
+        }
+        for ulps in [-5, 5, 1000] {
+            let mut dump = one_pair();
+            let want = dump.z_planes[2];
+            dump.z_planes[2] = step(want, ulps);
+            let e = dump.check_against(&grid(), 1).unwrap_err().to_string();
+            let got = dump.z_planes[2];
+            assert_eq!(
+                e,
+                format!(
+                    "z_planes[2] is {got}, but the scene's grid has {want} (another camera or depth slicing?)"
+                )
+            );
+        }
+        // Across zero, and the signs of zero.
+        assert!(same_plane(0.0, -0.0) && same_plane(f32::from_bits(1), -f32::from_bits(1)));
+        assert!(!same_plane(1e-17, 0.0) && !same_plane(f32::NAN, f32::NAN));
     }
 
     #[test]

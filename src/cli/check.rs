@@ -48,6 +48,10 @@ enum Reference {
 /// What `check --json` prints.
 #[derive(Serialize, Debug)]
 struct CheckOutput {
+    /// The scene checked against: its file, or the preset it was generated from.
+    scene: String,
+    /// The dump's file, as given.
+    dump: String,
     reference: Reference,
     /// The grid checked: the scene's, or the coarser one a pair budget made `assign` use.
     grid: [u32; 3],
@@ -99,6 +103,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         Reference::ExactMethod => check_all(&scene.lights, &scene.camera, &grid, &lists),
     };
     let out = CheckOutput {
+        scene: name.clone(),
+        dump: args.dump.display().to_string(),
         reference: args.reference,
         grid: grid.dims().to_array(),
         scene_grid: scene.grid.dims().to_array(),
@@ -126,7 +132,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             Reference::Independent => "the f64 oracle, every cluster (independent)",
             Reference::ExactMethod => "the exact method's lists",
         };
-        println!("{name} vs {} (against {reference}):", args.dump.display());
+        println!("{name} vs {} (against {reference}):", out.dump);
         if out.coarsened {
             let [x, y, z] = out.grid;
             println!(
@@ -141,16 +147,16 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     if let Some(m) = out.first_miss {
         eprintln!(
-            "error: {} miss(es); e.g. cluster {} (tile {}, {}, slice {}) lacks light {} (scene-file \
-             index), which the oracle says touches it",
-            out.misses, m.cluster, m.tile[0], m.tile[1], m.tile[2], m.light
+            "error: {}: {} miss(es); e.g. cluster {} (tile {}, {}, slice {}) lacks light {} \
+             (scene-file index), which the oracle says touches it",
+            out.dump, out.misses, m.cluster, m.tile[0], m.tile[1], m.tile[2], m.light
         );
     }
     if let Some((cluster, light)) = invalid.first {
         eprintln!(
-            "error: the dump lists {} invalid light(s), skipped when the scene was loaded, in {} \
-             pair(s); e.g. cluster {cluster} lists light {light} (scene-file index)",
-            invalid.lights, invalid.count
+            "error: {}: the dump lists {} invalid light(s), skipped when the scene was loaded, in \
+             {} pair(s); e.g. cluster {cluster} lists light {light} (scene-file index)",
+            out.dump, invalid.lights, invalid.count
         );
     }
     Ok(if out.misses == 0 && invalid.count == 0 {

@@ -170,7 +170,11 @@ fn check_finds_a_removed_light_with_either_reference() {
         assert_eq!(cmp["misses"], 1, "{reference}: {cmp}");
         assert_eq!(cmp["first_miss"]["cluster"], c, "{reference}: {cmp}");
         assert_eq!(cmp["first_miss"]["light"], removed, "{reference}: {cmp}");
-        assert_mentions(&stderr(&out), &["1 miss(es)", &format!("cluster {c}")]);
+        // The dump is named where the verdict is: on stderr and in the JSON.
+        let broken = broken.to_str().unwrap();
+        assert_eq!(cmp["dump"], broken, "{reference}: {cmp}");
+        let named = format!("error: {broken}: 1 miss(es)");
+        assert_mentions(&stderr(&out), &[&named, &format!("cluster {c}")]);
     }
 }
 
