@@ -19,7 +19,7 @@
 //! let (x, y, z) = (vec![0.0, 2.0], vec![0.0, 1.0], vec![-5.0, -20.0]);
 //! let radius = vec![1.0, 3.0];
 //! let mut assigner = Assigner::new(); // keep both across frames:
-//! let mut lists = LightLists::new(); // steady-state frames allocate nothing (see `Assigner`)
+//! let mut lists = LightLists::new(); // no list storage allocated in steady state (see `Assigner`)
 //! let input = LightInput::points(&x, &y, &z, &radius);
 //! let stats = assigner.assign(Method::Refined, &input, &camera, &grid, &mut lists);
 //! assert_eq!(stats.pairs, 57);
