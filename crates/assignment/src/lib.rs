@@ -34,7 +34,7 @@
 //! | --- | --- | --- |
 //! | `exact` | every candidate cluster checked with the f64 oracle | the reference; slow |
 //! | `linear` | the paper's Algorithm 1: planes stepped one by one | the baseline to beat |
-//! | `binary` | binary search of the x-, y-, z-plane sets → a box of clusters | fast |
+//! | `binary` | the x-, y-, z-plane sets searched (a binary search's partition points, found from the closed-form guess in 0–2 probes: `search.rs`) → a box of clusters | fast |
 //! | `refined` | binary's box tightened per slice and row | fast, few false positives |
 //! | `cone` | binary's box cut per tile by spherical-sliced cone tests (seed 004) | the fewest false positives short of `exact` on `paper` and `sphere`; several times `refined`'s time |
 //!
