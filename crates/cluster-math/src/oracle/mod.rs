@@ -20,8 +20,12 @@
 //! never leaving one out — only at such cameras: a field of view within 0.1° of 180° with a far
 //! plane of 1e30 or more, or targets about 4·10⁹ pixels wide. There a wall's normal rounds to the
 //! eye plane's, a point's projection is taken as inside a face it is not, and the distance comes
-//! out short (5.142e11 against a true 5.147e11 and a radius of 5.142e11); the spot test's GJK
-//! loses a cone wholly behind the eye the same way. `exact` then lists those pairs too, and a
+//! out short (5.142e11 against a true 5.147e11 and a radius of 5.142e11). The spot test's GJK
+//! lost a cone wholly behind the eye the same way, and sooner: its band grows with the cell's
+//! corners, and a later audit (2026-11-30) found needle spots behind the eye listed at slopes of
+//! only 1e8–5e9 (a field of view within 0.02° of 180° on a target 10⁴–10⁵ pixels wide); a cone
+//! that stays shallower than the cell's near wall is now rejected by that wall alone, in the
+//! light's own scale (`spot.rs`, step 5). `exact` then lists those pairs too, and a
 //! method judged against the oracle there can show "misses" that are none (the audit re-judged
 //! each of its 250 with an independent distance or by sampling the volume: all false); a real
 //! miss is never hidden, since the oracle only errs towards listing more. Left as it is: the

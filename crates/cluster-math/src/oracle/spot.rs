@@ -52,7 +52,12 @@
 //! 4. **Degenerate cones**: `angle < 0` leaves only the apex (already known to be outside):
 //!    `false`. `angle > 90°`, a NaN angle, a zero or non-finite `direction` or an infinite `range`:
 //!    the ball test, which step 2 already passed: `true`. (A non-unit `direction` is normalised.)
-//! 5. **GJK** on `D = C − S` with support `s_D(−u) = s_C(−u) − s_S(u)` (the point of `D` lowest
+//! 5. **Near wall** (exact): if the volume's deepest point (its support along the view axis) is
+//!    shallower than the cell's near depth by more than 64 ulps of `|apex| + range`: `false`. The
+//!    wall's normal is the view axis, so this gap rounds with the light's coordinates alone,
+//!    however far the cell's corners reach (see `tol` above: near 180° of field of view they
+//!    reach 10⁸ times their depth out, and GJK's band with them).
+//! 6. **GJK** on `D = C − S` with support `s_D(−u) = s_C(−u) − s_S(u)` (the point of `D` lowest
 //!    along `u`):
 //!    * `s_C(v)` is the cell corner maximising `v·c`;
 //!    * `s_S(u)` is the better (along `u`) of the apex and the cap's support point: `apex + range·û`
@@ -73,10 +78,10 @@
 //!       from the triangle's normal (or the point made exactly perpendicular to the segment),
 //!       which stays accurate when `|v|` is tiny next to the points. A tetrahedron enclosing the
 //!       origin ends in step 1; otherwise the simplex shrinks to the best face (≤ 3 points).
-//!    5. If `|v|` did not decrease, GJK has stalled; go to step 6 (also when iterations run out).
+//!    5. If `|v|` did not decrease, GJK has stalled; go to step 7 (also when iterations run out).
 //!       This happens for near-touching contacts of a long cell edge with the curved volume,
 //!       where GJK's far support points make progress vanish.
-//! 6. **Feature search** (exact). If the sets are disjoint, the cell's point closest to `S` lies
+//! 7. **Feature search** (exact). If the sets are disjoint, the cell's point closest to `S` lies
 //!    on a face, an edge or at a corner, and the best separating direction points from `S` to it:
 //!    * a face: the face's outward normal;
 //!    * a corner: from the corner's closest point of `S` (apex, cap, side or rim) to the corner;
@@ -123,7 +128,7 @@ pub fn spot_intersects_cell(spot: &SpotVolume, cell: &Cell) -> bool {
     classify(spot, cell, Engine::GjkThenFeatures).0
 }
 
-/// Which algorithm decides step 5 (tests run the feature search alone to cross-check GJK).
+/// Which algorithm decides step 6 (tests run the feature search alone to cross-check GJK).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Engine {
     /// GJK, and the feature search only when GJK stalls (the public behaviour).
@@ -136,15 +141,15 @@ enum Engine {
 /// Which step decided.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Route {
-    /// Steps 1–4: exact quick checks and the ball fallback.
+    /// Steps 1–5: exact quick checks and the ball fallback.
     Quick,
-    /// Step 5: GJK's certificates.
+    /// Step 6: GJK's certificates.
     Gjk,
-    /// Step 6: the feature search.
+    /// Step 7: the feature search.
     Features,
 }
 
-/// Steps 1–6 of the module docs: the answer and the step that gave it.
+/// Steps 1–7 of the module docs: the answer and the step that gave it.
 fn classify(spot: &SpotVolume, cell: &Cell, engine: Engine) -> (bool, Route) {
     // 1. Empty volume, or one that is nowhere.
     if !(spot.range >= 0.0) || !spot.apex.is_finite() {
@@ -194,14 +199,23 @@ fn classify(spot: &SpotVolume, cell: &Cell, engine: Engine) -> (bool, Route) {
         cos_angle,
         sin_angle,
     };
+    // 5. The near wall (exact): the cell lies at depths from `depths[0]` on, so a volume whose
+    // deepest point is shallower lies wholly on the eye's side of that wall. The wall's normal is
+    // the view axis itself, so this gap is measured in the light's own coordinates and rounds
+    // with them alone — where GJK's band grows with the cell's corners, which a field of view a
+    // hair under 180° puts 10⁸ times as far out as they are deep (an audit's needle spot wholly
+    // behind the eye, 0.013 from a cell whose band was 200 wide, was listed).
+    if convex.deepest() < cell.depths[0] - BALL_ROUNDING * (spot.apex.length() + spot.range) {
+        return (false, Route::Quick);
+    }
     let corners = cell.corners();
-    // 5. GJK.
+    // 6. GJK.
     if engine == Engine::GjkThenFeatures
         && let Some(answer) = gjk(&convex, &corners, scale)
     {
         return (answer, Route::Gjk);
     }
-    // 6. The feature search.
+    // 7. The feature search.
     (
         feature_search(&convex, cell, &corners, tol),
         Route::Features,
@@ -227,6 +241,11 @@ struct ConvexSpot {
 }
 
 impl ConvexSpot {
+    /// The largest view depth (`−z`) of the volume: its support along the view axis.
+    fn deepest(&self) -> f64 {
+        -self.support(DVec3::NEG_Z).z
+    }
+
     /// The unit direction of `v`'s component perpendicular to the axis (any unit perpendicular
     /// when there is none). Projected out twice: when `v` is nearly along the axis, one pass
     /// leaves a residue that is not perpendicular to it, and normalising that would be garbage.
@@ -348,7 +367,7 @@ fn gap(spot: &ConvexSpot, corners: &[DVec3; 8], u: DVec3) -> f64 {
     u.dot(cell_support(corners, -u)) - u.dot(spot.support(u))
 }
 
-/// Step 5 of the module docs: GJK on `C − S` with certified lower and upper distance bounds.
+/// Step 6 of the module docs: GJK on `C − S` with certified lower and upper distance bounds.
 /// `None` when it stalls or runs out of iterations.
 fn gjk(spot: &ConvexSpot, corners: &[DVec3; 8], scale: f64) -> Option<bool> {
     let (tol, converged) = (TOLERANCE * scale, CONVERGENCE * scale);
@@ -469,7 +488,7 @@ fn search_edge(spot: &ConvexSpot, a: DVec3, b: DVec3) -> EdgeSearch {
     }
 }
 
-/// Step 6 of the module docs: whether the sets intersect, by trying the separating directions of
+/// Step 7 of the module docs: whether the sets intersect, by trying the separating directions of
 /// every feature of the cell (face normals, and the candidates of each corner and of each edge's
 /// point closest to the volume). A cell point found in the volume proves an intersection.
 fn feature_search(spot: &ConvexSpot, cell: &Cell, corners: &[DVec3; 8], tol: f64) -> bool {
@@ -1381,6 +1400,55 @@ mod tests {
         // must end a range past the spot's far depth (about 2e-14), not a fixed length beyond it:
         // a cut at depth 2 or more made the band 1e-12 of that, ten million ranges.
         assert_tolerance_stays_local(1e-14, 1e-20, [10.0 * 1e-14, 1e7]);
+    }
+
+    /// An audit's needle spot (a miss hunt, 2026-11-30): its apex 0.008 behind the eye, pointing
+    /// further behind, against a cell of a 179.985° camera whose x walls slope 1e8 — GJK's band
+    /// there is about 200 wide (the corners of the cell cut a range past the light reach 2e14
+    /// out), and the 0.013 between the volume and the near wall was inside it: listed. The near
+    /// wall now decides, in the light's own scale; moved to touch the wall, it is listed.
+    #[test]
+    fn a_spot_wholly_behind_the_eye_misses_a_cell_of_a_nearly_flat_view() {
+        let cell = Cell {
+            x_slopes: [-166194811.279304, -99716886.7675824],
+            y_slopes: [-7607.794705778687, -5705.846029334015],
+            depths: [0.004788006190210581, 1775889.125],
+        };
+        let behind = SpotVolume {
+            apex: DVec3::new(-652634.2885737368, -17.259994845615438, 0.00829731416888535),
+            direction: DVec3::new(-8.09345799595742e-6, 0.997898635148469, 0.0647943971599304),
+            range: 652470.0625,
+            angle: 3.902640855812933e-6,
+        };
+        assert!(!spot_intersects_cell(&behind, &cell));
+        assert_eq!(classify(&behind, &cell, Engine::GjkThenFeatures), (false, Route::Quick));
+        // Turned to face into the view, the needle reaches the cell's depths: the near wall
+        // does not decide it (GJK does, as before).
+        let turned = SpotVolume {
+            direction: DVec3::new(-8.09345799595742e-6, 0.997898635148469, -0.0647943971599304),
+            ..behind
+        };
+        assert_ne!(classify(&turned, &cell, Engine::GjkThenFeatures).1, Route::Quick);
+        // A spot whose deepest point is exactly on the near wall of a plain cell touches it.
+        let unit = unit_cell();
+        for lateral in [0.0, 0.4, -0.4] {
+            let touching = SpotVolume {
+                apex: DVec3::new(lateral, lateral, -unit.depths[0] + 0.5),
+                direction: DVec3::NEG_Z,
+                range: 0.5,
+                angle: 0.2,
+            };
+            assert!(spot_intersects_cell(&touching, &unit), "{lateral}");
+            let short = SpotVolume {
+                range: 0.5 - 1e-9,
+                ..touching
+            };
+            assert_eq!(
+                classify(&short, &unit, Engine::GjkThenFeatures),
+                (false, Route::Quick),
+                "{lateral}"
+            );
+        }
     }
 
     #[test]
