@@ -143,7 +143,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
         println!("  reported pairs        {}", out.reported_pairs);
         println!("  misses                {}", out.misses);
         println!("  false positives       {}", out.false_positives);
-        println!("  false-positive ratio  {:.4}", out.false_positive_ratio);
+        if out.exact_pairs == 0 && out.false_positives > 0 {
+            // Every reported pair is false, and there is nothing to divide by: the JSON's 0
+            // (kept a number for readers that expect one) would read as "perfect" here.
+            println!("  false-positive ratio  n/a (no exact pairs to divide by)");
+        } else {
+            println!("  false-positive ratio  {:.4}", out.false_positive_ratio);
+        }
     }
     if let Some(m) = out.first_miss {
         eprintln!(

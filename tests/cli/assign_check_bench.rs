@@ -827,3 +827,43 @@ fn check_of_a_scene_no_light_touches_has_a_zero_ratio() {
     assert_eq!(u64_field(&cmp, "exact_pairs"), 0, "{cmp}");
     assert_eq!(cmp["false_positive_ratio"], 0.0, "{cmp}");
 }
+
+/// An audit's scene (a miss hunt, 2026-11-30): a 179.985° view on a 65536×3 target and one needle
+/// spot wholly behind the eye. The oracle listed it in two clusters it does not touch (its band
+/// grew with the cells' corners), so `check` called the fast methods' right lists misses; now
+/// nothing is exact, every method passes, and the text says the ratio has nothing to divide by
+/// where the JSON keeps its 0.
+#[test]
+fn a_needle_spot_behind_the_eye_of_a_nearly_flat_view_is_no_miss() {
+    let dir = work_dir("needle_behind_the_eye");
+    let scene = write(
+        &dir,
+        "needle.json",
+        r#"{"camera": {"position": [232.95943, -182.32129, -140.78365],
+             "target": [211.74008, -493.58524, -240.76201],
+             "up": [0.9979002652071821, -0.06166629543554522, -0.019807289231281992],
+             "fov_y_deg": 179.98494, "width": 65536, "height": 3,
+             "near": 0.004788006, "far": 21310670},
+           "grid": {"x": 5, "y": 8, "z": 12, "depth": "linear"},
+           "lights": [{"position": [215.73712, 199402.8, -621508.06], "radius": 652470.06,
+                       "spot": {"direction": [1, 2.6444755e-05, -5.159902e-09],
+                                "angle_deg": 0.00022360485825471512}}]}"#,
+    );
+    for method in ["exact", "binary", "refined", "cone"] {
+        let dump = dir.join(format!("{method}.dump.json"));
+        let cmp = assign_and_check(&scene, method, &dump);
+        assert_eq!(u64_field(&cmp, "exact_pairs"), 0, "{method}: {cmp}");
+        assert_eq!(u64_field(&cmp, "misses"), 0, "{method}: {cmp}");
+        if method == "binary" {
+            assert!(u64_field(&cmp, "false_positives") > 0, "{cmp}");
+            let text = stdout(&myriad_ok(&[
+                "check".as_ref(),
+                "--scene".as_ref(),
+                scene.as_os_str(),
+                "--dump".as_ref(),
+                dump.as_os_str(),
+            ]));
+            assert_mentions(&text, &["false-positive ratio  n/a (no exact pairs"]);
+        }
+    }
+}

@@ -1421,14 +1421,20 @@ mod tests {
             angle: 3.902640855812933e-6,
         };
         assert!(!spot_intersects_cell(&behind, &cell));
-        assert_eq!(classify(&behind, &cell, Engine::GjkThenFeatures), (false, Route::Quick));
+        assert_eq!(
+            classify(&behind, &cell, Engine::GjkThenFeatures),
+            (false, Route::Quick)
+        );
         // Turned to face into the view, the needle reaches the cell's depths: the near wall
         // does not decide it (GJK does, as before).
         let turned = SpotVolume {
             direction: DVec3::new(-8.09345799595742e-6, 0.997898635148469, -0.0647943971599304),
             ..behind
         };
-        assert_ne!(classify(&turned, &cell, Engine::GjkThenFeatures).1, Route::Quick);
+        assert_ne!(
+            classify(&turned, &cell, Engine::GjkThenFeatures).1,
+            Route::Quick
+        );
         // A spot whose deepest point is exactly on the near wall of a plain cell touches it.
         let unit = unit_cell();
         for lateral in [0.0, 0.4, -0.4] {
