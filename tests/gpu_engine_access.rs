@@ -683,3 +683,88 @@ fn a_read_back_past_the_buffer_limit_is_an_error() {
         other => panic!("a read back past the limit: {:?}", other.map(|v| v.len())),
     }
 }
+
+/// The engine guide's "In an engine's own frame" steps, word for word with public items, on an
+/// engine's own renderer and target: cull and gather, the depth prepass and its read-back, the
+/// fitted grid and the active clusters *of the fitted grid*, `assign_active`, and the shading
+/// after the prepass — the image of a plain frame of every light. (Followed literally, the
+/// guide's first version marked the mask on the unfitted grid, which `assign_active` refuses
+/// with a panic; a drop-in review found it.)
+#[test]
+fn the_guides_skipping_steps_in_an_engines_own_frame_give_the_plain_frames_image() {
+    use myriad::assignment::{ActiveClusters, Assigner, LightLists};
+    use myriad::gpu::{FrameDesc, HEADLESS_FORMAT};
+    use myriad::render::{
+        blended_bounds, cluster_lists, fitted_grid, light_columns, mark_active,
+        max_channel_difference,
+    };
+    use myriad::scene::Lights;
+    use myriad::scene::systems::{Visibility, cull_lights};
+    let Some((scene, viewer)) = viewer_after_one_frame(192, 96) else {
+        return;
+    };
+    let ctx = &viewer.ctx;
+    let (camera, grid) = (&scene.camera, &scene.grid);
+    let mut renderer = Renderer::try_new(ctx, HEADLESS_FORMAT).unwrap();
+    let gpu_scene = renderer.upload_scene(ctx, &scene.geometry).unwrap();
+    let texture = engine_target(ctx, (camera.width, camera.height), HEADLESS_FORMAT, &[]);
+    let view = texture.create_view(&Default::default());
+    let mut assigner = Assigner::new();
+
+    // The plain frame: every light, the whole grid.
+    let mut all_lists = LightLists::new();
+    let input = myriad::light_input(&scene.lights);
+    assigner.assign(Method::Refined, &input, camera, grid, &mut all_lists);
+    let plain = FrameDesc::clustered(
+        camera,
+        grid,
+        light_columns(&scene.lights),
+        cluster_lists(&all_lists),
+    );
+    renderer.render(ctx, &gpu_scene, &plain, &view).unwrap();
+    let plain_image = myriad::gpu::read_rgba8(ctx, &texture).unwrap();
+
+    // 1. Cull, and gather the visible lights: the lists index these from here on.
+    let (mut visibility, mut visible) = (Visibility::default(), Lights::new());
+    cull_lights(camera, scene.lights.slices(), &mut visibility);
+    scene.lights.gather_into(&visibility.indices, &mut visible);
+    assert!(
+        visible.len() < scene.lights.len(),
+        "the cull must drop some"
+    );
+    // 2. The depth prepass and its read-back.
+    renderer.render_prepass(ctx, &gpu_scene, camera).unwrap();
+    let depth = renderer.read_depth(ctx).unwrap().expect("the prepass drew");
+    // 3. The fitted grid, then the active clusters of that grid.
+    let blended = blended_bounds(&scene.geometry);
+    assert!(!blended.is_empty(), "the atrium has glass");
+    let fitted = fitted_grid(grid, camera, &depth, &blended);
+    let mut mask = ActiveClusters::new(&fitted);
+    mark_active(&mut mask, &fitted, camera, &depth, &blended);
+    assert!(mask.active_count() < fitted.cluster_count());
+    // 4. Assign the visible lights to the active clusters.
+    let mut lists = LightLists::new();
+    let stats = assigner.assign_active(
+        Method::Refined,
+        &myriad::light_input(&visible),
+        camera,
+        &fitted,
+        Some(&mask),
+        &mut lists,
+    );
+    let drawn = stats.grid_built(&fitted);
+    assert!(lists.pair_count() < all_lists.pair_count());
+    // 5. Shade after the prepass, with the gathered columns.
+    let frame = FrameDesc::clustered(
+        camera,
+        &drawn,
+        light_columns(&visible),
+        cluster_lists(&lists),
+    );
+    renderer
+        .render_after_prepass(ctx, &gpu_scene, &frame, &view)
+        .unwrap();
+    let skipped_image = myriad::gpu::read_rgba8(ctx, &texture).unwrap();
+    let difference = max_channel_difference(&plain_image, &skipped_image);
+    assert!(difference <= 1, "{difference}/255 off the plain frame");
+}

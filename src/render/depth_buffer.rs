@@ -186,7 +186,8 @@ impl SliceEdgesNdc {
 
 /// Marks the clusters of every covered pixel (both sides of a slice edge within
 /// 1e-5 relative) and of every blended draw's screen box (`blended`: their world bounds,
-/// [`crate::render::blended_bounds`]).
+/// [`crate::render::blended_bounds`]). The mask is reset for `grid` first, so one mask serves
+/// every frame's grid; assign with that same grid (after [`fitted_grid`], the fitted one).
 pub fn mark_active(
     mask: &mut ActiveClusters,
     grid: &ClusterGrid,
