@@ -5,6 +5,45 @@
 //! misspelt `offests` would otherwise leave the lists unchecked behind a default), and counts and
 //! indices must be JSON integers (`4.0` is refused: a fractional index has no meaning, and
 //! accepting some floats invites `4.5`). Key order is free, as in any JSON object.
+//!
+//! ## Index spaces
+//! A dump names lights by their index in the scene file's `lights` array, not by column of the
+//! loaded [`Lights`](myriad_scene::Lights): with [`LightPolicy::SkipInvalid`](myriad_scene::LightPolicy)
+//! the invalid lights are not loaded, so every later light's column is smaller than its file
+//! index. Hence the two counts below: [`AssignmentDump::check_against`] takes the file's light
+//! count (loaded + skipped), and lists compared with an assignment of the loaded columns (as
+//! [`crate::evaluate::compare`] does) come from [`AssignmentDump::lists_of_columns`], not
+//! [`AssignmentDump::lists`] — whose file indices, compared with columns, read as misses.
+//!
+//! ```
+//! use myriad::assignment::{Assigner, LightLists, Method};
+//! use myriad::dump::AssignmentDump;
+//! use myriad::scene::{LightPolicy, Scene};
+//!
+//! let text = r#"{
+//!   "camera": {"position": [0, 0, 0], "target": [0, 0, -1], "up": [0, 1, 0], "fov_y_deg": 60,
+//!              "width": 320, "height": 180, "near": 0.1, "far": 50},
+//!   "grid": {"x": 8, "y": 4, "z": 8, "depth": "log"},
+//!   "lights": [{"position": [0, 0, -5], "radius": 1},
+//!              {"position": [0, 0, -5], "radius": -1},
+//!              {"position": [1, 0, -8], "radius": 2}]
+//! }"#;
+//! let scene = Scene::from_json_str(text, "inline scene", LightPolicy::SkipInvalid)?;
+//! assert_eq!((scene.lights.len(), scene.skipped.len()), (2, 1));
+//! let mut lists = LightLists::new();
+//! let input = myriad::light_input(&scene.lights);
+//! Assigner::new().assign(Method::Refined, &input, &scene.camera, &scene.grid, &mut lists);
+//!
+//! let dump = AssignmentDump::new(&scene.grid, &lists, &scene.lights.source_index);
+//! assert!(dump.indices.contains(&2)); // the file's third light, the second column
+//! dump.check_against(&scene.grid, scene.lights.len() + scene.skipped.len())?;
+//! let back = dump.lists_of_columns(&scene.lights.source_index)?;
+//! assert_eq!(back, lists);
+//! let mut exact = LightLists::new();
+//! Assigner::new().assign(Method::Exact, &input, &scene.camera, &scene.grid, &mut exact);
+//! assert_eq!(myriad::evaluate::compare(&back, &exact).misses, 0);
+//! # Ok::<(), anyhow::Error>(())
+//! ```
 
 use anyhow::{Context, Result, bail, ensure};
 use myriad_assignment::LightLists;
@@ -161,7 +200,7 @@ impl AssignmentDump {
     /// Checks that the dump belongs to a scene with `grid` and `lights` lights: the same grid,
     /// the same edges and planes (to [`PLANE_ULPS`] units in the last place: `myriad assign`
     /// writes the grid's own f32 values, which JSON round-trips, but a tool that evaluates
-    /// DESIGN.md's formulas in f64 and rounds lands an ulp or two away, and a dump of another
+    /// the format's formulas (docs/cli.md) in f64 and rounds lands an ulp or two away, and a dump of another
     /// camera or slicing lands far more), every index a light of the scene, and no light twice in a cluster
     /// (a renderer would shade it twice). The first difference is the error; an inconsistent
     /// dump (see [`Self::validate`]) is one too.
@@ -209,7 +248,36 @@ impl AssignmentDump {
         Ok(())
     }
 
-    /// The lists of the dump (indices in scene-file space).
+    /// The lists of the dump with each scene-file index turned into the column of the loaded
+    /// lights that holds it (`source_index`: [`myriad_scene::Lights::source_index`], each column's
+    /// file index) — the inverse of [`Self::new`]'s mapping, for comparing with an assignment of
+    /// those columns. A pair naming a file light that has no column (one skipped when the scene
+    /// was loaded: an assignment never lists one) is an error naming it.
+    pub fn lists_of_columns(&self, source_index: &[u32]) -> Result<LightLists> {
+        let file_lights = source_index
+            .iter()
+            .chain(&self.indices)
+            .map(|&i| i as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut column_of = vec![u32::MAX; file_lights];
+        for (column, &file_index) in source_index.iter().enumerate() {
+            column_of[file_index as usize] = column as u32;
+        }
+        let mut lists = self.lists();
+        for (k, l) in lists.indices.iter_mut().enumerate() {
+            let column = column_of[*l as usize];
+            ensure!(
+                column != u32::MAX,
+                "indices[{k}] names light {l} of the scene file, which has no column among the \
+                 loaded lights (skipped when the scene was loaded?)"
+            );
+            *l = column;
+        }
+        Ok(lists)
+    }
+
+    /// The lists of the dump (indices in scene-file space; see [`Self::lists_of_columns`]).
     pub fn lists(&self) -> LightLists {
         LightLists {
             offsets: self.offsets.clone(),
@@ -324,6 +392,28 @@ mod tests {
         // Across zero, and the signs of zero.
         assert!(same_plane(0.0, -0.0) && same_plane(f32::from_bits(1), -f32::from_bits(1)));
         assert!(!same_plane(1e-17, 0.0) && !same_plane(f32::NAN, f32::NAN));
+    }
+
+    /// File indices become columns; a listed light without a column (skipped on loading) is an
+    /// error naming it, not a silent index past the columns.
+    #[test]
+    fn lists_of_columns_map_file_indices_and_refuse_a_skipped_light() {
+        let mut dump = one_pair();
+        dump.indices = vec![3];
+        // Columns 0 and 1 hold the file's lights 1 and 3 (0 and 2 were skipped).
+        let lists = dump.lists_of_columns(&[1, 3]).unwrap();
+        assert_eq!(lists.indices, vec![1]);
+        assert_eq!(
+            (lists.offsets, lists.counts),
+            (dump.offsets.clone(), dump.counts.clone())
+        );
+        let e = dump.lists_of_columns(&[1, 2]).unwrap_err().to_string();
+        assert!(
+            e.starts_with("indices[0] names light 3 of the scene file"),
+            "{e}"
+        );
+        let e = dump.lists_of_columns(&[]).unwrap_err().to_string();
+        assert!(e.contains("light 3"), "{e}");
     }
 
     #[test]
