@@ -965,14 +965,16 @@ mod tests {
     }
 
     /// A spot of range 1e9 behind the eye, aimed at the near face of the widest cell, one slice
-    /// from 1 to 2e9 deep: the spot reaches 1e9 into the cell, and the oracle's band is 64 ulps
-    /// of the corners there (7.8e5); the slack covers it with `spread` times the depth the light
-    /// reaches (its centre's depth plus twice its range), not the depth plus its range plus 2
-    /// (1.7e5).
+    /// from 1 to 2e9 deep. The oracle's band there was 64 ulps of the cell's corners (7.8e5),
+    /// which the slack covered with `spread` times the depth the light reaches (its centre's
+    /// depth plus twice its range); since the oracle decides a spot shallower than the near wall
+    /// by that wall alone, in the light's own scale (`spot.rs`, step 5), the band is 64 ulps of
+    /// the apex's distance and the range (2.8e-5), and the light is still kept at its last
+    /// accepted offset.
     #[test]
     fn the_prefilter_keeps_a_long_spot_behind_the_eye_of_a_deep_wide_cell_on_the_band() {
         let cell = widest_left_cell(1.0, 2e9);
-        assert_kept_on_the_band(&cell, DVec3::NEG_Z, DVec3::Z, 1e9, 3e5);
+        assert_kept_on_the_band(&cell, DVec3::NEG_Z, DVec3::Z, 1e9, 1e-5);
     }
 
     #[test]
