@@ -918,24 +918,27 @@ mod tests {
         assert_kept_on_the_band(&cell, DVec3::NEG_Z, DVec3::Z, 1e9, 1e-5);
     }
 
-    /// A spot just outside the wall of slope 0 of the widest cell, 5e8 deep: the oracle's band
-    /// is 64 ulps of the cell's corners at that depth (3.9e5), which the slack covers with its
-    /// `spread` times the depth, not with the light's coordinates or `spread` alone (5.6e4).
+    /// A spot just outside the wall of slope 0 of the widest cell, 5e8 deep. The oracle's band
+    /// there was 64 ulps of the cell's corners at that depth (3.9e5), which the slack covers
+    /// with its `spread` times the depth; since a spot beyond one wall is decided by that wall
+    /// in the light's own scale (`spot.rs`, step 5), the band is 64 ulps of the light's distance
+    /// (7e-6), and the light is still kept at its last accepted offset.
     #[test]
     fn the_prefilter_keeps_a_spot_beside_a_deep_wide_cell_on_the_band_of_its_corners() {
         let cell = widest_left_cell(1e8, 1e9);
         let p = DVec3::new(0.0, 0.0, -5e8);
-        assert_kept_on_the_band(&cell, p, DVec3::X, 1.0, 1e5);
+        assert_kept_on_the_band(&cell, p, DVec3::X, 1.0, 1e-6);
     }
 
-    /// A spot beyond the far plane of the widest cell, 1e9 deep: the oracle's band is 64 ulps of
-    /// the far corners (7.8e5), which the depth window's slack covers with `spread` times the
-    /// far depth, not with their sum (5.6e4).
+    /// A spot beyond the far plane of the widest cell, 1e9 deep: the band was 64 ulps of the far
+    /// corners (7.8e5), covered by the depth window's slack of `spread` times the far depth; the
+    /// far wall now decides it in the light's scale (64 ulps of 1e9: 1.4e-5), and the light is
+    /// still kept at its last accepted offset.
     #[test]
     fn the_prefilter_keeps_a_spot_beyond_a_deep_wide_cell_in_its_depth_window() {
         let cell = widest_left_cell(1e8, 1e9);
         let p = DVec3::new(0.0, 0.0, -1e9);
-        assert_kept_on_the_band(&cell, p, DVec3::NEG_Z, 1.0, 1e5);
+        assert_kept_on_the_band(&cell, p, DVec3::NEG_Z, 1.0, 1e-5);
     }
 
     /// A spot beyond the far plane of a cell of a field of view of 1e-12 (slopes ±9e-13), 2e9
@@ -967,7 +970,7 @@ mod tests {
     /// A spot of range 1e9 behind the eye, aimed at the near face of the widest cell, one slice
     /// from 1 to 2e9 deep. The oracle's band there was 64 ulps of the cell's corners (7.8e5),
     /// which the slack covered with `spread` times the depth the light reaches (its centre's
-    /// depth plus twice its range); since the oracle decides a spot shallower than the near wall
+    /// depth plus twice its range); since the oracle decides a spot beyond one of the cell's walls
     /// by that wall alone, in the light's own scale (`spot.rs`, step 5), the band is 64 ulps of
     /// the apex's distance and the range (2.8e-5), and the light is still kept at its last
     /// accepted offset.

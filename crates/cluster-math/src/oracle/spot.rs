@@ -52,11 +52,12 @@
 //! 4. **Degenerate cones**: `angle < 0` leaves only the apex (already known to be outside):
 //!    `false`. `angle > 90°`, a NaN angle, a zero or non-finite `direction` or an infinite `range`:
 //!    the ball test, which step 2 already passed: `true`. (A non-unit `direction` is normalised.)
-//! 5. **Near wall** (exact): if the volume's deepest point (its support along the view axis) is
-//!    shallower than the cell's near depth by more than 64 ulps of `|apex| + range`: `false`. The
-//!    wall's normal is the view axis, so this gap rounds with the light's coordinates alone,
-//!    however far the cell's corners reach (see `tol` above: near 180° of field of view they
-//!    reach 10⁸ times their depth out, and GJK's band with them).
+//! 5. **Walls** (exact): if the volume lies beyond one of the cell's six planes (its support
+//!    along the wall's inward normal is outside it) by more than 64 ulps of `|apex| + range`:
+//!    `false`. The side walls pass through the eye and the depth walls are `z = −depth`, so
+//!    these gaps round with the light's coordinates alone, however far the cell's corners reach
+//!    (see `tol` above: near 180° of field of view they reach 10⁶–10⁹ times their depth out, and
+//!    GJK's band with them).
 //! 6. **GJK** on `D = C − S` with support `s_D(−u) = s_C(−u) − s_S(u)` (the point of `D` lowest
 //!    along `u`):
 //!    * `s_C(v)` is the cell corner maximising `v·c`;
@@ -199,13 +200,13 @@ fn classify(spot: &SpotVolume, cell: &Cell, engine: Engine) -> (bool, Route) {
         cos_angle,
         sin_angle,
     };
-    // 5. The near wall (exact): the cell lies at depths from `depths[0]` on, so a volume whose
-    // deepest point is shallower lies wholly on the eye's side of that wall. The wall's normal is
-    // the view axis itself, so this gap is measured in the light's own coordinates and rounds
-    // with them alone — where GJK's band grows with the cell's corners, which a field of view a
-    // hair under 180° puts 10⁸ times as far out as they are deep (an audit's needle spot wholly
-    // behind the eye, 0.013 from a cell whose band was 200 wide, was listed).
-    if convex.deepest() < cell.depths[0] - BALL_ROUNDING * (spot.apex.length() + spot.range) {
+    // 5. The cell's walls (exact): a volume wholly beyond one of the cell's six planes misses it.
+    // Each wall is tested in the light's own scale — the side walls pass through the eye, the
+    // depth walls are `z = −depth` — where GJK's band grows with the cell's corners, which a
+    // field of view near 180° puts 10⁶–10⁹ times as far out as they are deep (audits: a needle
+    // spot wholly behind the eye, 0.013 from a cell whose band was 200 wide, and spots beside
+    // the top or a side wall, 1.3e-5 from a cell whose band was 1.4e-5, were listed).
+    if convex.beyond_a_wall_of(cell) {
         return (false, Route::Quick);
     }
     let corners = cell.corners();
@@ -241,9 +242,30 @@ struct ConvexSpot {
 }
 
 impl ConvexSpot {
-    /// The largest view depth (`−z`) of the volume: its support along the view axis.
-    fn deepest(&self) -> f64 {
-        -self.support(DVec3::NEG_Z).z
+    /// Whether the volume lies wholly on the outer side of one of `cell`'s six planes, by more
+    /// than 64 ulps of `|apex| + range`: its point nearest that side (its support along the
+    /// inward normal) is beyond it. The normals are the walls' own (the side walls' from the f64
+    /// slopes, rounded by normalising: a tilt of an ulp, which moves a point of the volume by an
+    /// ulp of its length, inside the margin), so a `true` is a certificate of separation.
+    fn beyond_a_wall_of(&self, cell: &Cell) -> bool {
+        let margin = BALL_ROUNDING * (self.apex.length() + self.range);
+        let ([x0, x1], [y0, y1], [d0, d1]) = (cell.x_slopes, cell.y_slopes, cell.depths);
+        // Outward normals `n` and offsets `c`: the cell lies in `n·p ≤ c` (view depth is −z, and
+        // a side wall `x = s·depth` is `x + s·z = 0`).
+        let walls = [
+            (DVec3::Z, -d0),
+            (DVec3::NEG_Z, d1),
+            (DVec3::new(-1.0, 0.0, -x0), 0.0),
+            (DVec3::new(1.0, 0.0, x1), 0.0),
+            (DVec3::new(0.0, -1.0, -y0), 0.0),
+            (DVec3::new(0.0, 1.0, y1), 0.0),
+        ];
+        walls.into_iter().any(|(n, c)| {
+            let length = n.length();
+            let (u, c) = (n / length, c / length);
+            // Non-finite slopes or depths (an infinite far wall) separate nothing.
+            u.is_finite() && c.is_finite() && u.dot(self.support(-u)) > c + margin
+        })
     }
 
     /// The unit direction of `v`'s component perpendicular to the axis (any unit perpendicular
@@ -251,9 +273,13 @@ impl ConvexSpot {
     /// leaves a residue that is not perpendicular to it, and normalising that would be garbage.
     fn perpendicular(&self, v: DVec3) -> DVec3 {
         let once = v - self.axis * v.dot(self.axis);
-        (once - self.axis * once.dot(self.axis))
-            .try_normalize()
-            .unwrap_or_else(|| self.axis.any_orthonormal_vector())
+        match (once - self.axis * once.dot(self.axis)).try_normalize() {
+            // A residue of rounding along the axis, normalised, is the axis itself (`v` exactly
+            // along an axis that normalising left an ulp short of unit length: an audit found
+            // the rim put on the axis, and the volume's support overshooting by half its range).
+            Some(w) if w.dot(self.axis).abs() <= 1e-6 => w,
+            _ => self.axis.any_orthonormal_vector(),
+        }
     }
 
     /// A point of the volume maximising `u·p`, for a unit `u`.
@@ -1455,6 +1481,67 @@ mod tests {
                 "{lateral}"
             );
         }
+    }
+
+    /// An audit's spot beside a cell's top wall at a 179.9° view (x walls sloping 7e7–9e7, a
+    /// range of 1e13): 5.8e8 beyond the wall, inside GJK's band of 1.8e9 (the cell's corners a
+    /// range past the light lie 1e21 out), so it was listed. The wall decides it now; the
+    /// neighbouring cell below, which the same light misses only along a direction that is no
+    /// wall's normal, is still GJK's (its band errs towards listing).
+    #[test]
+    fn a_spot_beyond_a_side_wall_of_a_nearly_flat_view_misses_the_cell() {
+        let cell = |y_slopes| Cell {
+            x_slopes: [-93809375.80349836, -72962847.84716539],
+            y_slopes,
+            depths: [282.58251953125, 1e308],
+        };
+        let spot = SpotVolume {
+            apex: DVec3::new(-20037855232.0, 7084687.5, -589.5349731445312),
+            direction: DVec3::new(0.4426957718968713, 0.050697569400615664, 0.8952375159707635),
+            range: 9708433833984.0,
+            angle: 0.002119973301887512,
+        };
+        let top = cell([-2866.397593995783, -0.0]);
+        assert_eq!(
+            classify(&spot, &top, Engine::GjkThenFeatures),
+            (false, Route::Quick)
+        );
+        let below = cell([-5732.795187991566, -2866.397593995783]);
+        assert_ne!(
+            classify(&spot, &below, Engine::GjkThenFeatures).1,
+            Route::Quick
+        );
+    }
+
+    /// An axis along ±z that normalising left an ulp short of unit length: the component of −z
+    /// perpendicular to it is rounding along the axis, which normalised *is* the axis, and the
+    /// rim was put on it — the support along −z overshot the apex by 0.57 ranges (an audit's
+    /// spot aimed at the eye from depth 0.5 was listed in a cell from depth 1 on).
+    #[test]
+    fn the_rim_stays_off_the_axis_of_a_spot_aimed_along_z() {
+        let axis = DVec3::new(0.0, 0.0, f64::from(0.9f32)).normalize();
+        let angle: f64 = 1.2;
+        let spot = ConvexSpot {
+            apex: DVec3::new(0.0, 0.0, -0.5),
+            axis,
+            range: 10.0,
+            cos_angle: angle.cos(),
+            sin_angle: angle.sin(),
+        };
+        // Every rim point is shallower than the apex (the cone opens towards the eye).
+        assert_eq!(spot.support(DVec3::NEG_Z), spot.apex);
+        let w = spot.perpendicular(DVec3::NEG_Z);
+        assert!(
+            w.dot(axis).abs() < 1e-12 && (w.length() - 1.0).abs() < 1e-12,
+            "{w}"
+        );
+        let volume = SpotVolume {
+            apex: spot.apex,
+            direction: DVec3::new(0.0, 0.0, f64::from(0.9f32)),
+            range: 10.0,
+            angle,
+        };
+        assert!(!spot_intersects_cell(&volume, &unit_cell()));
     }
 
     #[test]
