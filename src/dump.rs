@@ -254,19 +254,16 @@ impl AssignmentDump {
     /// those columns. A pair naming a file light that has no column (one skipped when the scene
     /// was loaded: an assignment never lists one) is an error naming it.
     pub fn lists_of_columns(&self, source_index: &[u32]) -> Result<LightLists> {
-        let file_lights = source_index
-            .iter()
-            .chain(&self.indices)
-            .map(|&i| i as usize + 1)
-            .max()
-            .unwrap_or(0);
-        let mut column_of = vec![u32::MAX; file_lights];
+        // Sized by the columns, not by the dump's indices: an unchecked dump may name light
+        // 4 294 967 295, and a table that long is 16 GiB.
+        let file_lights = source_index.iter().map(|&i| i as usize + 1).max();
+        let mut column_of = vec![u32::MAX; file_lights.unwrap_or(0)];
         for (column, &file_index) in source_index.iter().enumerate() {
             column_of[file_index as usize] = column as u32;
         }
         let mut lists = self.lists();
         for (k, l) in lists.indices.iter_mut().enumerate() {
-            let column = column_of[*l as usize];
+            let column = column_of.get(*l as usize).copied().unwrap_or(u32::MAX);
             ensure!(
                 column != u32::MAX,
                 "indices[{k}] names light {l} of the scene file, which has no column among the \
@@ -414,6 +411,10 @@ mod tests {
         );
         let e = dump.lists_of_columns(&[]).unwrap_err().to_string();
         assert!(e.contains("light 3"), "{e}");
+        // An index no column can have, before any check: an error, not a 16 GiB table.
+        dump.indices = vec![u32::MAX];
+        let e = dump.lists_of_columns(&[1, 3]).unwrap_err().to_string();
+        assert!(e.contains(&format!("light {}", u32::MAX)), "{e}");
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! # myriad — clustered shading with very many dynamic lights
 //!
-//! The facade: re-exports the four crates under short names and holds the pieces the `myriad`
+//! The facade: re-exports the four crates under short names (three without the `render` feature) and holds the pieces the `myriad`
 //! command-line tool shares with tests and benches: the assignment dump format, the evaluation
 //! code (accuracy and time against error), the render glue (`render`: `Viewer`, `run_frames`,
 //! `Skips`), `light_input`, `core_link` and the Tracy profiling.
@@ -17,7 +17,8 @@
 //!
 //! ## Features
 //! - `render` (in the default `cli`): the renderer glue — the `render` module, the `gpu`
-//!   re-export, `profiling::plot_pass_times` — and with it `myriad-gpu`, wgpu, naga and image.
+//!   re-export, `profiling::plot_pass_times` — and with it `myriad-gpu`, wgpu and naga (`image`
+//!   comes either way, with the glTF loader of `myriad-scene`).
 //!   Without it the facade is what joins scene and assignment ([`light_input`], [`dump`],
 //!   [`evaluate`], [`core_link`], [`profiling`]): an engine that renders itself but takes
 //!   myriad's lights and lists builds no GPU crate (`default-features = false`).

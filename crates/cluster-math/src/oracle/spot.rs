@@ -31,9 +31,12 @@
 //! The answer is exact except in a band of width `tol = 1e-12 · scale` (`scale` = the largest of
 //! `range`, `|apex|` and the magnitudes of the corners of the cell cut off one range beyond the
 //! ball's far depth — local to the light, however deep the cell reaches), where it errs on the
-//! side of "intersects"; the ball test (step 2) uses a band of 64 ulps of `scale` instead:
+//! side of "intersects"; the ball test (step 2) uses a band of 64 ulps of `scale` instead, and
+//! the wall test (step 5) one of 64 ulps of `|apex| + range` (narrower than `tol`: that step
+//! rounds with the light's coordinates alone):
 //! * `false` is only returned with a *certificate*: a direction whose gap exceeds `tol` (up to f64
-//!   rounding of two support values, orders of magnitude below `tol`), or the ball's miss.
+//!   rounding of two support values, orders of magnitude below `tol`), a wall of the cell the
+//!   volume lies beyond by more than its band, or the ball's miss.
 //! * `true` comes with a certificate too — a point of `C − S` (a convex combination of support
 //!   points) within `tol` of the origin, GJK's bounds pinning the distance below
 //!   `tol + 1e-14·scale`, a cell point found inside `S` — or, after the feature search, from the
@@ -1471,12 +1474,15 @@ mod tests {
                 angle: 0.2,
             };
             assert!(spot_intersects_cell(&touching, &unit), "{lateral}");
-            let short = SpotVolume {
-                range: 0.5 - 1e-9,
+            // Its ball reaching 0.5 into the cell, the cone turned away: the ball test passes
+            // it, and the near wall rejects it (GJK did before, on its wider band).
+            let away = SpotVolume {
+                direction: DVec3::Z,
+                range: 1.0,
                 ..touching
             };
             assert_eq!(
-                classify(&short, &unit, Engine::GjkThenFeatures),
+                classify(&away, &unit, Engine::GjkThenFeatures),
                 (false, Route::Quick),
                 "{lateral}"
             );
