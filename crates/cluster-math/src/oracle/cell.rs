@@ -80,8 +80,9 @@ impl Cell {
     }
 
     /// The six bounding planes as (outward unit normal, offset): inside ⇔ `n·p − offset ≤ 0`.
-    /// Order: left, right, bottom, top, near, far.
-    fn planes(&self) -> [(DVec3, f64); 6] {
+    /// Order: left, right, bottom, top, near, far. (Slopes past ~1e154 overflow the normal's
+    /// length and give a zero normal; a non-finite slope or depth a non-finite plane.)
+    pub(super) fn planes(&self) -> [(DVec3, f64); 6] {
         // p.x ≥ s·d  ⇔  p.x + s·p.z ≥ 0; outward normal of the left wall is −(1, 0, s)/|…|.
         let side = |v: DVec3| v.normalize();
         [

@@ -252,23 +252,11 @@ impl ConvexSpot {
     /// ulp of its length, inside the margin), so a `true` is a certificate of separation.
     fn beyond_a_wall_of(&self, cell: &Cell) -> bool {
         let margin = BALL_ROUNDING * (self.apex.length() + self.range);
-        let ([x0, x1], [y0, y1], [d0, d1]) = (cell.x_slopes, cell.y_slopes, cell.depths);
-        // Outward normals `n` and offsets `c`: the cell lies in `n·p ≤ c` (view depth is −z, and
-        // a side wall `x = s·depth` is `x + s·z = 0`).
-        let walls = [
-            (DVec3::Z, -d0),
-            (DVec3::NEG_Z, d1),
-            (DVec3::new(-1.0, 0.0, -x0), 0.0),
-            (DVec3::new(1.0, 0.0, x1), 0.0),
-            (DVec3::new(0.0, -1.0, -y0), 0.0),
-            (DVec3::new(0.0, 1.0, y1), 0.0),
-        ];
-        walls.into_iter().any(|(n, c)| {
-            let length = n.length();
-            let (u, c) = (n / length, c / length);
-            // Non-finite slopes or depths (an infinite far wall) separate nothing.
-            u.is_finite() && c.is_finite() && u.dot(self.support(-u)) > c + margin
-        })
+        // `u` the outward unit normal, `c` the offset: the cell lies in `u·p ≤ c`. Non-finite
+        // walls (an infinite far depth) and zero normals separate nothing.
+        cell.planes()
+            .into_iter()
+            .any(|(u, c)| u.is_finite() && c.is_finite() && u.dot(self.support(-u)) > c + margin)
     }
 
     /// The unit direction of `v`'s component perpendicular to the axis (any unit perpendicular
