@@ -280,7 +280,11 @@ fn prepared_pipelines_are_the_ones_frames_use() {
     ];
     for (shading, heat_map, want) in kinds {
         let what = format!("{shading:?}, heat map {heat_map}");
-        assert_eq!(viewer.prepare(&scene, shading, heat_map), want, "{what}");
+        assert_eq!(
+            viewer.prepare(&scene, shading, heat_map).unwrap(),
+            want,
+            "{what}"
+        );
         let before = viewer.renderer.pipelines_built();
         viewer
             .frame(&scene, shading, Method::Refined, heat_map)
@@ -291,7 +295,11 @@ fn prepared_pipelines_are_the_ones_frames_use() {
             before,
             "{what}: the frame built pipelines while encoding"
         );
-        assert_eq!(viewer.prepare(&scene, shading, heat_map), 0, "{what}");
+        assert_eq!(
+            viewer.prepare(&scene, shading, heat_map).unwrap(),
+            0,
+            "{what}"
+        );
     }
     assert_eq!(viewer.renderer.pipelines_built(), 1 + 2 + 1 + 2 + 1);
 

@@ -1215,7 +1215,7 @@ fn pass_times_are_each_pass_own_and_within_the_frame_wall_time() {
     }
     let scene = RenderScene::default_scene(4000, 96, 48).unwrap();
     let mut viewer = Viewer::new(ctx, &scene).unwrap();
-    viewer.prepare(&scene, Shading::BruteForce, false);
+    viewer.prepare(&scene, Shading::BruteForce, false).unwrap();
     let start = std::time::Instant::now();
     let frame = viewer
         .frame(&scene, Shading::BruteForce, Method::Refined, false)

@@ -374,7 +374,7 @@ fn without_feature_variants_every_shader_path_is_built() {
     render(&mut forced, &scene, Skips::NONE);
     forced.settings.force_all_features = true;
     assert_eq!(
-        forced.prepare(&scene, Shading::Clustered, false),
+        forced.prepare(&scene, Shading::Clustered, false).unwrap(),
         0,
         "a frame without `variants` left shader paths unbuilt"
     );
@@ -385,13 +385,13 @@ fn without_feature_variants_every_shader_path_is_built() {
     };
     render(&mut varied, &scene, variants);
     assert_eq!(
-        varied.prepare(&scene, Shading::Clustered, false),
+        varied.prepare(&scene, Shading::Clustered, false).unwrap(),
         0,
         "a frame with `variants` did not build the spot-free paths"
     );
     varied.settings.force_all_features = true;
     assert!(
-        varied.prepare(&scene, Shading::Clustered, false) > 0,
+        varied.prepare(&scene, Shading::Clustered, false).unwrap() > 0,
         "a frame with `variants` built the spot paths a scene without spots does not need"
     );
 }

@@ -359,7 +359,7 @@ fn measure(
     progress: &Progress,
 ) -> Result<StrategyResult> {
     let mut last = None;
-    viewer.prepare(scene, shading, false);
+    viewer.prepare(scene, shading, false)?;
     let mut samples = FrameSamples::new(viewer);
     let warm_ups = timed_frames(shading.name(), runs, progress, || {
         let frame = viewer.frame(scene, shading, method, false)?;

@@ -180,17 +180,18 @@ impl Viewer {
     /// Builds the pipelines [`Viewer::frame`] will use for `shading` and `heat_map` ahead of it
     /// ([`Renderer::prepare`]), so that frame's encoding compiles no shaders; returns how many it
     /// built. The main job calls it before each strategy's frames: brute force's one timed frame
-    /// on a slow machine is its warm-up, which would otherwise carry the compilation.
-    ///
-    /// # Panics
-    ///
-    /// Where the viewer's public `ctx`, `renderer` or `scene` were replaced by another device's.
-    pub fn prepare(&mut self, scene: &RenderScene, shading: Shading, heat_map: bool) -> usize {
+    /// on a slow machine is its warm-up, which would otherwise carry the compilation. An error
+    /// where the device was lost, or where the viewer's public `ctx`, `renderer` or `scene` were
+    /// replaced by another device's.
+    pub fn prepare(
+        &mut self,
+        scene: &RenderScene,
+        shading: Shading,
+        heat_map: bool,
+    ) -> Result<usize> {
         let grid = shading.grid(&scene.grid);
         let frame = frame_desc(scene, &grid, shading, heat_map, None, self.settings);
-        self.renderer
-            .prepare(&self.ctx, &self.scene, &frame)
-            .expect("a viewer's context, renderer and scene share one device")
+        Ok(self.renderer.prepare(&self.ctx, &self.scene, &frame)?)
     }
 
     /// Assigns (unless brute force), uploads and submits one frame; does not wait for the GPU.

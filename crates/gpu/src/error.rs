@@ -1,8 +1,9 @@
 //! What can go wrong on the GPU side, each with a message that says what to do.
 //!
 //! What the renderer checks itself comes back here: inputs that do not fit, buffers past the
-//! device's binding limit, loop budgets, limits, read-back and waits. wgpu's own validation and
-//! out-of-memory errors do not: wgpu hands them to the device's uncaptured-error handler (an
+//! device's binding limit, loop budgets, limits, a lost device (`device_loss.rs`), read-back and
+//! waits, and running out of memory where the caller's data decides a size (`out_of_memory.rs`).
+//! wgpu's other errors do not: wgpu hands them to the device's uncaptured-error handler (an
 //! engine's device keeps its own; wgpu's default panics with the message), as for every other
 //! call an engine makes on that device. The renderer checks ahead what would reach it — sizes
 //! against limits, targets against the pipelines (`renderer/target_check.rs`, inside a
@@ -96,6 +97,15 @@ pub enum GpuError {
     /// Mapping a read-back buffer failed.
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
+    /// The device was lost (a driver reset, a hung GPU, `Device::destroy`): nothing more can be
+    /// drawn or read on it. Make a new device and renderer, and upload the scene again. Only
+    /// reported where the loss is recorded (`device_loss.rs`: the headless context does it,
+    /// an engine's device through its own callback).
+    #[error(
+        "the GPU device was {0}; nothing more can be drawn on it: make a new device and renderer \
+         (and upload the scene again)"
+    )]
+    DeviceLost(crate::DeviceLoss),
     /// Waiting for the GPU to finish its work failed (wgpu's `PollError`).
     #[error("waiting for the GPU failed: {0}")]
     Wait(#[from] wgpu::PollError),

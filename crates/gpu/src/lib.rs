@@ -46,6 +46,7 @@ mod buffers;
 mod check_pass;
 pub mod cluster_check;
 mod context;
+mod device_loss;
 mod error;
 mod frame_input;
 pub mod layout;
@@ -67,6 +68,7 @@ mod tracy_zones;
 #[cfg(feature = "headless")]
 pub use context::shared_instance;
 pub use context::{GpuContext, SKIP_GPU_TESTS_VAR};
+pub use device_loss::{DeviceLoss, DeviceLossRecorder};
 pub use error::GpuError;
 pub use frame_input::{
     ClusterLists, LightColumns, SPOT_INNER_FRACTION, SpotColumns, fill_gpu_lights,

@@ -16,11 +16,10 @@
 //! ordinary, recoverable out-of-memory error — and a copy on the queue ([`buffer_init`],
 //! [`texture_init`]).
 //!
-//! What this cannot catch: a driver that reports host memory exhaustion as a lost device (wgpu
-//! then drops every error), and any backend whose error scopes do not resolve at once (the web;
-//! there an error still reaches the device's handler, as without the scope). The renderer does not
-//! set a device-lost callback of its own: it works on the engine's device, whose callback is the
-//! engine's.
+//! What this cannot catch: a driver that reports host memory exhaustion as a lost device (that
+//! is [`GpuError::DeviceLost`] where the loss is recorded, `device_loss.rs`), and any backend
+//! whose error scopes do not resolve at once (the web; there an error still reaches the device's
+//! handler, as without the scope).
 
 use crate::GpuError;
 

@@ -147,6 +147,9 @@ pub(crate) fn map_and_read_with<T>(
     buffer: &wgpu::Buffer,
     read: impl FnOnce(&[u8]) -> T,
 ) -> Result<T, GpuError> {
+    // On a lost device `map_async` raises a validation error, which wgpu's default handler
+    // turns into a panic: a known loss is an error before it.
+    ctx.check_not_lost()?;
     let slice = buffer.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |result| {

@@ -205,6 +205,7 @@ impl Renderer {
     /// float colour format the device can render to and blend): an error now, where `new` gives
     /// a renderer whose calls return it (or refuse that format's targets).
     pub fn try_new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        ctx.check_not_lost()?;
         if let Some(short) = limits_shortfall(&ctx.device) {
             return Err(GpuError::DeviceLimits(short));
         }
@@ -352,6 +353,7 @@ impl Renderer {
     /// ("Cannot get non-existent resource", audit). And every call of a renderer made with
     /// [`Renderer::new`] on a device below the required limits.
     fn check_device(&self, ctx: &GpuContext, scene: Option<&GpuScene>) -> Result<(), GpuError> {
+        ctx.check_not_lost()?;
         if let Some(refused) = &self.refused {
             return Err(GpuError::DeviceLimits(refused.clone()));
         }
