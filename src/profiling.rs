@@ -85,6 +85,20 @@ pub fn plot_pass_times(times: Option<&myriad_gpu::PassTimes>) {
     }
 }
 
+/// Plots a drawn frame's load once a client runs: `visible lights` (the lights that went to the
+/// assignment and the GPU), `cluster-light pairs` (`None` for a frame without lists: brute
+/// force, or a skipping frame that reused the last lists) and `bytes uploaded`. Every frame loop
+/// of the facade calls it once per drawn frame, beside its frame mark (`run_frames`,
+/// `Viewer::frame`, `Viewer::frame_with_skips`, `myriad stress`), so a capture of any command
+/// has the three plots.
+pub fn plot_frame_load(visible_lights: u64, pairs: Option<u64>, upload_bytes: u64) {
+    crate::profile_plot!("visible lights", visible_lights);
+    if let Some(pairs) = pairs {
+        crate::profile_plot!("cluster-light pairs", pairs);
+    }
+    crate::profile_plot!("bytes uploaded", upload_bytes);
+}
+
 /// Plots `value` on the Tracy plot `name` (a static name per call site) once a client runs.
 #[cfg(feature = "tracy")]
 #[macro_export]

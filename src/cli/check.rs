@@ -9,7 +9,7 @@
 //! Exit status: 1 is the verdict "this dump misses a light" (or lists a light skipped on
 //! loading); 2 is a dump that cannot be checked against this scene at all — another grid or
 //! camera, a light index past the scene's lights, or a cluster listing a light twice. The last is
-//! malformed rather than wrong: DESIGN.md's lists are sets, and a list with a repeat cannot be
+//! malformed rather than wrong: the dump format's lists are sets (docs/cli.md), and a list with a repeat cannot be
 //! counted in pairs the way the verdict's numbers are.
 
 use super::oracle_check::{self, CheckReport, OracleLights, check_all, check_clusters};

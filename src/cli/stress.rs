@@ -29,7 +29,7 @@
 //!    `GpuError::ShaderLoopLimit`; clustered lists stay far below that); then the lists the
 //!    GPU shaded with are read back (`Renderer::read_back_lists`) and compared with the uploaded
 //!    ones array by array: the oracle below proves the CPU's lists, this that the GPU got them
-//!    whole through the staging ring (at 1M lights, 88 MiB in chunks of their own size);
+//!    whole through the staging ring (at 1M lights, 90 MiB in chunks of their own size);
 //! 6. **oracle check** (`oracle_check.rs`): up to `--exact-up-to` lights (200k), **every
 //!    cluster** through the `exact` method's lists; above, **`--sample K` clusters** (2000,
 //!    seeded), each checked independently against every light in its depth window. A miss names
@@ -282,12 +282,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
             ..FrameDesc::clustered(&scene.camera, &grid, light_columns(&scene.lights), no_lists)
         };
         let what = format!("the warm-up frame of {} lights", scene.lights.len());
-        render_explained(
+        let report = render_explained(
             &mut viewer,
             &warm_up,
             &what,
             grid.dims() != scene.grid.dims(),
         )?;
+        myriad::profiling::plot_frame_load(scene.lights.len() as u64, None, report.upload_bytes);
         myriad::profiling::frame_mark();
         viewer.ctx.wait_idle()?;
         Ok(viewer)
@@ -317,6 +318,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // The GPU may be at work already: the wait below counts from here, not from after the
     // progress lines.
     let submitted = Instant::now();
+    myriad::profiling::plot_frame_load(
+        u64::from(stats.visible()),
+        Some(stats.pairs),
+        report.upload_bytes,
+    );
     myriad::profiling::frame_mark();
     stages.upload_ms = report.upload_seconds * 1e3;
     stages.encode_ms = report.encode_seconds * 1e3;

@@ -253,9 +253,11 @@ impl GpuStage<'_> {
         let report = self
             .renderer
             .render(self.ctx, self.scene, &frame, &self.target.view)?;
-        crate::profile_plot!("visible lights", work.stats.visible());
-        crate::profile_plot!("cluster-light pairs", work.stats.pairs);
-        crate::profile_plot!("bytes uploaded", report.upload_bytes);
+        crate::profiling::plot_frame_load(
+            u64::from(work.stats.visible()),
+            Some(work.stats.pairs),
+            report.upload_bytes,
+        );
         let start = Instant::now();
         crate::profile_span!("wait for GPU");
         self.ctx.wait_idle()?;

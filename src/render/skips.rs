@@ -263,7 +263,12 @@ impl Viewer {
             state.cache = None;
         }
         self.skip_state = state;
-        if result.is_ok() {
+        if let Ok(frame) = &result {
+            crate::profiling::plot_frame_load(
+                frame.lights_assigned as u64,
+                frame.stats.map(|s| s.pairs),
+                frame.report.upload_bytes,
+            );
             crate::profiling::frame_mark();
         }
         result

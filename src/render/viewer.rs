@@ -229,7 +229,11 @@ impl Viewer {
         let report = self
             .renderer
             .render(&self.ctx, &self.scene, &frame, &self.target.view)?;
-        crate::profile_plot!("bytes uploaded", report.upload_bytes);
+        crate::profiling::plot_frame_load(
+            stats.map_or(scene.lights.len() as u64, |s| u64::from(s.visible())),
+            stats.map(|s| s.pairs),
+            report.upload_bytes,
+        );
         crate::profiling::frame_mark();
         Ok(ViewerFrame {
             assign_seconds,

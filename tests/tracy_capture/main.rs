@@ -248,6 +248,30 @@ fn a_profiler_receives_the_main_job_with_its_prepass() {
     }
     assert_eq!(c.zones.get("wait for GPU"), Some(&timed), "{stdout}");
     assert!(c.frame_marks >= timed, "{} frame marks", c.frame_marks);
+    // The frame's load, plotted once per drawn frame (the viewer's and the skipping frames'
+    // plotted bytes uploaded alone until `plot_frame_load`); pairs for the frames with lists:
+    // all but brute force's warm-up and timed frames, and any skipping frame that reused its
+    // lists.
+    for name in ["visible lights", "bytes uploaded"] {
+        assert_eq!(
+            c.plots.get(name).map(Vec::len),
+            Some(c.frame_marks),
+            "plot {name}: {:?}",
+            c.plots.keys()
+        );
+    }
+    assert!(
+        c.plots["visible lights"]
+            .iter()
+            .all(|&v| v > 0.0 && v <= 300.0)
+    );
+    let pairs = c.plots.get("cluster-light pairs").map_or(0, Vec::len);
+    assert!(
+        (2 * 3..=c.frame_marks - 3).contains(&pairs),
+        "{pairs} frames with pairs of {} drawn",
+        c.frame_marks
+    );
+    assert!(c.plots["cluster-light pairs"].iter().all(|&v| v > 0.0));
     let passes = [
         ("GPU: upload copies", "GPU upload ms"),
         ("GPU: G-buffer pass", "GPU G-buffer ms"),

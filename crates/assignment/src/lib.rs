@@ -10,19 +10,27 @@
 //!
 //! ```
 //! use myriad_assignment::{Assigner, LightInput, LightLists, Method};
-//! use myriad_cluster_math::glam::{UVec3, Vec3};
+//! use myriad_cluster_math::glam::{UVec3, Vec3}; // the glam version of the public types
 //! use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 //!
 //! let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 1920, 1080, 0.1, 100.0);
 //! let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, camera.near, camera.far);
+//!
 //! // SoA columns: world-space positions and ranges, one entry per light.
 //! let (x, y, z) = (vec![0.0, 2.0], vec![0.0, 1.0], vec![-5.0, -20.0]);
 //! let radius = vec![1.0, 3.0];
+//!
 //! let mut assigner = Assigner::new(); // keep both across frames:
 //! let mut lists = LightLists::new(); // no list storage allocated in steady state (see `Assigner`)
-//! let input = LightInput::points(&x, &y, &z, &radius);
-//! let stats = assigner.assign(Method::Refined, &input, &camera, &grid, &mut lists);
+//! let stats = assigner.assign(
+//!     Method::Refined,
+//!     &LightInput::points(&x, &y, &z, &radius),
+//!     &camera,
+//!     &grid,
+//!     &mut lists,
+//! );
 //! assert_eq!(stats.pairs, 57);
+//!
 //! // What the shader does per pixel: pixel + view depth -> cluster -> its lights.
 //! let c = grid.cluster_of_pixel(960, 540, 5.0, camera.width, camera.height);
 //! assert_eq!(lists.lights_of(c as usize), &[0]);
@@ -36,7 +44,7 @@
 //! | `linear` | the paper's Algorithm 1: planes stepped one by one | the baseline to beat |
 //! | `binary` | the x-, y-, z-plane sets searched (a binary search's partition points, found from the closed-form guess in 0–2 probes: `search.rs`) → a box of clusters | fast |
 //! | `refined` | binary's box tightened per slice and row | fast, few false positives |
-//! | `cone` | binary's box cut per tile by spherical-sliced cone tests (seed 004) | the fewest false positives short of `exact` on `paper` and `sphere`; several times `refined`'s time |
+//! | `cone` | binary's box cut per tile by spherical-sliced cone tests (seed 004) | tighter than `refined` on `sphere`, on `paper` only for some seeds and grids (docs/results.md); 1.3–2.7× `refined`'s time |
 //!
 //! ## A frame, step by step (`binary`, `refined`, `cone`, `exact`)
 //! 1. **Plan**: split the lights into contiguous ranges, one task each (one task below

@@ -21,8 +21,8 @@
 //!   a light of radius 1e-6 next to a camera at 1e6 is still never missed (tested:
 //!   `camera_at_1e6_with_micro_lights`). What a caller loses there is *placement*: lights cannot
 //!   be closer to each other than ~0.06 at 1e6 — a property of f32 input, not of the assignment.
-//! * **Depth range.** near 1e-4 with far 1e7 (ratio 1e11, the widest the scene file allows at
-//!   these magnitudes) with linear and log slicing: no misses (`widest_depth_range_*`).
+//! * **Depth range.** near 1e-4 with far 1e7 (ratio 1e11; the scene file sets no limit on the
+//!   ratio, `near·far` must fit f32) with linear and log slicing: no misses (`widest_depth_range_*`).
 //! * **Field of view.** 0.5°–179° × aspect 0.1–10: no misses; at 179° the side planes have slope
 //!   ~115 per unit depth, so the padding (relative to the centre's |c|) still covers them.
 //! * **Radii.** 1e-6 at 1e3 from the camera (radius 1e-9 of the distance: the padding dominates,

@@ -8,7 +8,8 @@
 //!    [`ClusterGrid::slice_start_depth`] (computed in f64, rounded to f32). [`ClusterGrid::slice_of_depth`]
 //!    estimates the slice with the closed-form inverse and then corrects the estimate against those
 //!    edges, so `slice_start_depth(k) <= d < slice_start_depth(k + 1)` holds exactly for every f32
-//!    depth inside the range — the GPU shader does the same with the uploaded edge table.
+//!    depth inside the range — the GPU shader gets the same slice by a plain binary search of the
+//!    uploaded edge table (comparisons only, no estimate).
 //!
 //! Depths outside the grid's range clamp: below `near` (or NaN) → slice 0, at or beyond `far` →
 //! slice Z−1. So the pixels nearer than `near` read the first slice and those past `far` the last,

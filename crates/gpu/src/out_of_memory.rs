@@ -8,7 +8,7 @@
 //! textures and materials, the G-buffer and targets at the caller's size, the frame's storage
 //! buffers and their staging copies, read-backs) is made here inside an out-of-memory error scope.
 //!
-//! Contents are never handed to wgpu's own upload helpers (`create_buffer_init`, a buffer mapped
+//! Contents whose size the data decides are never handed to wgpu's own upload helpers (`create_buffer_init`, a buffer mapped
 //! at creation that the GPU cannot map, `Queue::write_texture`): those stage through an internal
 //! buffer whose allocation failure wgpu-core treats as fatal and answers by losing the device
 //! (every later call then silently does nothing). Data goes instead through a staging buffer of

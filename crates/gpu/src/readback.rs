@@ -54,6 +54,7 @@ fn copy_texels(
     texel_bytes: u32,
     aspect: wgpu::TextureAspect,
 ) -> Result<Vec<u8>, GpuError> {
+    ctx.check_not_lost()?;
     // Layers overran the buffer sized for one, and multisampled textures cannot be copied.
     if texture.sample_count() != 1
         || texture.depth_or_array_layers() != 1
@@ -141,7 +142,7 @@ pub(crate) fn map_and_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Ve
 }
 
 /// Maps a `MAP_READ` buffer, waits, and returns what `read` makes of its contents (without the
-/// whole copy [`map_and_read`] makes first: a million lights' lists are 88 MiB).
+/// whole copy [`map_and_read`] makes first: a million lights' lists are 90 MiB).
 pub(crate) fn map_and_read_with<T>(
     ctx: &GpuContext,
     buffer: &wgpu::Buffer,
