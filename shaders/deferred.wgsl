@@ -42,17 +42,12 @@ fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
         }
         return vec4<f32>(to_target(BACKGROUND), 1.0);
     }
-    let size = vec2<f32>(frame.target_size);
-    let ndc = vec2<f32>(frag_coord.x / size.x * 2.0 - 1.0, 1.0 - frag_coord.y / size.y * 2.0);
-    // The shaded point is the pixel's ray at the view depth that also picks its cluster: the
-    // ray through the near-plane point (well conditioned), scaled from the near depth to the
-    // pixel's. Unprojecting `depth` itself through the inverse matrix would cancel like the
-    // textbook depth formula and land up to percents off the cluster it is shaded from.
-    let view_depth = view_depth_from_ndc_depth(depth, frame.camera_near, frame.camera_near_over_far);
-    let on_near = frame.world_rel_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+    // The shaded point is the pixel's ray at the view depth that also picks its cluster.
+    let point = pixel_point(frag_coord.xy, depth, frame);
+    let view_depth = point.view_depth;
 
     var s: Surface;
-    s.position = on_near.xyz / on_near.w * (view_depth / frame.camera_near);
+    s.position = point.position;
     s.normal = octahedral_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
     s.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
     let params = textureLoad(gbuffer_material, pixel, 0);

@@ -38,9 +38,12 @@ fn vs_main(v: VertexIn) -> VertexOut {
 fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let face = face_normal(in.rel_position);
     let base = material.base_color * textureSample(base_color_texture, material_sampler, in.uv);
+    // The shaded point is the pixel's ray at the fragment's own depth, as deferred shading
+    // rebuilds it from the G-buffer's (`pixel_point`): the point whose depth picks the cluster.
+    let point = pixel_point(in.clip.xy, in.clip.z, frame);
     var s: Surface;
-    s.position = in.rel_position;
-    s.normal = surface_normal(in.normal, face, in.rel_position, front_facing);
+    s.position = point.position;
+    s.normal = surface_normal(in.normal, face, point.position, front_facing);
     s.albedo = base.rgb;
     s.roughness = material.roughness;
     s.metallic = material.metallic;
@@ -52,11 +55,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @locatio
         }
     } else {
         let pixel = vec2<u32>(in.clip.xy);
-        // The cluster of the shaded position's own view depth (clip w = distance along the view
-        // axis), not of the fragment's stored depth, which in f32 can sit percents away from it
-        // when the near plane is small.
-        let view_depth = (frame.clip_from_world_rel * vec4<f32>(in.rel_position, 1.0)).w;
-        let cluster = cluster_of_pixel(pixel, view_depth, frame.target_size, frame.grid_dims.xyz);
+        let cluster = cluster_of_pixel(pixel, point.view_depth, frame.target_size, frame.grid_dims.xyz);
         let start = cluster_offsets[cluster];
         let count = cluster_counts[cluster];
         for (var i = 0u; i < count; i++) {

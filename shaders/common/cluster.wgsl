@@ -52,3 +52,27 @@ fn cluster_of_pixel(pixel: vec2<u32>, depth: f32, target_size: vec2<u32>, dims: 
 fn view_depth_from_ndc_depth(ndc_depth: f32, near: f32, near_over_far: f32) -> f32 {
     return near / (near_over_far + ndc_depth * (1.0 - near_over_far));
 }
+
+// The point a pixel shades (camera-relative) and the view depth that picks its cluster.
+struct PixelPoint {
+    position: vec3<f32>,
+    view_depth: f32,
+}
+
+// The pixel's ray at its view depth, from the pixel's centre (`frag_xy`, the fragment's position
+// builtin) and its reversed-Z depth: the ray through the near-plane point (well conditioned),
+// scaled from the near depth to the pixel's. Unprojecting the depth itself through the inverse
+// matrix would cancel like the textbook depth formula and land up to percents off the cluster it
+// is shaded from. Deferred shading takes the depth from the G-buffer, the forward pass from its
+// own fragment: both shade the point whose depth and pixel picked the cluster, so the point
+// stays in (within f32 rounding of) that cluster, which the lists' padding covers. The forward
+// pass shaded its interpolated vertex position instead, whose rounding grows with the
+// triangle's coordinates: on a blended quad 2e6 across it sat centimetres outside its cluster
+// and lights its list rightly leaves out lit it under brute force (audit, up to 183/255).
+fn pixel_point(frag_xy: vec2<f32>, ndc_depth: f32, f: Frame) -> PixelPoint {
+    let size = vec2<f32>(f.target_size);
+    let ndc = vec2<f32>(frag_xy.x / size.x * 2.0 - 1.0, 1.0 - frag_xy.y / size.y * 2.0);
+    let view_depth = view_depth_from_ndc_depth(ndc_depth, f.camera_near, f.camera_near_over_far);
+    let on_near = f.world_rel_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+    return PixelPoint(on_near.xyz / on_near.w * (view_depth / f.camera_near), view_depth);
+}
