@@ -48,6 +48,7 @@
 use anyhow::{Context, Result, bail, ensure};
 use myriad_assignment::LightLists;
 use myriad_cluster_math::ClusterGrid;
+use myriad_cluster_math::glam::UVec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -128,7 +129,7 @@ impl AssignmentDump {
             "grid dimensions must be >= 1, got {:?}",
             self.grid
         );
-        let clusters = x as u64 * y as u64 * z as u64;
+        let clusters = ClusterGrid::clusters_in(UVec3::new(x, y, z));
         ensure!(
             self.x_edges.len() as u64 == x as u64 + 1,
             "x_edges needs {} values",
@@ -145,11 +146,11 @@ impl AssignmentDump {
             z as u64 + 1
         );
         ensure!(
-            self.offsets.len() as u64 == clusters,
+            self.offsets.len() as u128 == clusters,
             "offsets needs {clusters} values"
         );
         ensure!(
-            self.counts.len() as u64 == clusters,
+            self.counts.len() as u128 == clusters,
             "counts needs {clusters} values"
         );
         for (c, (&o, &n)) in self.offsets.iter().zip(&self.counts).enumerate() {
@@ -341,6 +342,15 @@ mod tests {
         dump.grid = [u32::MAX, 1, 1];
         let e = dump.validate().unwrap_err().to_string();
         assert_eq!(e, "x_edges needs 4294967296 values");
+        // A product past u64 is not 0 clusters (it wrapped, and empty lists passed).
+        let mut dump = one_pair();
+        dump.grid = [4_194_304, 2_097_152, 2_097_152];
+        dump.x_edges = vec![0.0; 4_194_305];
+        dump.y_edges = vec![0.0; 2_097_153];
+        dump.z_planes = vec![0.0; 2_097_153];
+        (dump.offsets, dump.counts, dump.indices) = (vec![], vec![], vec![]);
+        let e = dump.validate().unwrap_err().to_string();
+        assert_eq!(e, "offsets needs 18446744073709551616 values");
     }
 
     #[test]

@@ -8,9 +8,11 @@
 //!
 //! Exit status: 1 is the verdict "this dump misses a light" (or lists a light skipped on
 //! loading); 2 is a dump that cannot be checked against this scene at all — another grid or
-//! camera, a light index past the scene's lights, or a cluster listing a light twice. The last is
-//! malformed rather than wrong: the dump format's lists are sets (docs/cli.md), and a list with a repeat cannot be
-//! counted in pairs the way the verdict's numbers are.
+//! depth range, a light index past the scene's lights, or a cluster listing a light twice. The
+//! last is malformed rather than wrong: the dump format's lists are sets (docs/cli.md), and a
+//! list with a repeat cannot be counted in pairs the way the verdict's numbers are. The format
+//! records no camera or lights, so a dump of another view or other lights on the same grid and
+//! depth range is judged as this scene's (docs/cli.md says so).
 
 use super::oracle_check::{self, CheckReport, OracleLights, check_all, check_clusters};
 use super::source::SceneSource;

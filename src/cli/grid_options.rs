@@ -2,7 +2,7 @@
 
 use anyhow::{Result, bail, ensure};
 use myriad::cluster_math::glam::UVec3;
-use myriad::scene::DepthSlicing;
+use myriad::scene::{ClusterGrid, DepthSlicing};
 
 /// What `--depth` accepts, for its errors.
 const DEPTH_CHOICES: &str = "log, linear or log_near:D (a first slice to D metres, \
@@ -14,9 +14,9 @@ pub(super) fn parse_grid(flag: &str, text: &str) -> Result<UVec3> {
     let dims: Option<Vec<u32>> = parts.iter().map(|p| p.parse().ok()).collect();
     match dims.as_deref() {
         Some(&[x, y, z]) if x >= 1 && y >= 1 && z >= 1 => {
-            let clusters = x as u64 * y as u64 * z as u64;
+            let clusters = ClusterGrid::clusters_in(UVec3::new(x, y, z));
             ensure!(
-                clusters <= u32::MAX as u64,
+                clusters <= u32::MAX as u128,
                 "{flag} {text:?}: {clusters} clusters; cluster ids are u32, so at most {}",
                 u32::MAX
             );
@@ -103,6 +103,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("68719476736 clusters"), "{e}");
+        // 2^64 clusters wrapped to 0 in u64 and passed (audit).
+        let e = parse_grid("--grid", "4194304x2097152x2097152")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("18446744073709551616 clusters"), "{e}");
     }
 
     #[test]

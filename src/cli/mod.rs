@@ -92,10 +92,17 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     }
 }
 
-/// Parses a count of timed runs: at least 1 (a median of nothing is not a timing).
-fn at_least_one(text: &str) -> Result<usize, String> {
+/// The most timed runs a command takes, as `bench --runs` (each run's time is kept for the
+/// median, and the list is sized up front: `report --runs 4294967296` asked for 32 GiB and
+/// aborted, audit).
+const MAX_RUNS: usize = 1_000_000;
+
+/// Parses a count of timed runs: at least 1 (a median of nothing is not a timing), at most
+/// [`MAX_RUNS`].
+fn run_count(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
         Ok(0) => Err("must be at least 1".into()),
+        Ok(n) if n > MAX_RUNS => Err(format!("at most {MAX_RUNS} runs, got {n}")),
         Ok(n) => Ok(n),
         Err(e) => Err(e.to_string()),
     }
@@ -119,9 +126,15 @@ fn light_count(text: &str) -> Result<usize, String> {
 mod count_tests {
     #[test]
     fn counts_are_range_checked() {
-        assert_eq!(super::at_least_one("3"), Ok(3));
-        assert!(super::at_least_one("0").unwrap_err().contains("at least 1"));
-        assert!(super::at_least_one("-1").is_err());
+        assert_eq!(super::run_count("3"), Ok(3));
+        assert!(super::run_count("0").unwrap_err().contains("at least 1"));
+        assert!(super::run_count("-1").is_err());
+        assert_eq!(super::run_count("1000000"), Ok(1_000_000));
+        assert!(
+            super::run_count("4294967296")
+                .unwrap_err()
+                .contains("at most 1000000 runs")
+        );
         assert_eq!(super::light_count("0"), Ok(0));
         assert_eq!(super::light_count("4294967295"), Ok(u32::MAX as usize));
         assert!(

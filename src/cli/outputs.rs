@@ -61,17 +61,26 @@ fn is_regular_file(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.is_file())
 }
 
-/// Creates the `--out` folder `out` (and its parents). A file in its place is named as such,
-/// where `create_dir_all` said only "cannot create afile: File exists (os error 17)"
-/// (hostile-input hunt, session 38).
+/// Creates the `--out` folder `out` (and its parents) and makes sure a file can be written in
+/// it, before any work: `render` and `paper` found a folder they could not create (or write
+/// into) only after minutes of rendering (audit). A file in its place is named as such, where
+/// `create_dir_all` said only "cannot create afile: File exists (os error 17)" (hostile-input
+/// hunt, session 38).
 pub fn create_out_folder(out: &Path) -> Result<()> {
     check_out_folder(out)?;
     std::fs::create_dir_all(out)
-        .with_context(|| format!("cannot create the folder {}", out.display()))
+        .with_context(|| format!("cannot create the folder {}", out.display()))?;
+    // A probe of this process's own name, removed at once: the run's files are written to
+    // temporary names and renamed the same way (`replace_files`).
+    let probe = out.join(format!(".myriad-write-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("cannot write into the folder {}", out.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 /// Refuses an `--out` folder `out` that is something else (a file), before any work.
-pub fn check_out_folder(out: &Path) -> Result<()> {
+fn check_out_folder(out: &Path) -> Result<()> {
     if out.exists() && !out.is_dir() {
         bail!(
             "--out {}: is not a folder (the run writes its files into it)",

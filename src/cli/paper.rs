@@ -69,7 +69,7 @@ pub struct Args {
     size: String,
     /// Timed frames per configuration (medians are reported; after one untimed warm-up frame,
     /// a configuration whose frames take over 10 s gets one timed frame).
-    #[arg(long, value_parser = super::at_least_one, default_value_t = 3)]
+    #[arg(long, value_parser = super::run_count, default_value_t = 3)]
     runs: usize,
     /// Assignment method: exact, linear (the paper's Algorithm 1), binary, refined or cone.
     #[arg(long, default_value = "refined")]
@@ -401,7 +401,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // The heat map and the JSON describe one run: a target neither can replace (a folder, a
     // read-only file) is said before the minutes of rendering, and both are written at the end
     // as one set.
-    super::outputs::check_out_folder(&args.out)?;
+    super::outputs::create_out_folder(&args.out)?;
     check_replaceable(&[&heat_path, &json_path])?;
 
     let ctx = GpuContext::headless()?;

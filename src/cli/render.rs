@@ -63,7 +63,7 @@ pub struct Args {
     out: PathBuf,
     /// Timed frames per shading strategy, after a warm-up frame (the median is reported; fewer
     /// once a strategy's frames pass 20 s, and a warm-up that alone takes 20 s is the one).
-    #[arg(long, value_parser = super::at_least_one, default_value_t = 5)]
+    #[arg(long, value_parser = super::run_count, default_value_t = 5)]
     runs: usize,
     /// Savings for the `clustered+skips` column: "none" (no such column), "all", or a comma
     /// list of cull, active, depth, reuse, variants (see `myriad skips`), and "tune" to keep
@@ -420,7 +420,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         super::outputs::refuse_overwriting_inputs(output, &inputs)?;
     }
     // A folder or a read-only file in the set's place: said now, not after the render.
-    super::outputs::check_out_folder(&args.out)?;
+    super::outputs::create_out_folder(&args.out)?;
     check_replaceable(&outputs.each_ref().map(|p| p.as_path()))?;
     let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);

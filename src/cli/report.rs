@@ -60,7 +60,7 @@ pub struct Args {
     grids: Vec<String>,
     /// Timed runs per method and grid, after one warm-up (the median is reported; exact, the
     /// slow oracle, does at most 3). With the defaults the whole study takes about 10 s on 2 cores.
-    #[arg(long, value_parser = super::at_least_one, default_value_t = 21)]
+    #[arg(long, value_parser = super::run_count, default_value_t = 21)]
     runs: usize,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]

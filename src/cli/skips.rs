@@ -36,7 +36,7 @@ pub struct Args {
     #[arg(long, default_value = "refined")]
     method: String,
     /// Timed frames per configuration (medians).
-    #[arg(long, value_parser = super::at_least_one, default_value_t = 3)]
+    #[arg(long, value_parser = super::run_count, default_value_t = 3)]
     runs: usize,
     /// Print JSON instead of tables.
     #[arg(long)]

@@ -42,6 +42,55 @@ fn validate_names_file_light_and_problem() {
     assert_mentions(&out, &["2 problems", "1 bad"]);
 }
 
+/// A grid of 2^22 × 2^21 × 2^21 clusters, 2^64: the product wrapped to 0 in u64, passed the
+/// reader's check and panicked in `ClusterGrid::new` (exit 101, a backtrace) in every command
+/// that reads a scene (audit).
+#[test]
+fn a_grid_whose_cluster_count_passes_u64_is_a_problem_not_a_panic() {
+    let dir = work_dir("validate_wrapping_grid");
+    let text = GOOD_SCENE.replace(
+        r#""x": 24, "y": 12, "z": 16"#,
+        r#""x": 4194304, "y": 2097152, "z": 2097152"#,
+    );
+    assert_ne!(text, GOOD_SCENE);
+    let scene = write(&dir, "wrapping.json", &text);
+    let out = myriad_exits(
+        1,
+        &["validate".as_ref(), "--scene".as_ref(), scene.as_os_str()],
+    );
+    assert_mentions(
+        &out,
+        &["18446744073709551616 clusters", "at most 4294967295"],
+    );
+    let dump = dir.join("dump.json");
+    for command in ["assign", "bench"] {
+        let mut args = vec![command.as_ref(), "--scene".as_ref(), scene.as_os_str()];
+        if command == "assign" {
+            args.extend(["--out".as_ref(), dump.as_os_str()]);
+        }
+        let out = myriad_exits(2, &args);
+        assert_mentions(
+            &out,
+            &[
+                &scene.display().to_string(),
+                "18446744073709551616 clusters",
+            ],
+        );
+    }
+    let report = dir.join("report");
+    let out = myriad_exits(
+        2,
+        &[
+            "report".as_ref(),
+            "--grids".as_ref(),
+            "4194304x2097152x2097152".as_ref(),
+            "--out".as_ref(),
+            report.as_os_str(),
+        ],
+    );
+    assert_mentions(&out, &["--grids", "18446744073709551616 clusters"]);
+}
+
 #[test]
 fn validate_reports_unreadable_and_missing_files() {
     let dir = work_dir("validate_unreadable");

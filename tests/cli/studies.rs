@@ -279,6 +279,18 @@ fn report_and_paper_refuse_a_set_they_cannot_write_whole_before_measuring() {
         assert_mentions(&out, &["a_file", "not a folder"]);
         assert_eq!(std::fs::read(&file).unwrap(), b"mine");
     }
+    // A folder that cannot be made (nothing can be created in /proc, not even by root) is
+    // refused up front too: `render` and `paper` found out only when writing, after the
+    // rendering (audit).
+    let nowhere = "/proc/self/myriad-out";
+    for command in ["report", "paper", "render"] {
+        let out = myriad_fails(&[command, "--out", nowhere]);
+        assert_mentions(&out, &["cannot create the folder", nowhere]);
+        assert!(
+            !out.contains("[1/") && !out.contains("done in"),
+            "{command} measured first:\n{out}"
+        );
+    }
 }
 
 #[test]

@@ -107,6 +107,13 @@ impl ClusterGrid {
     /// down to it gets the lists of the unscaled one (`crates/assignment/tests/stability.rs`).
     pub const MIN_NEAR: f32 = 1e-12;
 
+    /// The clusters of a grid of `dims`, in u128: three u32 factors pass u64 (a 2^22 × 2^21 ×
+    /// 2^21 grid wrapped to 0 clusters and was accepted, audit). Every check of a grid's size
+    /// against u32 cluster ids counts with this.
+    pub fn clusters_in(dims: UVec3) -> u128 {
+        dims.x as u128 * dims.y as u128 * dims.z as u128
+    }
+
     /// A grid over the depth range `[near, far]`, its outer slices [`OuterSlices::Open`]. Panics
     /// on zero dimensions or an invalid range (with [`Self::try_new`]'s message).
     pub fn new(dims: UVec3, slicing: DepthSlicing, near: f32, far: f32) -> Self {
@@ -155,9 +162,8 @@ impl ClusterGrid {
                 Self::MIN_NEAR
             )));
         }
-        // Cluster ids are u32 in the output lists. In u128: three u32 factors pass u64 (a
-        // 2^22 × 2^21 × 2^21 grid wrapped to 0 clusters and was accepted, audit).
-        if (dims.x as u128) * (dims.y as u128) * (dims.z as u128) > u32::MAX as u128 {
+        // Cluster ids are u32 in the output lists.
+        if Self::clusters_in(dims) > u32::MAX as u128 {
             return Err(InvalidGrid(format!(
                 "cluster grid {dims} has more clusters than fit in a u32 id"
             )));

@@ -53,6 +53,15 @@ pub struct TextureRgba8 {
     pub pixels: Vec<u8>,
 }
 
+impl TextureRgba8 {
+    /// Whether `pixels` holds `width·height·4` bytes, counted in u128: in u64 a 2^31 × 2^31
+    /// texture needs 2^64 bytes, which wrapped to 0 and passed with no pixels, and
+    /// `SceneGeometry::fit_textures` then panicked (audit).
+    fn bytes_match_size(&self) -> bool {
+        self.pixels.len() as u128 == self.width as u128 * self.height as u128 * 4
+    }
+}
+
 /// Everything the renderer draws, flattened.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SceneGeometry {
@@ -117,10 +126,7 @@ impl SceneGeometry {
             }
         }
         for (t, tex) in self.textures.iter().enumerate() {
-            if tex.pixels.len() as u64 != tex.width as u64 * tex.height as u64 * 4
-                || tex.width == 0
-                || tex.height == 0
-            {
+            if !tex.bytes_match_size() || tex.width == 0 || tex.height == 0 {
                 return Err(format!(
                     "texture {t} is {}x{} with {} bytes",
                     tex.width,
@@ -176,7 +182,7 @@ impl SceneGeometry {
         for (n, t) in self.textures.iter_mut().enumerate() {
             let side = t.width.max(t.height);
             // A texture whose bytes do not match its size is left for `check` to report.
-            if side <= max_side || t.pixels.len() as u64 != t.width as u64 * t.height as u64 * 4 {
+            if side <= max_side || !t.bytes_match_size() {
                 continue;
             }
             let scale = |v: u32| ((v as u64 * max_side as u64 / side as u64) as u32).max(1);
@@ -566,5 +572,23 @@ mod tests {
         assert_eq!(sizes, [(4, 3, 48), (4, 4, 64), (1, 4, 16), (8, 8, 255)]);
         assert!(geometry.textures[0].pixels.iter().all(|&p| p == 200));
         assert_eq!(geometry.textures[3], odd);
+    }
+
+    /// A texture whose byte count passes u64 (2^31 × 2^31 × 4 = 2^64) does not match its empty
+    /// pixels: `check` refuses it and `fit_textures` leaves it (it passed as 0 bytes, and the
+    /// scaling panicked).
+    #[test]
+    fn a_texture_whose_byte_count_passes_u64_is_refused_not_scaled() {
+        let mut geometry = valid();
+        let huge = TextureRgba8 {
+            width: 1 << 31,
+            height: 1 << 31,
+            pixels: Vec::new(),
+        };
+        geometry.textures = vec![huge.clone()];
+        let e = geometry.check().unwrap_err();
+        assert!(e.contains("2147483648x2147483648 with 0 bytes"), "{e}");
+        assert!(geometry.fit_textures(8192).is_empty());
+        assert_eq!(geometry.textures, [huge]);
     }
 }

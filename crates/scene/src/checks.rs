@@ -321,8 +321,8 @@ pub(crate) fn check_grid(
         }
     }
     if let [Some(x), Some(y), Some(z)] = p.dims {
-        let clusters = x as u64 * y as u64 * z as u64;
-        if clusters > u32::MAX as u64 {
+        let clusters = ClusterGrid::clusters_in(UVec3::new(x, y, z));
+        if clusters > u32::MAX as u128 {
             sink.report(
                 "",
                 format!(
@@ -359,8 +359,16 @@ pub(crate) fn check_grid(
         return None;
     }
     match (p.dims, p.slicing, depth_range) {
+        // `try_new`: whatever its checks find that the ones above missed is the file's error,
+        // not a panic (a grid whose product wrapped u64 reached `new`, audit).
         ([Some(x), Some(y), Some(z)], Some(slicing), Some((near, far))) => {
-            Some(ClusterGrid::new(UVec3::new(x, y, z), slicing, near, far))
+            match ClusterGrid::try_new(UVec3::new(x, y, z), slicing, near, far) {
+                Ok(grid) => Some(grid),
+                Err(e) => {
+                    sink.report("", e.to_string());
+                    None
+                }
+            }
         }
         _ => None,
     }
@@ -799,6 +807,24 @@ mod tests {
             problems[0].message.contains("4294967296 clusters"),
             "{problems:?}"
         );
+        // Products that pass u64 are counted whole: 2^22 · 2^21 · 2^21 is 2^64, which wrapped
+        // to 0 clusters, passed, and panicked in `ClusterGrid::new` (audit); all-maximal
+        // dimensions overflowed the multiplication itself in a debug build.
+        for (dims, count) in [
+            (
+                [4_194_304, 2_097_152, 2_097_152],
+                "18446744073709551616 clusters",
+            ),
+            ([u32::MAX; 3], "79228162458924105385300197375 clusters"),
+        ] {
+            let wrapped = GridParts {
+                dims: dims.map(Some),
+                slicing: Some(DepthSlicing::Log),
+            };
+            let (g, problems) = grid_problems(&wrapped, Some((0.1, 100.0)));
+            assert!(g.is_none());
+            assert!(problems[0].message.contains(count), "{problems:?}");
+        }
         // The largest grid that fits is accepted.
         let max = GridParts {
             dims: [Some(u32::MAX), Some(1), Some(1)],
