@@ -18,8 +18,8 @@ pub struct Args {
     /// Lights (the atrium's own, then lights on its surfaces), orbiting the view's centre.
     #[arg(long, value_parser = super::light_count, default_value_t = 100_000)]
     lights: usize,
-    /// Frames per loop.
-    #[arg(long, default_value_t = 30)]
+    /// Frames per loop, 2 to 1 000 000 (each frame's stage times are kept for the summary).
+    #[arg(long, value_parser = super::run_count, default_value_t = 30)]
     frames: usize,
     /// Image size WxH.
     #[arg(long, default_value = "320x160")]

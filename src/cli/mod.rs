@@ -102,7 +102,7 @@ const MAX_RUNS: usize = 1_000_000;
 fn run_count(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
         Ok(0) => Err("must be at least 1".into()),
-        Ok(n) if n > MAX_RUNS => Err(format!("at most {MAX_RUNS} runs, got {n}")),
+        Ok(n) if n > MAX_RUNS => Err(format!("at most {MAX_RUNS}, got {n}")),
         Ok(n) => Ok(n),
         Err(e) => Err(e.to_string()),
     }
@@ -133,7 +133,7 @@ mod count_tests {
         assert!(
             super::run_count("4294967296")
                 .unwrap_err()
-                .contains("at most 1000000 runs")
+                .contains("at most 1000000, got 4294967296")
         );
         assert_eq!(super::light_count("0"), Ok(0));
         assert_eq!(super::light_count("4294967295"), Ok(u32::MAX as usize));

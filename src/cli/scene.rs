@@ -127,15 +127,10 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
     let (camera, camera_name) = match &args.camera {
         Some(name) => {
             let index = model.camera_index(name).with_context(|| {
-                let names: Vec<_> = model.cameras.iter().map(|c| printable(&c.name)).collect();
                 format!(
                     "{}: no camera named {name:?}; it has {}",
                     path.display(),
-                    if names.is_empty() {
-                        "none".to_string()
-                    } else {
-                        names.join(", ")
-                    }
+                    model.camera_names()
                 )
             })?;
             let camera = model.camera(index, width, height).with_context(|| {

@@ -68,8 +68,10 @@ impl RenderScene {
         let camera = match camera {
             Some(c) => {
                 let index = model.camera_index(c).with_context(|| {
-                    let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
-                    format!("{name}: no camera named {c:?}; it has {names:?}")
+                    format!(
+                        "{name}: no camera named {c:?}; it has {}",
+                        model.camera_names()
+                    )
                 })?;
                 model.camera(index, width, height).with_context(|| {
                     format!("{name}: camera {c:?} is orthographic; a perspective one is needed")
@@ -79,7 +81,13 @@ impl RenderScene {
             None => {
                 model
                     .camera_or_view(0, width, height)
-                    .with_context(|| format!("{name}: draws nothing and has no camera"))?
+                    .with_context(|| {
+                        format!(
+                            "{name}: draws nothing and has no camera, so there is no view to \
+                             render; give a model with geometry or a camera (`myriad info` \
+                             lists what a model has)"
+                        )
+                    })?
                     .0
             }
         };
@@ -188,7 +196,33 @@ mod tests {
         let err = RenderScene::from_model(&model, "no camera", Some("Main"), 10, 1, 64, 32)
             .unwrap_err()
             .to_string();
-        assert!(err.contains("no camera named \"Main\""), "{err}");
+        assert!(
+            err.contains("no camera named \"Main\"; it has none"),
+            "{err}"
+        );
+        // Listed as `myriad scene` lists them, not as a Rust array.
+        let atrium = myriad_scene::atrium();
+        let err = RenderScene::from_model(&atrium, "atrium", Some("nope"), 10, 1, 64, 32)
+            .unwrap_err()
+            .to_string();
+        let names: Vec<_> = atrium.cameras.iter().map(|c| c.name.as_str()).collect();
+        assert!(atrium.cameras.len() > 1);
+        assert!(
+            err.ends_with(&format!("it has {}", names.join(", "))),
+            "{err}"
+        );
+        // A model with nothing to draw and no camera says what would do.
+        let mut empty = myriad_scene::atrium();
+        empty.cameras.clear();
+        empty.meshes.clear();
+        empty.instances.clear();
+        let err = RenderScene::from_model(&empty, "empty", None, 0, 1, 64, 32)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("give a model with geometry or a camera"),
+            "{err}"
+        );
     }
 
     /// A scene has the model's own lights first, then surface lights up to the count asked for,

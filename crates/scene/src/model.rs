@@ -583,6 +583,21 @@ impl Model {
         self.cameras.iter().position(|c| c.name == name)
     }
 
+    /// The cameras' names for a message: `Main, Gallery` (each made printable, see
+    /// [`crate::printable`]), or `none`. Every command that reports a camera name it did not
+    /// find lists them this way.
+    pub fn camera_names(&self) -> String {
+        if self.cameras.is_empty() {
+            return "none".to_string();
+        }
+        let names: Vec<_> = self
+            .cameras
+            .iter()
+            .map(|c| crate::printable(&c.name))
+            .collect();
+        names.join(", ")
+    }
+
     /// Camera `index` as a [`Camera`] at `width`×`height` (see [`ModelCamera::to_camera`]); an
     /// infinite far plane becomes the distance to the farthest corner of [`Model::bounds`]
     /// (plus 1%), at least `1000 × znear`, at most `f32::MAX`. `None` if there is no such camera or it is
