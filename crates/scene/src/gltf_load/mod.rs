@@ -108,7 +108,9 @@
 //!   - sparse indices that do not strictly increase: applied in file order, so a repeated
 //!     index takes its last value;
 //!   - a buffer holding more than its `byteLength` (beyond the padding to 4 bytes): the rest
-//!     is ignored.
+//!     is ignored;
+//!   - a node `rotation` whose length is not 1 (beyond 1e-5): normalised;
+//!   - a mesh with no primitives: it draws nothing.
 //! * **Normals** that are not unit length are normalised (with a warning naming the primitive);
 //!   a trailing incomplete triangle of a list is dropped (with a warning).
 
@@ -337,6 +339,13 @@ fn load(
         loader.model.materials.push(material);
     }
     for (i, mesh) in root.meshes.iter().enumerate() {
+        if mesh.primitives.is_empty() {
+            loader.model.warnings.push(format!(
+                "meshes[{i}]{}: has no primitives (the spec requires at least one); it draws \
+                 nothing",
+                quoted(&mesh.name)
+            ));
+        }
         let mut primitives = Vec::with_capacity(mesh.primitives.len());
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let at = format!("meshes[{i}]{} primitives[{p}]", quoted(&mesh.name));

@@ -85,6 +85,22 @@ impl Loader<'_> {
                 ("scale", n.scale.is_some()),
             ];
             let given: Vec<&str> = trs.iter().filter(|t| t.1).map(|t| t.0).collect();
+            // The spec requires unit quaternions; another length is normalised (`local_transform`),
+            // and said so, as every repair is (it was silent, audit). The tolerance is the
+            // glTF validator's order: a quaternion stored in f32 may be a few ulps off.
+            if n.matrix.is_none()
+                && let Some(r) = &n.rotation
+            {
+                let len = Quat::from_array(r.0).length();
+                if len.is_finite() && len > 0.0 && (len - 1.0).abs() > 1e-5 {
+                    self.model.warnings.push(format!(
+                        "nodes[{i}]{}: rotation {:?} has length {len}, not 1 (the spec requires \
+                         a unit quaternion); normalised",
+                        quoted(&n.name),
+                        r.0
+                    ));
+                }
+            }
             if n.matrix.is_some() && !given.is_empty() {
                 self.model.warnings.push(format!(
                     "nodes[{i}]{}: has both matrix and {} (the spec allows one or the other); \

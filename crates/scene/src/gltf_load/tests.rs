@@ -700,6 +700,22 @@ fn spec_violations_are_refused_or_reported() {
         (
             text.replace(
                 r#""nodes": [{"mesh": 0}, {}]"#,
+                r#""nodes": [{"mesh": 0, "name": "long", "rotation": [10, 0, 0, 0]}, {}]"#,
+            ),
+            "nodes[0] \"long\": rotation [10.0, 0.0, 0.0, 0.0] has length 10, not 1 (the spec \
+             requires a unit quaternion); normalised",
+        ),
+        (
+            text.replace(
+                r#""indices": 1}]}]"#,
+                r#""indices": 1}]}, {"name": "hollow", "primitives": []}]"#,
+            ),
+            "meshes[1] \"hollow\": has no primitives (the spec requires at least one); it draws \
+             nothing",
+        ),
+        (
+            text.replace(
+                r#""nodes": [{"mesh": 0}, {}]"#,
                 r#""nodes": [{"mesh": 0}, {"camera": 0}],
                 "cameras": [{"type": "perspective",
                              "perspective": {"yfov": 1, "znear": 0.1, "aspectRatio": 0}}]"#,
