@@ -584,7 +584,7 @@ impl Model {
     }
 
     /// The cameras' names for a message: `Main, Gallery` (each made printable, see
-    /// [`crate::printable`]), or `none`. Every command that reports a camera name it did not
+    /// [`crate::printable()`]), or `none`. Every command that reports a camera name it did not
     /// find lists them this way.
     pub fn camera_names(&self) -> String {
         if self.cameras.is_empty() {
