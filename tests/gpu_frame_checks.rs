@@ -353,13 +353,20 @@ fn the_report_counts_exactly_the_bytes_each_frame_staged() {
     ];
     let mut generation = renderer.upload_generation();
     assert_eq!(generation, 0);
+    let mut seen = vec![generation];
     for (what, frame, want) in frames {
         let report = renderer
             .render(&ctx, &geometry, &frame, &target.view)
             .unwrap();
         assert_eq!(report.upload_bytes, want, "{what}");
-        generation += u64::from(frame.lights.is_some() || frame.lists.is_some());
-        assert_eq!(renderer.upload_generation(), generation, "{what}");
+        // A new value exactly when the frame uploads; never one given before.
+        let now = renderer.upload_generation();
+        if frame.lights.is_some() || frame.lists.is_some() {
+            assert!(!seen.contains(&now), "{what}: generation {now} again");
+            seen.push(now);
+            generation = now;
+        }
+        assert_eq!(now, generation, "{what}");
     }
 }
 

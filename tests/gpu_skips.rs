@@ -3,9 +3,10 @@
 //! reused without uploading lights or lists, and changed colours or positions are picked up.
 
 use myriad::assignment::Method;
-use myriad::gpu::GpuContext;
+use myriad::gpu::{GpuContext, HEADLESS_FORMAT, Renderer};
 use myriad::render::{
-    FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer, max_channel_difference,
+    FramePlan, GpuStage, RenderScene, Shading, Skips, TunerSettings, Viewer,
+    max_channel_difference, run_frames,
 };
 use myriad::scene::{ClusterGrid, Lights, atrium};
 
@@ -228,6 +229,110 @@ fn a_plain_frame_in_between_invalidates_the_reuse_cache() {
         .frame_with_skips(&scene, Method::Binary, Skips::ALL)
         .unwrap();
     assert!(!other.reused, "lists of another method reused");
+}
+
+/// A viewer whose renderer is replaced (an engine rebuilding it on the same device) does not
+/// take what the new renderer holds for the cached frame's data: each renderer counted its
+/// uploads from 0, so one upload on the new one matched the cached count and the next skipping
+/// frame was reused over another frame's lights and lists (145/255 off, with `Ok`; audit).
+#[test]
+fn a_replaced_renderer_does_not_match_the_reuse_cache() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(500, 128, 64).unwrap();
+    let mut other = scene.clone();
+    for i in 0..other.lights.len() {
+        other.lights.r[i] *= 0.3;
+        other.lights.y[i] += 0.7;
+    }
+    let mut fresh = Viewer::new(ctx.clone(), &scene).unwrap();
+    let (expected, _) = render(&mut fresh, &scene, Skips::NONE);
+    for skips in [
+        Skips {
+            reuse_unchanged: true,
+            ..Skips::NONE
+        },
+        Skips {
+            cull: true,
+            reuse_unchanged: true,
+            ..Skips::NONE
+        },
+    ] {
+        let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+        render(&mut viewer, &scene, skips);
+        viewer.renderer = Renderer::try_new(&ctx, HEADLESS_FORMAT).unwrap();
+        viewer.scene = viewer.renderer.upload_scene(&ctx, &scene.geometry).unwrap();
+        viewer
+            .frame(&other, Shading::Clustered, Method::Refined, false)
+            .unwrap();
+        let (image, frame) = render(&mut viewer, &scene, skips);
+        assert!(
+            !frame.reused,
+            "{:?}: reused another renderer's upload",
+            skips.names()
+        );
+        assert!(
+            max_channel_difference(&image, &expected) <= 1,
+            "{:?}",
+            skips.names()
+        );
+    }
+}
+
+/// A camera the assignment cannot use (near 0) is the frame's error, with or without skips and
+/// in the frame loop, and the viewer draws the next good frame as if it had not happened: it
+/// panicked inside the assignment where no depth prepass refused it first (audit).
+#[test]
+fn an_unusable_camera_is_an_error_not_a_panic() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let scene = RenderScene::default_scene(100, 128, 64).unwrap();
+    let mut bad = scene.clone();
+    bad.camera.near = 0.0;
+    let mut viewer = Viewer::new(ctx, &scene).unwrap();
+    let (expected, _) = render(&mut viewer, &scene, Skips::NONE);
+    let plain = viewer.frame(&bad, Shading::Clustered, Method::Refined, false);
+    assert!(plain.is_err(), "a plain frame took near 0");
+    for skips in [
+        Skips::NONE,
+        Skips {
+            cull: true,
+            ..Skips::NONE
+        },
+        Skips::ALL,
+    ] {
+        let e = viewer
+            .frame_with_skips(&bad, Method::Refined, skips)
+            .map(|_| ())
+            .unwrap_err();
+        assert!(e.to_string().contains("near"), "{:?}: {e:#}", skips.names());
+    }
+    let mut stage = GpuStage {
+        ctx: &viewer.ctx,
+        renderer: &mut viewer.renderer,
+        scene: &viewer.scene,
+        target: &viewer.target,
+        settings: viewer.settings,
+    };
+    for pipelined in [false, true] {
+        let looped = run_frames(
+            &mut stage,
+            &bad,
+            Method::Refined,
+            2,
+            pipelined,
+            false,
+            |_, _| Ok(()),
+        );
+        assert!(
+            looped.is_err(),
+            "the frame loop took near 0 (pipelined: {pipelined})"
+        );
+    }
+    let (after, _) = render(&mut viewer, &scene, Skips::NONE);
+    assert!(max_channel_difference(&after, &expected) <= 1);
 }
 
 #[test]

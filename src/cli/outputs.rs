@@ -61,22 +61,39 @@ fn is_regular_file(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.is_file())
 }
 
-/// Creates the `--out` folder `out` (and its parents) and makes sure a file can be written in
-/// it, before any work: `render` and `paper` found a folder they could not create (or write
-/// into) only after minutes of rendering (audit). A file in its place is named as such, where
-/// `create_dir_all` said only "cannot create afile: File exists (os error 17)" (hostile-input
-/// hunt, session 38).
+/// Creates the `--out` folder `out` (and its parents). A file in its place is named as such,
+/// where `create_dir_all` said only "cannot create afile: File exists (os error 17)"
+/// (hostile-input hunt, session 38).
 pub fn create_out_folder(out: &Path) -> Result<()> {
     check_out_folder(out)?;
     std::fs::create_dir_all(out)
-        .with_context(|| format!("cannot create the folder {}", out.display()))?;
-    // A probe of this process's own name, removed at once: the run's files are written to
-    // temporary names and renamed the same way (`replace_files`).
-    let probe = out.join(format!(".myriad-write-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"")
-        .with_context(|| format!("cannot write into the folder {}", out.display()))?;
-    let _ = std::fs::remove_file(&probe);
-    Ok(())
+        .with_context(|| format!("cannot create the folder {}", out.display()))
+}
+
+/// Makes sure, before any work, that the `--out` folder `out` can be made and written into, and
+/// leaves no trace: the folders it had to make are removed again, so a run refused later leaves
+/// no empty output folder. `render` and `paper` found a folder they could not make or write
+/// into only after minutes of rendering (audit).
+pub fn check_out_folder_writable(out: &Path) -> Result<()> {
+    check_out_folder(out)?;
+    // The folders that do not exist yet, innermost first.
+    let missing: Vec<&Path> = out
+        .ancestors()
+        .take_while(|p| !p.as_os_str().is_empty() && !p.exists())
+        .collect();
+    let written = create_out_folder(out).and_then(|()| {
+        // A probe of this process's own name, removed at once: the run's files are written to
+        // temporary names and renamed the same way (`replace_files`).
+        let probe = out.join(format!(".myriad-write-probe-{}", std::process::id()));
+        std::fs::write(&probe, b"")
+            .with_context(|| format!("cannot write into the folder {}", out.display()))?;
+        let _ = std::fs::remove_file(&probe);
+        Ok(())
+    });
+    for folder in missing {
+        let _ = std::fs::remove_dir(folder);
+    }
+    written
 }
 
 /// Refuses an `--out` folder `out` that is something else (a file), before any work.

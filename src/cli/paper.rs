@@ -401,7 +401,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // The heat map and the JSON describe one run: a target neither can replace (a folder, a
     // read-only file) is said before the minutes of rendering, and both are written at the end
     // as one set.
-    super::outputs::create_out_folder(&args.out)?;
+    super::outputs::check_out_folder_writable(&args.out)?;
     check_replaceable(&[&heat_path, &json_path])?;
 
     let ctx = GpuContext::headless()?;

@@ -420,7 +420,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         super::outputs::refuse_overwriting_inputs(output, &inputs)?;
     }
     // A folder or a read-only file in the set's place: said now, not after the render.
-    super::outputs::create_out_folder(&args.out)?;
+    super::outputs::check_out_folder_writable(&args.out)?;
     check_replaceable(&outputs.each_ref().map(|p| p.as_path()))?;
     let (scene, lights_skipped_in_file) = load_scene(&args)?;
     let (width, height) = (scene.camera.width, scene.camera.height);

@@ -305,6 +305,13 @@ pub fn run_frames(
         culled: cull,
         ..Default::default()
     };
+    // The loop's camera and grid never change: checked once here, as the CPU stage's assignment
+    // would otherwise panic on them (on its worker thread, in the pipelined loop).
+    myriad_assignment::Assigner::check_frame(
+        &light_input(&scene.lights),
+        &scene.camera,
+        &scene.grid,
+    )?;
     let max_pairs = gpu.ctx.max_list_pairs();
     let start = Instant::now();
     if !pipelined {

@@ -449,14 +449,14 @@ impl Viewer {
         } else {
             None
         };
-        let stats = self.assigner.assign_active(
+        let stats = self.assigner.try_assign_active(
             method,
             &light_input(assigned),
             &scene.camera,
             &grid,
             mask,
             &mut self.lists,
-        );
+        )?;
         frame.assign_seconds = start.elapsed().as_secs_f64();
         if stats.coarsened > 0 {
             // Lists past the pair budget are built unmasked on the coarser grid: no cluster

@@ -213,13 +213,15 @@ impl Viewer {
         if shading != Shading::BruteForce {
             crate::profile_span!("viewer: assign");
             let start = Instant::now();
-            let s = self.assigner.assign(
+            // `try_`: a camera the assignment cannot use is the frame's error, not a panic
+            // (near 0 panicked here, audit).
+            let s = self.assigner.try_assign(
                 method,
                 &light_input(&scene.lights),
                 &scene.camera,
                 &grid,
                 &mut self.lists,
-            );
+            )?;
             assign_seconds = start.elapsed().as_secs_f64();
             grid = s.grid_built(&grid);
             stats = Some(s);

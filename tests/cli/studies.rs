@@ -291,6 +291,29 @@ fn report_and_paper_refuse_a_set_they_cannot_write_whole_before_measuring() {
             "{command} measured first:\n{out}"
         );
     }
+    // The check leaves no folder behind: a run refused after it (here: no GPU backend) leaves
+    // none either.
+    let dir = work_dir("out_folder_probe");
+    let out_dir = dir.join("deeper").join("out");
+    let out = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(["paper", "--size", "64x32", "--runs", "1", "--out"])
+        .arg(&out_dir)
+        // A backend this platform lacks: no adapter (as in `render_follows_wgpu_backend…`).
+        .env(
+            "WGPU_BACKEND",
+            if cfg!(target_os = "macos") {
+                "dx12"
+            } else {
+                "metal"
+            },
+        )
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", all_output(&out));
+    assert!(
+        !dir.join("deeper").exists(),
+        "an output folder without results"
+    );
 }
 
 #[test]

@@ -392,6 +392,19 @@ impl Assigner {
         self.try_assign_active(method, lights, camera, grid, None, out)
     }
 
+    /// What [`Assigner::try_assign`] would refuse about this frame, without assigning it: a loop
+    /// whose camera and grid stay fixed checks them once, up front.
+    pub fn check_frame(
+        lights: &LightInput<'_>,
+        camera: &Camera,
+        grid: &ClusterGrid,
+    ) -> Result<(), InvalidFrame> {
+        match frame_problem(lights, camera, grid, None) {
+            Some(problem) => Err(InvalidFrame(problem)),
+            None => Ok(()),
+        }
+    }
+
     /// [`Assigner::assign_active`] that returns an error where it panics (as
     /// [`Assigner::try_assign`], and a mask for another grid).
     pub fn try_assign_active(

@@ -72,6 +72,13 @@ pub struct FrameDesc<'a> {
     pub lights: Option<LightColumns<'a>>,
     /// This frame's lists, or `None` to keep the last upload (allowed only for the same grid and
     /// camera as that upload's: lists belong to one view). Needed for [`ShadingMode::Lists`].
+    ///
+    /// Kept lists must also be the ones assigned for the lights uploaded now: a frame may upload
+    /// lights and keep the lists when only colours or intensities changed (what the viewer's
+    /// skipping frames do), never when positions, ranges or cones did. The renderer checks the
+    /// grid, the camera and that the lists name no light past the upload, but not the lights'
+    /// geometry (that would hash every light of every upload): lists kept across a brute-force
+    /// frame that uploaded other lights shade with `Ok` and the wrong lights (audit).
     pub lists: Option<ClusterLists<'a>>,
     /// Look settings.
     pub settings: ShadingSettings,
@@ -155,7 +162,8 @@ pub struct Renderer {
     /// The last target the shading passes validated against (`target_check.rs`).
     checked_target: Option<target_check::CheckedTarget>,
     has_spots: bool,
-    /// Bumped by every frame that uploads lights or lists (see [`Renderer::upload_generation`]).
+    /// Set anew by every frame that uploads lights or lists (see
+    /// [`Renderer::upload_generation`]).
     uploads: u64,
     /// Why wgpu refused what [`Renderer::new`] made (a device below
     /// [`Renderer::required_limits`]): every call returns it as [`GpuError::DeviceLimits`].
@@ -417,9 +425,14 @@ impl Renderer {
         self.pipelines.output_format()
     }
 
-    /// How many frames have uploaded lights or lists so far. A caller that keeps what it last
-    /// uploaded (to send nothing when nothing changed) compares this with the value after its own
-    /// upload: if another frame uploaded in between, the GPU no longer holds its data.
+    /// Which upload of lights or lists the renderer holds: a new value with every frame that
+    /// uploads either, 0 before the first. A caller that keeps what it last uploaded (to send
+    /// nothing when nothing changed) compares this with the value after its own upload: if
+    /// another frame uploaded in between, the GPU no longer holds its data. The values are
+    /// unique across every renderer of the process, so a renderer replaced by another (the
+    /// viewer's public `renderer`) never matches a value the old one gave: each renderer
+    /// counted from 0, and after one upload on the new renderer a viewer's skipping frame took
+    /// another frame's lights and lists for its own and reused them, with `Ok` (audit).
     pub fn upload_generation(&self) -> u64 {
         self.uploads
     }
@@ -824,9 +837,10 @@ impl Renderer {
                 pairs: lists.indices.len(),
             });
         }
-        // Once per frame, however much it uploads: the generation counts frames.
+        // Once per frame, however much it uploads, from one counter for the whole process.
         if frame.lights.is_some() || frame.lists.is_some() {
-            self.uploads += 1;
+            static UPLOADS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+            self.uploads = UPLOADS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         }
         let max_count = match (frame.mode, self.lists_uploaded) {
             (ShadingMode::BruteForce, _) => self.light_count as u32,
