@@ -432,11 +432,16 @@ impl LightField {
         }
         if let Some(s) = self.spots {
             let [a0, a1] = s.angle_deg;
-            if !((0.0..=1.0).contains(&s.fraction) && a0 > 0.0 && a1 <= 180.0 && range_ok([a0, a1]))
+            // Above 0 in radians, as the lights get them: 1e-45° is 0 there, and the scene
+            // made from the field was refused for its first spot instead of the option (audit).
+            if !((0.0..=1.0).contains(&s.fraction)
+                && a0.to_radians() > 0.0
+                && a1 <= 180.0
+                && range_ok([a0, a1]))
             {
                 return Some(format!(
-                    "spots need a fraction in [0, 1] and angles 0 < min <= max <= 180, got {} and \
-                     {a0}..{a1}",
+                    "spots need a fraction in [0, 1] and angles 0 < min <= max <= 180 (min above 0 \
+                     once in radians), got {} and {a0}..{a1}",
                     s.fraction
                 ));
             }
@@ -1043,6 +1048,10 @@ mod tests {
             b.clone().with_spots(SpotRule {
                 fraction: 0.5,
                 angle_deg: [0.0, 10.0],
+            }),
+            b.clone().with_spots(SpotRule {
+                fraction: 0.5,
+                angle_deg: [1e-45, 1e-45],
             }),
             LightField::new(Placement::Surfaces {
                 surfaces: SurfaceSampler::from_triangles([]),
