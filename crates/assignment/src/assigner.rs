@@ -85,7 +85,9 @@ pub enum AppendStrategy {
     #[default]
     PartitionedByDepth,
     /// One shared counter per cluster, `fetch_add` in the count and the fill passes, then a sort
-    /// of every list to make the order deterministic. Kept to measure against.
+    /// of every list to make the order deterministic. Kept to measure against. Its frames called
+    /// from outside the pool are always handed off ([`OutsideCalls::HandOff`]'s waits
+    /// included): the caller-works path exists for the default append only.
     AtomicCounters,
 }
 
@@ -104,12 +106,28 @@ pub enum OutsideCalls {
     /// 2 × threads per frame, fewer where a region has fewer items to share. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
     /// medians of the `targets` bench, three runs: `binary` 25.1–25.8 µs against 30.9–34.2 µs
     /// handed off, `refined` 38.7–39.8 against 44.2–50.1 µs; 21–23 and 36–44 µs on a worker).
+    ///
+    /// With [`AppendStrategy::PartitionedByDepth`] (the default append) only; with
+    /// [`AppendStrategy::AtomicCounters`] the frame is handed off. Helpers no worker has started
+    /// stay queued on the pool until one frees (each returns at once then): 100,000 frames while
+    /// both workers of a 2-thread pool were held busy grew the process by 24 MB (audit).
+    ///
+    /// The caller runs tasks on its own stack, and a task of 2048 lights or more keeps blocks of
+    /// about 100 KB there: a 100,000-light frame overflowed (aborting the process) on threads
+    /// made with 64 and 128 KiB stacks and ran on 192 KiB. Call from threads with 256 KiB or more
+    /// (Rust's spawned threads have 2 MiB), or hand off.
     #[default]
     Join,
     /// The whole frame moves onto a pool worker in one hand-off and the calling thread sleeps
     /// until it is done: two cross-thread wake-ups per frame, but nothing allocated per frame
     /// (only rayon's injection queue allocates, a block per 63 jobs injected by anyone: one
     /// per 63 frames here). For an engine that must keep off the allocator in steady state.
+    ///
+    /// It waits for a free worker, so a frame handed off while every worker of the global pool
+    /// waits on the calling thread never starts: workers blocked on a lock the caller holds, or
+    /// a global pool whose only thread is a member that is not inside rayon (a pool of one built
+    /// with `use_current_thread` on another thread; the frame ran when that thread next yielded
+    /// to rayon, audit). `Join` with the default append does not wait for such workers.
     HandOff,
 }
 
