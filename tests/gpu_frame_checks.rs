@@ -12,8 +12,7 @@ use myriad::gpu::{
     ShadingMode, ShadingSettings, read_rgba8, wgpu,
 };
 use myriad::render::{
-    GpuStage, RenderScene, Shading, Viewer, cluster_lists, light_columns, max_channel_difference,
-    run_frames,
+    RenderScene, Shading, Viewer, cluster_lists, light_columns, max_channel_difference, run_frames,
 };
 use myriad::scene::{Camera, ClusterGrid, DepthSlicing};
 
@@ -491,13 +490,7 @@ fn the_frame_loop_coarsens_lists_past_what_the_device_binds() {
     let brute = viewer.image().unwrap();
     let mut images = [Vec::new(), Vec::new()];
     for (pipelined, images) in [false, true].into_iter().zip(&mut images) {
-        let mut stage = GpuStage {
-            ctx: &viewer.ctx,
-            renderer: &mut viewer.renderer,
-            scene: &viewer.scene,
-            target: &viewer.target,
-            settings: viewer.settings,
-        };
+        let mut stage = viewer.gpu_stage();
         let report = run_frames(
             &mut stage,
             &scene,

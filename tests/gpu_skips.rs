@@ -5,8 +5,8 @@
 use myriad::assignment::Method;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, Renderer};
 use myriad::render::{
-    FramePlan, GpuStage, RenderScene, Shading, Skips, TunerSettings, Viewer,
-    max_channel_difference, run_frames,
+    FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer, max_channel_difference,
+    run_frames,
 };
 use myriad::scene::{ClusterGrid, Lights, atrium};
 
@@ -309,13 +309,7 @@ fn an_unusable_camera_is_an_error_not_a_panic() {
             .unwrap_err();
         assert!(e.to_string().contains("near"), "{:?}: {e:#}", skips.names());
     }
-    let mut stage = GpuStage {
-        ctx: &viewer.ctx,
-        renderer: &mut viewer.renderer,
-        scene: &viewer.scene,
-        target: &viewer.target,
-        settings: viewer.settings,
-    };
+    let mut stage = viewer.gpu_stage();
     for pipelined in [false, true] {
         let looped = run_frames(
             &mut stage,

@@ -4,7 +4,7 @@
 //! into their neighbours in a capture; one that marks twice splits them. Counted with the
 //! profiling module's per-thread test counter, so this runs without the `tracy` feature.
 
-use super::{GpuStage, RenderScene, Shading, Skips, Viewer, run_frames};
+use super::{RenderScene, Shading, Skips, Viewer, run_frames};
 use crate::profiling::frame_marks_on_this_thread;
 use myriad_assignment::Method;
 use myriad_gpu::GpuContext;
@@ -47,13 +47,7 @@ fn every_rendered_frame_is_marked_once() {
         assert_eq!(drawn, 1, "frame_with_skips, {name}");
         assert_eq!(reused, name.ends_with("reused"), "{name}");
     }
-    let mut gpu = GpuStage {
-        ctx: &viewer.ctx,
-        renderer: &mut viewer.renderer,
-        scene: &viewer.scene,
-        target: &viewer.target,
-        settings: viewer.settings,
-    };
+    let mut gpu = viewer.gpu_stage();
     for pipelined in [false, true] {
         let drawn = marks(|| {
             run_frames(

@@ -245,6 +245,18 @@ impl Viewer {
         })
     }
 
+    /// The viewer's device, renderer, geometry, target and settings as the GPU side of
+    /// [`super::run_frames`]' loop.
+    pub fn gpu_stage(&mut self) -> super::GpuStage<'_> {
+        super::GpuStage {
+            ctx: &self.ctx,
+            renderer: &mut self.renderer,
+            scene: &self.scene,
+            target: &self.target,
+            settings: self.settings,
+        }
+    }
+
     /// The target's pixels (RGBA8, sRGB), after the GPU has finished.
     pub fn image(&self) -> Result<Vec<u8>> {
         Ok(myriad_gpu::read_rgba8(&self.ctx, &self.target.texture)?)
