@@ -528,3 +528,68 @@ fn coarsened_lists_report_no_active_cluster_count() {
         "coarsened lists differ from the full ones by {worst}/255"
     );
 }
+
+/// Invalid lights (a NaN, negative, zero or infinite radius, a non-finite position) are skipped
+/// and counted in every frame path: the cull drops them and now counts them, where before
+/// those it dropped vanished from the frame's numbers while the ones it kept (an infinite or
+/// zero radius) were counted by the assignment (audit). The image is the one without them.
+#[test]
+fn invalid_lights_are_counted_in_every_frame_path() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let mut scene = RenderScene::default_scene(1000, 192, 96).unwrap();
+    // The first lights in view, so that a cull that kept a light by its position would see it.
+    let mut valid_view = Viewer::new(ctx.clone(), &scene).unwrap();
+    let (_, plain) = render(&mut valid_view, &scene, Skips::NONE);
+    assert_eq!(plain.lights_invalid, 0);
+    let l = &mut scene.lights;
+    l.radius[10] = f32::NAN;
+    l.radius[20] = -2.0;
+    l.radius[30] = 0.0;
+    l.radius[40] = f32::INFINITY;
+    l.x[50] = f32::INFINITY;
+    l.z[60] = f32::NAN;
+    let invalid = 6;
+    // The same scene with those six lights out of reach of every pixel instead.
+    let mut reference = scene.clone();
+    for i in [10, 20, 30, 40, 50, 60] {
+        let l = &mut reference.lights;
+        (l.x[i], l.y[i], l.z[i], l.radius[i]) = (0.0, 1e6, 0.0, 1e-3);
+    }
+    let mut fresh = Viewer::new(ctx.clone(), &reference).unwrap();
+    let (expected, _) = render(&mut fresh, &reference, Skips::NONE);
+
+    let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+    for (name, skips) in singles() {
+        let (image, frame) = render(&mut viewer, &scene, skips);
+        assert_eq!(frame.lights_invalid, invalid, "{name}");
+        assert!(max_channel_difference(&image, &expected) <= 1, "{name}");
+    }
+    // Reused: the count of the frame whose lists it keeps.
+    let (_, frame) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(frame.reused);
+    assert_eq!(frame.lights_invalid, invalid);
+
+    let mut stage = viewer.gpu_stage();
+    for pipelined in [false, true] {
+        for cull in [false, true] {
+            let looped = run_frames(
+                &mut stage,
+                &scene,
+                Method::Refined,
+                3,
+                pipelined,
+                cull,
+                |_, _| Ok(()),
+            )
+            .unwrap();
+            for f in &looped.frames {
+                assert_eq!(
+                    f.lights_invalid, invalid,
+                    "pipelined {pipelined}, cull {cull}"
+                );
+            }
+        }
+    }
+}

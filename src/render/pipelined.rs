@@ -48,6 +48,10 @@ pub struct StageTimes {
     pub cull_seconds: f64,
     /// Lights assigned and uploaded (the visible ones with `cull`).
     pub lights_uploaded: usize,
+    /// Lights skipped as invalid (a position or radius that is not finite, a radius that is not
+    /// positive): dropped and counted by the cull ([`Visibility::invalid`]) with `cull`, by the
+    /// assignment (its `rejected`) without it. Never uploaded.
+    pub lights_invalid: usize,
     /// CPU: light assignment.
     pub assign_seconds: f64,
     /// CPU: converting and staging lights and lists.
@@ -120,6 +124,8 @@ struct FrameWork {
     /// The visible lights, gathered (with `cull`).
     visible: Lights,
     culled: bool,
+    /// Lights the cull dropped as invalid (0 without `cull`).
+    culled_invalid: usize,
     lists: LightLists,
     stats: AssignStats,
     animate_seconds: f64,
@@ -184,9 +190,11 @@ impl<'a> CpuStage<'a> {
         work.animate_seconds = start.elapsed().as_secs_f64();
         work.culled = self.visibility.is_some();
         work.cull_seconds = 0.0;
+        work.culled_invalid = 0;
         if let Some(visibility) = &mut self.visibility {
             let start = Instant::now();
             cull_lights(&self.scene.camera, work.lights.slices(), visibility);
+            work.culled_invalid = visibility.invalid();
             crate::profile_span!("gather visible lights");
             work.lights
                 .gather_into(&visibility.indices, &mut work.visible);
@@ -215,6 +223,7 @@ fn empty_work() -> FrameWork {
         lights: Lights::new(),
         visible: Lights::new(),
         culled: false,
+        culled_invalid: 0,
         lists: LightLists::new(),
         stats: AssignStats::default(),
         animate_seconds: 0.0,
@@ -268,6 +277,7 @@ impl GpuStage<'_> {
             animate_seconds: work.animate_seconds,
             cull_seconds: work.cull_seconds,
             lights_uploaded: work.assigned().len(),
+            lights_invalid: work.culled_invalid + work.stats.rejected as usize,
             assign_seconds: work.assign_seconds,
             upload_seconds: report.upload_seconds,
             upload_bytes: report.upload_bytes,

@@ -187,6 +187,11 @@ pub struct SkipFrame {
     pub lights: usize,
     /// Lights that went to the assignment and the GPU.
     pub lights_assigned: usize,
+    /// Lights skipped as invalid (a position or radius that is not finite, a radius that is not
+    /// positive): dropped and counted by the cull ([`Visibility::invalid`]) with
+    /// [`Skips::cull`], by the assignment (`stats.rejected`) without it; a reused frame repeats
+    /// the count of the frame whose lists it keeps.
+    pub lights_invalid: usize,
     /// CPU seconds of the frustum cull and gather.
     pub cull_seconds: f64,
     /// Seconds of the depth prepass on the GPU and its read-back (the G-buffer pass moves here
@@ -220,6 +225,9 @@ struct Cache {
     method: Method,
     /// The frame's active clusters (with `active`), which a reused frame still shades with.
     active_clusters: Option<usize>,
+    /// The frame's [`SkipFrame::lights_invalid`]: the lights' geometry is unchanged in a reused
+    /// frame, and so is which of them are invalid.
+    lights_invalid: usize,
     /// The renderer's upload generation after this frame: any other upload since (a plain
     /// [`Viewer::frame`], say) means the GPU's lights and lists are no longer these.
     generation: u64,
@@ -344,6 +352,7 @@ impl Viewer {
             appearance_only: false,
             lights: lights.len(),
             lights_assigned: lights.len(),
+            lights_invalid: 0,
             cull_seconds: 0.0,
             prepass_seconds: 0.0,
             mask_seconds: 0.0,
@@ -370,6 +379,7 @@ impl Viewer {
             // The lists (and their mask) are the cached frame's; `skips` printed no active
             // count for a reused frame although it shaded with the mask (audit).
             frame.active_clusters = cache.active_clusters;
+            frame.lights_invalid = cache.lights_invalid;
             frame.lights_assigned = if skips.cull {
                 state.visible.len()
             } else {
@@ -412,6 +422,7 @@ impl Viewer {
             cull_lights(&scene.camera, lights.slices(), &mut state.visibility);
             lights.gather_into(&state.visibility.indices, &mut state.visible);
             frame.lights_assigned = state.visible.len();
+            frame.lights_invalid = state.visibility.invalid();
         }
         frame.cull_seconds = start.elapsed().as_secs_f64();
 
@@ -464,6 +475,7 @@ impl Viewer {
             frame.active_clusters = None;
         }
         frame.grid = stats.grid_built(&grid);
+        frame.lights_invalid += stats.rejected as usize;
         frame.stats = Some(stats);
 
         let desc = FrameDesc {
@@ -491,10 +503,12 @@ impl Viewer {
                 lights: Lights::new(),
                 method,
                 active_clusters: None,
+                lights_invalid: 0,
                 generation: 0,
             });
             cache.skips = skips;
             cache.active_clusters = frame.active_clusters;
+            cache.lights_invalid = frame.lights_invalid;
             cache.method = method;
             cache.generation = self.renderer.upload_generation();
             cache.camera = scene.camera;
@@ -510,23 +524,30 @@ impl Viewer {
 
 /// Whether positions, radii or spot cones differ (the lists depend on them).
 fn geometry_dirty(a: &Lights, b: &Lights) -> bool {
-    a.x != b.x
-        || a.y != b.y
-        || a.z != b.z
-        || a.radius != b.radius
-        || a.spot_dir_x != b.spot_dir_x
-        || a.spot_dir_y != b.spot_dir_y
-        || a.spot_dir_z != b.spot_dir_z
-        || a.spot_angle != b.spot_angle
+    differ(&a.x, &b.x)
+        || differ(&a.y, &b.y)
+        || differ(&a.z, &b.z)
+        || differ(&a.radius, &b.radius)
+        || differ(&a.spot_dir_x, &b.spot_dir_x)
+        || differ(&a.spot_dir_y, &b.spot_dir_y)
+        || differ(&a.spot_dir_z, &b.spot_dir_z)
+        || differ(&a.spot_angle, &b.spot_angle)
 }
 
 /// Whether colours, intensities or spots' inner angles differ (only the upload depends on them).
 fn appearance_dirty(a: &Lights, b: &Lights) -> bool {
-    a.r != b.r
-        || a.g != b.g
-        || a.b != b.b
-        || a.intensity != b.intensity
-        || a.spot_inner_angle != b.spot_inner_angle
+    differ(&a.r, &b.r)
+        || differ(&a.g, &b.g)
+        || differ(&a.b, &b.b)
+        || differ(&a.intensity, &b.intensity)
+        || differ(&a.spot_inner_angle, &b.spot_inner_angle)
+}
+
+/// Whether two columns differ bit for bit. Not `!=`: a NaN never equals itself, so one light
+/// with a NaN (an invalid light, skipped and counted) made every frame of an unchanged scene
+/// dirty, and none was ever reused (audit).
+fn differ(a: &[f32], b: &[f32]) -> bool {
+    a.len() != b.len() || a.iter().zip(b).any(|(x, y)| x.to_bits() != y.to_bits())
 }
 
 #[cfg(test)]
@@ -596,6 +617,11 @@ mod tests {
         assert!(lights.has_spots(), "the spot columns are compared too");
         assert!(!geometry_dirty(&lights, &lights.clone()));
         assert!(!appearance_dirty(&lights, &lights.clone()));
+        // A NaN is the same NaN in both frames: unchanged, not dirty.
+        let mut with_nan = lights.clone();
+        (with_nan.radius[2], with_nan.x[5], with_nan.r[7]) = (f32::NAN, f32::NAN, f32::NAN);
+        assert!(!geometry_dirty(&with_nan, &with_nan.clone()));
+        assert!(!appearance_dirty(&with_nan, &with_nan.clone()));
         type Column = fn(&mut Lights) -> &mut Vec<f32>;
         let geometric: [(&str, Column); 8] = [
             ("x", |l| &mut l.x),

@@ -53,12 +53,25 @@ pub struct Visibility {
     pub indices: Vec<u32>,
     /// Visible lights per block (scratch of the compaction).
     counts: Vec<u32>,
+    /// Invalid lights per block.
+    invalid_counts: Vec<u32>,
+    /// Invalid lights of the last cull: see [`Self::invalid`].
+    invalid: usize,
 }
 
 impl Visibility {
     /// Empty outputs.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Lights the last [`cull_lights`] dropped as invalid: a position or radius that is not
+    /// finite, or a radius that is not positive — what the assignment counts as
+    /// `AssignStats::rejected` when it is handed such a light. Counted here because a cull that
+    /// drops them leaves the assignment nothing to count: without this number they would
+    /// vanish from a frame's statistics (audit). Never part of [`Self::indices`].
+    pub fn invalid(&self) -> usize {
+        self.invalid
     }
 }
 
@@ -156,7 +169,8 @@ impl Frustum {
     fn visible(&self, lights: &LightSlices<'_>, i: usize) -> bool {
         let p = Vec3::new(lights.x[i], lights.y[i], lights.z[i]);
         let r = lights.radius[i];
-        self.sphere_visible(p, r)
+        is_valid(p, r)
+            && self.sphere_visible(p, r)
             && lights.spot.as_ref().is_none_or(|s| {
                 let axis = Vec3::new(s.dir_x[i], s.dir_y[i], s.dir_z[i]);
                 !is_cone(axis, s.angle[i]) || self.cone_visible(p, r, axis, s.angle[i])
@@ -183,12 +197,21 @@ fn unit_axis(axis: Vec3) -> Vec3 {
     scaled / scaled.length()
 }
 
+/// Whether a light can be assigned at all: a finite position and a finite, positive radius
+/// (the assignment's own test, [`Visibility::invalid`]). Branch-free, for the block loop.
+#[inline(always)]
+fn is_valid(p: Vec3, r: f32) -> bool {
+    // `&`, not glam's `is_finite` (`&&`): no branch in the vectorised loop.
+    (r > 0.0) & (r < f32::INFINITY) & p.x.is_finite() & p.y.is_finite() & p.z.is_finite()
+}
+
 /// The sphere test over the block of lights from `start` (`mask.len()` of them), then the cone
-/// test for its spots, into `mask`. Built twice, for AVX2 (eight lanes) and for the baseline
-/// (SSE2, four), the faster picked at run time; both compute the same numbers (no fused
-/// multiply-add: Rust never contracts one).
+/// test for its spots, into `mask`; returns how many of the block's lights are invalid
+/// ([`is_valid`]: they are never visible). Built twice, for AVX2 (eight lanes) and for the
+/// baseline (SSE2, four), the faster picked at run time; both compute the same numbers (no
+/// fused multiply-add: Rust never contracts one).
 #[multiversion::multiversion(targets("x86_64+avx+avx2+fma"))]
-fn test_block(frustum: &Frustum, lights: &LightSlices<'_>, start: usize, mask: &mut [bool]) {
+fn test_block(frustum: &Frustum, lights: &LightSlices<'_>, start: usize, mask: &mut [bool]) -> u32 {
     let end = start + mask.len();
     let (x, y, z, r) = (
         &lights.x[start..end],
@@ -196,8 +219,14 @@ fn test_block(frustum: &Frustum, lights: &LightSlices<'_>, start: usize, mask: &
         &lights.z[start..end],
         &lights.radius[start..end],
     );
+    // Counted in u32: a usize sum halves the vector width.
+    let mut invalid = 0u32;
     for j in 0..mask.len() {
-        mask[j] = frustum.sphere_visible(Vec3::new(x[j], y[j], z[j]), r[j]);
+        let p = Vec3::new(x[j], y[j], z[j]);
+        let valid = is_valid(p, r[j]);
+        // An infinite radius passes every plane test: only `valid` drops it.
+        mask[j] = frustum.sphere_visible(p, r[j]) & valid;
+        invalid += !valid as u32;
     }
     if let Some(s) = &lights.spot {
         let (dx, dy, dz, angle) = (
@@ -215,11 +244,19 @@ fn test_block(frustum: &Frustum, lights: &LightSlices<'_>, start: usize, mask: &
             mask[j] &= !is_cone(axis, angle[j]) | cone;
         }
     }
+    invalid
 }
 
 /// Culls `lights` against `camera`'s frustum into `out`: `out.mask[i]` for every light and
-/// `out.indices`, the visible ones ascending. Returns how many are visible. Parallel in blocks
-/// above [`super::PARALLEL_MIN`] lights; the result does not depend on the thread count.
+/// `out.indices`, the visible ones ascending. Returns how many are visible. Invalid lights
+/// (a non-finite position or radius, a radius not positive) are never visible, and are counted
+/// in [`Visibility::invalid`]. Parallel in blocks above [`super::PARALLEL_MIN`] lights; the
+/// result does not depend on the thread count.
+///
+/// The frustum is the camera's, from its near to its far plane: a cluster grid reaching nearer
+/// or farther than the camera (an engine's own grid) has cells no pixel lies in, and a light
+/// only in those is culled although it touches them — assigned after this cull, such lists
+/// are the exact ones within the camera's view.
 pub fn cull_lights(camera: &Camera, lights: LightSlices<'_>, out: &mut Visibility) -> usize {
     crate::profiling::profile_span!("cull lights");
     lights.assert_consistent();
@@ -229,39 +266,45 @@ pub fn cull_lights(camera: &Camera, lights: LightSlices<'_>, out: &mut Visibilit
     out.mask.resize(n, false);
     out.indices.resize(n, 0);
     out.counts.resize(blocks, 0);
+    out.invalid_counts.resize(blocks, 0);
     // One block, in three passes: the sphere test over every light (vectorised), the cone
     // test for the spots that passed it, then the block's visible indices written at the start
     // of its own region of `indices`, and counted.
-    let block = |b: usize, mask: &mut [bool], indices: &mut [u32], count: &mut u32| {
+    let block = |b: usize, mask: &mut [bool], indices: &mut [u32], counts: (&mut u32, &mut u32)| {
         let start = b * BLOCK;
-        test_block(&frustum, &lights, start, mask);
+        *counts.1 = test_block(&frustum, &lights, start, mask);
         let mut k = 0;
         for (j, &m) in mask.iter().enumerate() {
             indices[k] = (start + j) as u32;
             k += m as usize;
         }
-        *count = k as u32;
+        *counts.0 = k as u32;
     };
     if n < PARALLEL_MIN {
-        for (b, ((mask, indices), count)) in out
+        for (b, (((mask, indices), count), invalid)) in out
             .mask
             .chunks_mut(BLOCK)
             .zip(out.indices.chunks_mut(BLOCK))
             .zip(out.counts.iter_mut())
+            .zip(out.invalid_counts.iter_mut())
             .enumerate()
         {
-            block(b, mask, indices, count);
+            block(b, mask, indices, (count, invalid));
         }
     } else {
         (
             out.mask.par_chunks_mut(BLOCK),
             out.indices.par_chunks_mut(BLOCK),
             out.counts.par_iter_mut(),
+            out.invalid_counts.par_iter_mut(),
         )
             .into_par_iter()
             .enumerate()
-            .for_each(|(b, (mask, indices, count))| block(b, mask, indices, count));
+            .for_each(|(b, (mask, indices, count, invalid))| {
+                block(b, mask, indices, (count, invalid))
+            });
     }
+    out.invalid = out.invalid_counts.iter().map(|&n| n as usize).sum();
     // Compaction: move each block's run down to the write cursor (never past its own start).
     let mut cursor = 0;
     for (b, &count) in out.counts.iter().enumerate() {
@@ -588,6 +631,80 @@ mod tests {
         let few = random_lights(10, 8, false);
         let v2 = cull_lights(&camera, few.slices(), &mut vis);
         assert_eq!((vis.mask.len(), vis.indices.len()), (10, v2));
+    }
+
+    #[test]
+    fn invalid_lights_are_dropped_and_counted_whatever_their_place() {
+        // Each invalid light sits where a valid one would be visible (in the middle of the
+        // view), or reaches everything (an infinite radius, which every plane test passes).
+        // Before the count, NaN and negative radii and non-finite positions were culled
+        // uncounted while an infinite or zero radius was kept (for the assignment to count),
+        // so a frame's statistics lost some of them (audit).
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 100, 100, 0.1, 100.0);
+        let at = |x: f32, y: f32, z: f32, r: f32| LightRecord::point(Vec3::new(x, y, z), r);
+        let invalid = [
+            at(0.0, 0.0, -10.0, f32::NAN),
+            at(0.0, 0.0, -10.0, -50.0),
+            at(0.0, 0.0, -10.0, -1.0),
+            at(0.0, 0.0, -10.0, 0.0),
+            at(0.0, 0.0, -10.0, f32::INFINITY),
+            at(f32::NAN, 0.0, -10.0, 1.0),
+            at(0.0, f32::INFINITY, -10.0, 1.0),
+            at(0.0, 0.0, f32::NEG_INFINITY, 1.0),
+            at(1e30, 0.0, -10.0, f32::NAN),
+        ];
+        for spots in [false, true] {
+            // The invalid lights spread among valid ones, over several blocks, serial and
+            // parallel (past `PARALLEL_MIN`).
+            for n in [40, 3 * BLOCK + 17, PARALLEL_MIN + 5] {
+                let random = random_lights(n, 41, spots);
+                let is_invalid: Vec<bool> = (0..n).map(|i| i % 7 == 3).collect();
+                // `far`: the invalid lights replaced by a valid light behind the camera.
+                let with = |far: bool| -> Lights {
+                    (0..n)
+                        .map(|i| {
+                            if !is_invalid[i] {
+                                return random.get(i);
+                            }
+                            let bad = if far {
+                                at(0.0, 0.0, 1e4, 1.0)
+                            } else {
+                                invalid[(i / 7) % invalid.len()]
+                            };
+                            let bad = if spots && i % 2 == 0 {
+                                bad.with_spot(Vec3::NEG_Z, 0.4)
+                            } else {
+                                bad
+                            };
+                            bad.with_source_index(i as u32)
+                        })
+                        .collect()
+                };
+                let lights = with(false);
+                let mut vis = Visibility::new();
+                let visible = cull_lights(&camera, lights.slices(), &mut vis);
+                let expected = is_invalid.iter().filter(|&&b| b).count();
+                assert_eq!(vis.invalid(), expected, "{n} lights, spots {spots}");
+                assert_eq!(visible, vis.indices.len());
+                // The valid lights' verdicts are their own: the same as with the invalid ones
+                // replaced by a light behind the camera.
+                let mut reference = Visibility::new();
+                cull_lights(&camera, with(true).slices(), &mut reference);
+                assert_eq!(vis.indices, reference.indices, "{n} lights, spots {spots}");
+                assert_eq!(reference.invalid(), 0);
+                // The per-light twin agrees.
+                let frustum = Frustum::new(&camera);
+                assert!((0..n).all(|i| frustum.visible(&lights.slices(), i) == vis.mask[i]));
+            }
+        }
+        // Recounted every call, not accumulated.
+        let mut vis = Visibility::new();
+        let bad: Lights = invalid.into_iter().collect();
+        assert_eq!(cull_lights(&camera, bad.slices(), &mut vis), 0);
+        assert_eq!(vis.invalid(), invalid.len());
+        let good: Lights = [at(0.0, 0.0, -10.0, 1.0)].into_iter().collect();
+        assert_eq!(cull_lights(&camera, good.slices(), &mut vis), 1);
+        assert_eq!(vis.invalid(), 0);
     }
 
     #[test]
