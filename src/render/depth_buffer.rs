@@ -18,37 +18,72 @@ use rayon::prelude::*;
 const DEPTH_TOLERANCE: f32 = 1e-4;
 const EDGE_TOLERANCE: f32 = 1e-5;
 
-/// View-depth extent of a world box seen by `camera` (corners), or `None` when it lies wholly
-/// behind the near plane or beyond the far plane.
+/// How far a blended fragment's view depth may lie from the exact depth of its point, per unit
+/// of the point's distance from the camera. The forward pass transforms camera-relative f32
+/// vertices by an f32 matrix, so its rounding grows with that distance, not with the depth:
+/// at a field of view near 180° a point at depth 2 can lie 400 units to the side. With the
+/// box's depths in f32 and only the bands relative to depth, a fragment 1.1e-4 (relative)
+/// nearer than its corner's f32 depth read a cluster the mask had left empty (179.5°, 4000 ×
+/// 100; audit). 1e-6 is about eight f32 units in the last place, several times what a 3-term
+/// dot product and the rotation's own f32 rounding can add.
+const BOX_ROUNDING: f64 = 1e-6;
+
+/// View-depth extent of a world box seen by `camera`, widened by what the GPU's rounding can
+/// move a fragment of the box ([`BOX_ROUNDING`]), and its NDC extent (the whole screen when the
+/// box reaches behind the near plane); `None` when it lies wholly behind the near plane or
+/// beyond the far plane.
+///
+/// The corners are made camera-relative in f32, as the vertex shader makes each vertex (f32
+/// subtraction rounds monotonically, so every vertex of the box stays inside these corners),
+/// then rotated in f64: the depths are exact but for that subtraction.
 fn box_depths(camera: &Camera, b: &Aabb) -> Option<(f32, f32, [f32; 4])> {
-    let (tan_x, tan_y) = (camera.tan_half_fov().x, camera.tan_half_fov().y);
-    let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
+    let rotation = camera.view_rotation_f64();
+    let (tan_x, tan_y) = camera.tan_half_fov_f64();
+    let (near, far) = (camera.near as f64, camera.far as f64);
+    let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
     let mut ndc = [
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-        f32::INFINITY,
-        f32::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
     ];
     let mut in_front = true;
     for corner in b.corners() {
-        let v = camera.view_from_world_point(corner);
-        let d = -v.z;
-        dmin = dmin.min(d);
-        dmax = dmax.max(d);
-        if d <= camera.near {
+        let rel = (corner - camera.position).as_dvec3();
+        let v = rotation * rel;
+        let (d, slack) = (-v.z, BOX_ROUNDING * rel.length());
+        dmin = dmin.min(d - slack);
+        dmax = dmax.max(d + slack);
+        if d - slack <= near {
             in_front = false;
         } else {
             let (x, y) = (v.x / (d * tan_x), v.y / (d * tan_y));
             ndc = [ndc[0].min(x), ndc[1].max(x), ndc[2].min(y), ndc[3].max(y)];
         }
     }
-    if dmax < camera.near || dmin > camera.far {
+    if dmax < near || dmin > far {
         return None;
     }
     if !in_front {
         ndc = [-1.0, 1.0, -1.0, 1.0];
     }
-    Some((dmin.max(camera.near), dmax.min(camera.far), ndc))
+    Some((
+        f32_down(dmin.max(near)),
+        f32_up(dmax.min(far)),
+        ndc.map(|t| t as f32),
+    ))
+}
+
+/// The largest f32 at or below `x`.
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x { f.next_down() } else { f }
+}
+
+/// The smallest f32 at or above `x`.
+fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
 }
 
 /// The scene grid over the depth range that holds every covered pixel and every blended draw
@@ -491,6 +526,108 @@ mod tests {
             };
             assert_eq!(fitted.slicing(), expected, "first slice edge {first}");
             assert_holds_every_drawn_depth(&fitted, &camera, &depth);
+        }
+    }
+
+    /// A blended box's nearest corner drawn at a pixel on the screen's left or right edge, at a
+    /// field of view near 180°: the corner lies hundreds of units to the side at a depth of a
+    /// few, and the GPU's f32 rounding of its depth grows with that distance. Its fragment's
+    /// depth — exact, and as an f32 vertex transform like the shader's computes it — must lie in
+    /// the fitted range and in a marked cluster, also a hair from a slice edge. With the box's depths in f32 and bands relative
+    /// to depth only, 7 of 20,000 such corners read an unmarked cluster and 3,435 lay nearer
+    /// than the closed fitted grid (179.5°, 4000 × 100; audit).
+    #[test]
+    fn blended_fragments_seen_almost_side_on_stay_in_the_fitted_and_marked_clusters() {
+        use myriad_scene::glam::{DVec3, Mat4};
+        for (fov, w, h, corners) in [(179.5, 4000, 100, 1500), (179.9, 1920, 1080, 150)] {
+            let camera = Camera::new(
+                Vec3::new(3.0, 1.5, -2.0),
+                Vec3::new(4.0, -1.4, -3.4),
+                Vec3::Y,
+                fov,
+                w,
+                h,
+                0.1,
+                1000.0,
+            );
+            let grid = ClusterGrid::new(UVec3::new(16, 9, 24), DepthSlicing::Log, 0.1, 1000.0);
+            let world_from_view = camera.view_rotation_f64().transpose();
+            let forward = world_from_view * DVec3::NEG_Z;
+            let eye = camera.position.as_dvec3();
+            let (tx, ty) = camera.tan_half_fov_f64();
+            // What the vertex shader multiplies camera-relative positions by.
+            let clip_from_rel = camera.clip_from_view() * Mat4::from_mat3(camera.view_rotation());
+            // Two opaque pixels, at depths 1 and 50, or none: the box alone sets the range.
+            let mut opaque = vec![0.0f32; (w * h) as usize];
+            opaque[0] = stored(&camera, 1.0);
+            opaque[1] = stored(&camera, 50.0);
+            let empty = vec![0.0f32; (w * h) as usize];
+            // The slice edges of the grid fitted to the opaque pixels, which the boxes (1.5 to
+            // 41 deep) do not widen: the corners are put within 1e-4 of them.
+            let edges: Vec<f64> = {
+                let fitted = fitted_grid(&grid, &camera, &opaque, &[]);
+                (1..24)
+                    .map(|k| fitted.slice_start_depth(k) as f64)
+                    .collect()
+            };
+            let mut state = 11u64;
+            let mut next = || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            };
+            let (mut outside_fitted, mut unmarked) = (0, 0);
+            for n in 0..corners {
+                let on_edges = n % 4 != 0;
+                let depth = if on_edges { &opaque } else { &empty };
+                let px = if n % 2 == 0 { n % 3 } else { w - 1 - n % 3 };
+                let py = (next() * h as f64) as u32 % h;
+                let (nx, ny) = (
+                    2.0 * (px as f64 + 0.5) / w as f64 - 1.0,
+                    1.0 - 2.0 * (py as f64 + 0.5) / h as f64,
+                );
+                let d = if on_edges {
+                    let edge = edges[(next() * edges.len() as f64) as usize % edges.len()];
+                    edge * (1.0 + 2e-4 * (next() - 0.5))
+                } else {
+                    1.5 * (40.0f64 / 1.5).powf(next())
+                };
+                let corner = eye + world_from_view * DVec3::new(nx * tx * d, ny * ty * d, -d);
+                let corner32 = corner.as_vec3();
+                // The box reaches away from the camera from that corner.
+                let (mut min, mut max) = (corner32, corner32);
+                for axis in 0..3 {
+                    if forward[axis] >= 0.0 {
+                        max[axis] = (corner[axis] + 0.01 * d) as f32;
+                    } else {
+                        min[axis] = (corner[axis] - 0.01 * d) as f32;
+                    }
+                }
+                let b = Aabb { min, max };
+                let fitted = fitted_grid(&grid, &camera, depth, &[b]);
+                let mut mask = ActiveClusters::new(&fitted);
+                mark_active(&mut mask, &fitted, &camera, depth, &[b]);
+                let exact = -camera.view_from_world_point_f64(corner32.as_dvec3()).z;
+                let exact = stored(&camera, exact as f32);
+                let clip = clip_from_rel * Vec4::from((corner32 - camera.position, 1.0));
+                for stored_depth in [exact, clip.z / clip.w] {
+                    let v = camera.view_depth_from_ndc_depth(stored_depth);
+                    if fitted.outer_slices() == OuterSlices::Closed
+                        && !(v >= fitted.near() && v <= fitted.far())
+                    {
+                        outside_fitted += 1;
+                    }
+                    if !mask.is_active(fitted.cluster_of_pixel(px, py, v, w, h)) {
+                        unmarked += 1;
+                    }
+                }
+            }
+            assert_eq!(
+                (outside_fitted, unmarked),
+                (0, 0),
+                "{fov}°, {w} × {h}: fragments outside the fitted range, in unmarked clusters"
+            );
         }
     }
 
