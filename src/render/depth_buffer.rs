@@ -9,6 +9,10 @@
 //! same formula in WGSL) is within 1e-6 of the exact depth of the stored value, fused or not, for
 //! any near plane (tested in `myriad-cluster-math`), so the band has ten times the room it needs.
 //! (The textbook formula it replaced was 5e-5 off at near 0.1, far 100: over the band.)
+//! A blended draw is not in the depth buffer: its box's depths are computed here, exactly but
+//! for the f32 camera-relative subtraction the vertex shader also makes, and widened by the
+//! GPU's rounding, which grows with a point's distance from the camera, not its depth
+//! ([`BOX_ROUNDING`]).
 
 use myriad_assignment::ActiveClusters;
 use myriad_scene::{Aabb, Camera, ClusterGrid, DepthSlicing, OuterSlices};
