@@ -127,7 +127,21 @@ macro_rules! profile_plot {
 /// call this records nothing and opens no socket, whatever features are on. Where the client
 /// was already running (an engine started its own `tracy_client::Client`), the session leaves
 /// the shutdown to whoever started it.
-pub fn start() -> Session {
+///
+/// # Safety
+///
+/// The session that starts the client shuts the profiler down when it is dropped, and nothing
+/// may record after that: tracy-client still reports the client as running, so a span, plot,
+/// frame mark or GPU zone made afterwards — by this crate, by `myriad-assignment`,
+/// `myriad-scene` or `myriad-gpu`, or by the caller's own `tracy_client` calls, on any thread —
+/// uses the profiler's freed memory. Keep the session alive until every instrumented thread is
+/// done and every renderer, viewer and instrumented value is dropped: bind it first in `main`
+/// (`let _profiler = unsafe { start() };`, never `let _ = …`, which drops it at once) so it is
+/// dropped last. (A safe `start` let `drop(start()); frame_mark();` abort in Tracy's own
+/// assertion, and a span open on another thread meanwhile read freed memory: soundness audit.)
+/// Without the `tracy` feature nothing is started or shut down, and the call is harmless.
+#[allow(unsafe_code)] // The contract above; the shutdown it guards is in `shutdown`.
+pub unsafe fn start() -> Session {
     #[cfg(feature = "tracy")]
     {
         use std::sync::atomic::{AtomicBool, Ordering};
@@ -148,7 +162,7 @@ pub fn start() -> Session {
 }
 
 /// The running Tracy client, from [`start`] until this is dropped: dropping the session that
-/// started the client shuts the profiler down (`___tracy_shutdown_profiler`), which sends what
+/// started the client shuts the profiler down (what makes [`start`] `unsafe`) (`___tracy_shutdown_profiler`), which sends what
 /// is still queued, ends the capture cleanly and, with `TRACY_NO_EXIT=1`, waits until a profiler
 /// has taken the data. Without the `tracy` feature it is an empty value that does nothing.
 ///
@@ -179,9 +193,9 @@ impl Drop for Session {
 fn shutdown() {
     #[cfg(not(test))]
     // SAFETY: called once, by the session that started the client (`OWNED`), on the thread that
-    // started it (`Session` is not `Send`), at the end of `main`, when no other thread records
-    // (the `Session` contract); tracy-client's `Client::start` documents this call as the
-    // program's job under `manual-lifetime`.
+    // started it (`Session` is not `Send`), when nothing records any more: the contract of the
+    // `unsafe fn start` that made the session; tracy-client's `Client::start` documents this
+    // call as the program's job under `manual-lifetime`.
     #[allow(unsafe_code)]
     unsafe {
         tracy_client::sys::___tracy_shutdown_profiler();
@@ -205,6 +219,7 @@ pub fn name_this_thread(name: &str) {
 }
 
 #[cfg(all(test, feature = "tracy"))]
+#[allow(unsafe_code)] // `start`, whose shutdown the tests count instead of making.
 mod tests {
     use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -222,13 +237,15 @@ mod tests {
             crate::profile_span!("before the client");
             crate::profile_plot!("before the client", 1.0);
         }
-        let session = super::start();
+        // SAFETY: the shutdown is counted, not made, in the lib's tests (`shutdown`).
+        let session = unsafe { super::start() };
         assert!(tracy_client::Client::running().is_some());
         crate::profile_span!("after the client");
         crate::profile_plot!("after the client", 2.0);
         super::name_this_thread("profiling test");
         // A second start finds the client running: its session is not the one to shut it down.
-        drop(super::start());
+        // SAFETY: as above; and this session does not own the client.
+        drop(unsafe { super::start() });
         assert_eq!(SHUTDOWNS.load(Ordering::Relaxed), 0);
         drop(session);
         assert_eq!(SHUTDOWNS.load(Ordering::Relaxed), 1);

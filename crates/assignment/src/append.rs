@@ -574,7 +574,11 @@ impl AtomicCounters {
                 for c in clusters_of(s) {
                     let at = counters[c].fetch_add(1, Relaxed);
                     // SAFETY: `fetch_add` hands every caller a distinct slot of the cluster's
-                    // range [offset, offset + count), which lies inside `0..pairs`.
+                    // range [offset, offset + count), which lies inside `0..pairs`: the fill
+                    // walks the same spans as the count did (`frame_spans`, `clusters_of`), so a
+                    // cluster gets exactly `count` of them, starting at its offset; and no count
+                    // wrapped, since a cluster lists each light once and there are at most
+                    // `u32::MAX` lights (`LightInput::problem`, checked before any frame), so ranges never overlap.
                     unsafe { shared.write(at as usize, s.light) };
                 }
             }
