@@ -578,7 +578,8 @@ impl AtomicCounters {
                     // walks the same spans as the count did (`frame_spans`, `clusters_of`), so a
                     // cluster gets exactly `count` of them, starting at its offset; and no count
                     // wrapped, since a cluster lists each light once and there are at most
-                    // `u32::MAX` lights (`LightInput::problem`, checked before any frame), so ranges never overlap.
+                    // `u32::MAX` lights (`LightInput::problem`, checked before any frame): the
+                    // ranges never overlap.
                     unsafe { shared.write(at as usize, s.light) };
                 }
             }
