@@ -333,6 +333,59 @@ mod tests {
         assert_eq!(distance_to_cell(DVec3::new(1e11, 1e10, -1e12), &open), 0.0);
     }
 
+    /// Random open cells and points: the distance equals the distance to the same cell cut far
+    /// deeper than the open cell's own cut (4 × the corner's distance instead of 2 ×). The
+    /// fixed points above left the cut's depth unpinned: a cut at a quarter of the corner's
+    /// distance called the first case below 84.0 away instead of 77.8 — a ball of radius 80
+    /// there not touching, a light missing from `exact`'s open last slice (mutation audit).
+    #[test]
+    fn an_infinite_cell_is_as_far_as_the_same_cell_cut_well_past_its_closest_point() {
+        let check = |p: DVec3, open: Cell| {
+            let corner = open.corner(0, 0, 0);
+            let far = open.depths[0].max(-p.z) + 4.0 * (corner - p).length() + 10.0;
+            let cut = Cell {
+                depths: [open.depths[0], far],
+                ..open
+            };
+            let (got, want) = (distance_to_cell(p, &open), distance_to_cell(p, &cut));
+            assert!(
+                (got - want).abs() <= 1e-9 * want.max(1.0),
+                "{p}, {open:?}: {got} against {want}"
+            );
+        };
+        check(
+            DVec3::new(113.85380394105331, -31.522886710542906, 11.288005347125136),
+            Cell {
+                x_slopes: [-48.335969104140474, 1.319010776857065],
+                y_slopes: [-35.01383204669804, 49.799448006834915],
+                depths: [0.08070471989922934, f64::INFINITY],
+            },
+        );
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(23);
+        let slopes = |rng: &mut rand_pcg::Pcg64| {
+            let scale = 10f64.powf(rng.random_range(-2.0..2.0));
+            let (a, b) = (
+                rng.random_range(-1.0..1.0) * scale,
+                rng.random_range(-1.0..1.0) * scale,
+            );
+            [a.min(b), a.max(b)]
+        };
+        for _ in 0..200_000 {
+            let open = Cell {
+                x_slopes: slopes(&mut rng),
+                y_slopes: slopes(&mut rng),
+                depths: [10f64.powf(rng.random_range(-3.0..3.0)), f64::INFINITY],
+            };
+            let scale = 10f64.powf(rng.random_range(-2.0..4.0));
+            let p = DVec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..0.3),
+            ) * scale;
+            check(p, open);
+        }
+    }
+
     #[test]
     fn a_cell_of_zero_thickness_is_touched_like_its_face() {
         // Slices of a very thin log grid can have equal f32 edges: such a cell is its near face,
