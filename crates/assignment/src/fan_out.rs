@@ -353,4 +353,72 @@ mod tests {
             assert!(result.is_err(), "a panic on a helper: {on_a_helper}");
         }
     }
+
+    /// The caller panics in its own item while a helper is inside one, writing into the
+    /// caller's stack: the caller does not unwind past `with_caller` (dropping the region and
+    /// the slots) before the helper leaves (soundness audit; also run under Miri).
+    #[test]
+    fn a_caller_that_panics_waits_for_the_helper_inside_an_item() {
+        use std::sync::atomic::AtomicBool;
+        for _ in 0..3 {
+            let helper_in = AtomicBool::new(false);
+            let mut slots = vec![0u64; 6];
+            let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                with_caller(slots.iter_mut().enumerate(), 2, |(i, slot)| {
+                    if rayon::current_thread_index().is_some() {
+                        helper_in.store(true, Ordering::Release);
+                        for k in 0..50 {
+                            *slot += k;
+                            std::thread::yield_now();
+                        }
+                    } else {
+                        while !helper_in.load(Ordering::Acquire) {
+                            std::thread::yield_now();
+                        }
+                        panic!("caller item {i}");
+                    }
+                })
+            }));
+            assert!(r.is_err());
+            // Every slot a helper touched is complete: the caller waited for it.
+            assert!(
+                slots.iter().all(|&s| s == 0 || s == (0..50).sum::<u64>()),
+                "{slots:?}"
+            );
+        }
+    }
+
+    /// Many tiny regions whose helpers mostly arrive after the caller has returned (and its
+    /// stack frame, which held the region, has been reused): a late helper does not follow the
+    /// erased pointer (soundness audit; under Miri this is a use-after-free if it does).
+    #[test]
+    fn late_helpers_never_touch_a_region_whose_caller_returned() {
+        for round in 0..40u32 {
+            let mut slots = [0u32; 3];
+            with_caller(slots.iter_mut(), 4, |s| *s = round + 1);
+            assert!(slots.iter().all(|&s| s == round + 1));
+        }
+    }
+
+    /// Both a helper and the caller panic: the caller's panic is the one raised, and the
+    /// helper's payload is dropped with the control block, perhaps on a worker (soundness
+    /// audit).
+    #[test]
+    fn a_helper_and_the_caller_panicking_together_raise_one_panic() {
+        use std::sync::atomic::AtomicBool;
+        for _ in 0..3 {
+            let took = [AtomicBool::new(false), AtomicBool::new(false)];
+            let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                with_caller(0..6, 2, |_| {
+                    let helper = rayon::current_thread_index().is_some();
+                    took[helper as usize].store(true, Ordering::Release);
+                    while !took[!helper as usize].load(Ordering::Acquire) {
+                        std::thread::yield_now();
+                    }
+                    panic!("both {helper}");
+                })
+            }));
+            assert!(r.is_err());
+        }
+    }
 }
