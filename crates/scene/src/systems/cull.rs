@@ -578,6 +578,39 @@ mod tests {
         assert_eq!(dropped, 0, "{dropped} of {touching} touching lights culled");
     }
 
+    /// A spot of range `r` and half angle `half_angle` whose edge nearest a face's inward
+    /// normal −n reaches `r·sin(tilt)` past its apex's plane: its axis makes α = θ + π/2 − tilt
+    /// with −n, turned about n by a random angle.
+    struct Leaning {
+        r: f64,
+        half_angle: f64,
+        tilt: f64,
+    }
+
+    impl Leaning {
+        /// The spot with its apex `out(rng) · r·sin(tilt)` outside the face point `p` (view
+        /// space, outward unit `normal`), in world space.
+        fn light(
+            &self,
+            rng: &mut rand_pcg::Pcg64,
+            camera: &Camera,
+            world_from_view: glam::DMat3,
+            p: glam::DVec3,
+            normal: glam::DVec3,
+            out: impl FnOnce(&mut rand_pcg::Pcg64) -> f64,
+        ) -> LightRecord {
+            let alpha = self.half_angle + std::f64::consts::FRAC_PI_2 - self.tilt;
+            let phi = rng.random_range(0.0..std::f64::consts::TAU);
+            let t0 = normal.any_orthonormal_vector();
+            let tangent = t0 * phi.cos() + normal.cross(t0) * phi.sin();
+            let axis = -normal * alpha.cos() + tangent * alpha.sin();
+            let apex = p + normal * out(rng) * self.r * self.tilt.sin();
+            let world = camera.position.as_dvec3() + world_from_view * apex;
+            LightRecord::point(world.as_vec3(), self.r as f32)
+                .with_spot((world_from_view * axis).as_vec3(), self.half_angle as f32)
+        }
+    }
+
     #[test]
     fn cones_grazing_the_frustum_are_kept_when_the_oracle_sees_them_touch() {
         // Audit g3: a spot with its apex just outside a face, its axis the face's outward normal
@@ -592,17 +625,14 @@ mod tests {
                 let r = rng.random_range(0.05..50.0f64);
                 let half_angle = rng.random_range(0.01..FRAC_PI_2 - 1e-6);
                 let tilt = 10f64.powf(rng.random_range(-6.0..-2.0));
-                // The axis makes α = θ + π/2 − ε with −n, so the edge nearest −n reaches
-                // r·sin ε past the apex's plane.
-                let alpha = half_angle + FRAC_PI_2 - tilt;
-                let phi = rng.random_range(0.0..std::f64::consts::TAU);
-                let t0 = normal.any_orthonormal_vector();
-                let tangent = t0 * phi.cos() + normal.cross(t0) * phi.sin();
-                let axis = -normal * alpha.cos() + tangent * alpha.sin();
-                let apex = p + normal * rng.random_range(-0.5..2.0) * r * tilt.sin();
-                let world = camera.position.as_dvec3() + world_from_view * apex;
-                LightRecord::point(world.as_vec3(), r as f32)
-                    .with_spot((world_from_view * axis).as_vec3(), half_angle as f32)
+                let cone = Leaning {
+                    r,
+                    half_angle,
+                    tilt,
+                };
+                cone.light(rng, camera, world_from_view, p, normal, |rng| {
+                    rng.random_range(-0.5..2.0)
+                })
             },
         );
         assert!(touching > 1000, "only {touching} grazing cones touch");
@@ -625,15 +655,12 @@ mod tests {
                 let r = rng.random_range(5.0..50.0f64);
                 let half_angle = FRAC_PI_2 - rng.random_range(1e-6..1.2e-4);
                 let tilt = rng.random_range(1e-5..1e-4);
-                let alpha = half_angle + FRAC_PI_2 - tilt;
-                let phi = rng.random_range(0.0..std::f64::consts::TAU);
-                let t0 = normal.any_orthonormal_vector();
-                let tangent = t0 * phi.cos() + normal.cross(t0) * phi.sin();
-                let axis = -normal * alpha.cos() + tangent * alpha.sin();
-                let apex = p + normal * 0.5 * r * tilt.sin();
-                let world = camera.position.as_dvec3() + world_from_view * apex;
-                LightRecord::point(world.as_vec3(), r as f32)
-                    .with_spot((world_from_view * axis).as_vec3(), half_angle as f32)
+                let cone = Leaning {
+                    r,
+                    half_angle,
+                    tilt,
+                };
+                cone.light(rng, camera, world_from_view, p, normal, |_| 0.5)
             },
         );
         assert!(touching > 5000, "only {touching} leaning cones touch");
