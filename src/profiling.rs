@@ -162,9 +162,9 @@ pub unsafe fn start() -> Session {
 }
 
 /// The running Tracy client, from [`start`] until this is dropped: dropping the session that
-/// started the client shuts the profiler down (what makes [`start`] `unsafe`) (`___tracy_shutdown_profiler`), which sends what
+/// started the client shuts the profiler down (`___tracy_shutdown_profiler`), which sends what
 /// is still queued, ends the capture cleanly and, with `TRACY_NO_EXIT=1`, waits until a profiler
-/// has taken the data. Without the `tracy` feature it is an empty value that does nothing.
+/// has taken the data; after that nothing may record, which is why [`start`] is `unsafe`. Without the `tracy` feature it is an empty value that does nothing.
 ///
 /// Drop it last, at the end of `main` (on every path out: an early `return` or a panic's unwind
 /// drops it too), once every instrumented thread is idle: nothing may record after the shutdown

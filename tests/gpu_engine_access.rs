@@ -761,6 +761,9 @@ fn the_guides_skipping_steps_in_an_engines_own_frame_give_the_plain_frames_image
         &mut lists,
     );
     let drawn = stats.grid_built(&fitted);
+    // Lights skipped as invalid: the cull dropped them, so the assignment saw none.
+    let invalid = visibility.invalid() + stats.rejected as usize;
+    assert_eq!(invalid, 0, "the atrium's lights are all valid");
     assert!(lists.pair_count() < all_lists.pair_count());
     // 5. Shade after the prepass, with the gathered columns.
     let frame = FrameDesc::clustered(

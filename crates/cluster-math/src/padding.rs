@@ -5,9 +5,9 @@
 //! step rounds by about 1e-7 of the magnitudes in play, so a light the f64 oracle sees touching a
 //! plane by less than that could be judged outside and lost. Growing the radius by
 //! [`RADIUS_PAD`] of the light's view-space extent absorbs all of it, and with one shared pad the
-//! cull in front of the assignment can never drop a light the assignment would keep (save a light
-//! whose offset from the camera overflows f32, which the assignment decides in f64 and the scene
-//! cull drops: `myriad-scene`'s `systems/cull.rs` says why).
+//! cull in front of the assignment can never drop a light the assignment would keep. (A light
+//! whose padded radius overflows f32 — a radius near `f32::MAX`, an offset from the camera past
+//! it — cannot be judged in f32: the assignment decides it in f64, and the scene cull keeps it.)
 
 /// Relative padding of light radii: 4e-6 of the light's view-space extent, about 34–67 f32 ulps
 /// of it (a ulp is 2⁻²³–2⁻²⁴ of a value).

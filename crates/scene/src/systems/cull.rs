@@ -9,12 +9,14 @@
 //! plane from inside were dropped that the assignment (and the f64 oracle) put in a cluster
 //! (5 625 of 46 067 such lights, audit f2).
 //!
-//! One exception, left as it is: a light whose offset from the camera overflows f32 (both
-//! beyond ~1.7·10³⁸ on opposite sides) gets NaN view coordinates, which every plane test reads
-//! as outside, so it is culled where the assignment (which decides such lights in f64) would
-//! keep it. Keeping them cost the sphere loop 15–20% on `cull/points/100000`
-//! (`cargo bench --bench scene_systems`, two runs against a saved baseline) for coordinates no
-//! scene has.
+//! A valid light whose view-space sphere overflows f32 — a radius near `f32::MAX` (an engine's
+//! "infinite range"), or an offset from the camera beyond ~1.7·10³⁸ — cannot be judged by the
+//! plane tests and is kept: the assignment decides such lights in f64. The same pass finds the
+//! invalid lights (a non-finite position or radius, a radius not positive), which are dropped
+//! and counted ([`Visibility::invalid`]). Both come from one test the block loop makes anyway
+//! (`r > 0` and a finite padded radius); only a block holding a light that fails it is looked
+//! at again. (Until 2026-12-01 such lights were culled uncounted, and a radius of `f32::MAX`
+//! was culled where the assignment lists it everywhere: review.)
 //!
 //! ## The test, per light
 //! 1. The centre goes to view space camera-relative: `R · (p − eye)`.
@@ -121,11 +123,10 @@ impl Frustum {
     /// Returns `(visible, sound)`. `sound`: `r > 0` and the padded radius finite, which holds
     /// for every valid light ([`is_valid`]) whose view-space sphere fits f32 — the padded
     /// radius sums every view coordinate, so a non-finite input makes it non-finite — and for
-    /// no invalid one; a light that is not sound is never visible (an infinite radius passed
-    /// every plane). A few operations a light: testing [`is_valid`] itself here made the point
+    /// no invalid one. A light that is not sound is not `visible` here (an infinite radius
+    /// passed every plane): [`test_block`] then counts it if invalid and keeps it if valid. A few operations a light: testing [`is_valid`] itself here made the point
     /// cull 23% slower (`cull/points/1000000` 0.96–1.01 → 1.19–1.26 ms, three interleaved runs
-    /// of `cargo bench --bench scene_systems`), this about 5% (→ 1.05–1.09 ms); callers sort
-    /// out the rare unsound lights with [`is_valid`].
+    /// of `cargo bench --bench scene_systems`), this about 5% (→ 1.05–1.09 ms).
     #[inline(always)] // Into both builds of `test_block`.
     fn sphere_visible(&self, p: Vec3, r: f32) -> (bool, bool) {
         let c = self.view_from_world * (p - self.eye);
@@ -181,12 +182,14 @@ impl Frustum {
     fn visible(&self, lights: &LightSlices<'_>, i: usize) -> bool {
         let p = Vec3::new(lights.x[i], lights.y[i], lights.z[i]);
         let r = lights.radius[i];
+        let (sphere, sound) = self.sphere_visible(p, r);
         is_valid(p, r)
-            && self.sphere_visible(p, r).0
-            && lights.spot.as_ref().is_none_or(|s| {
-                let axis = Vec3::new(s.dir_x[i], s.dir_y[i], s.dir_z[i]);
-                !is_cone(axis, s.angle[i]) || self.cone_visible(p, r, axis, s.angle[i])
-            })
+            && (!sound
+                || sphere
+                    && lights.spot.as_ref().is_none_or(|s| {
+                        let axis = Vec3::new(s.dir_x[i], s.dir_y[i], s.dir_z[i]);
+                        !is_cone(axis, s.angle[i]) || self.cone_visible(p, r, axis, s.angle[i])
+                    }))
     }
 }
 
@@ -238,15 +241,6 @@ fn test_block(frustum: &Frustum, lights: &LightSlices<'_>, start: usize, mask: &
         mask[j] = visible;
         unsound += !sound as u32;
     }
-    // Which of the unsound lights are invalid (the others' view-space sphere overflowed f32):
-    // a second pass, only in the rare block that has one.
-    let invalid = if unsound == 0 {
-        0
-    } else {
-        (0..mask.len())
-            .filter(|&j| !is_valid(Vec3::new(x[j], y[j], z[j]), r[j]))
-            .count() as u32
-    };
     if let Some(s) = &lights.spot {
         let (dx, dy, dz, angle) = (
             &s.dir_x[start..end],
@@ -261,6 +255,21 @@ fn test_block(frustum: &Frustum, lights: &LightSlices<'_>, start: usize, mask: &
             let p = Vec3::new(x[j], y[j], z[j]);
             let cone = frustum.cone_visible(p, r[j], axis, angle[j]);
             mask[j] &= !is_cone(axis, angle[j]) | cone;
+        }
+    }
+    // The unsound lights, in the rare block that has one: the invalid are counted (and stay
+    // culled); the valid, whose view-space sphere overflowed f32 (a radius near `f32::MAX`,
+    // an offset from the camera past it), are kept whatever the plane or cone tests said of
+    // their overflowed numbers: the assignment decides them in f64.
+    let mut invalid = 0;
+    if unsound > 0 {
+        for j in 0..mask.len() {
+            let p = Vec3::new(x[j], y[j], z[j]);
+            if !is_valid(p, r[j]) {
+                invalid += 1;
+            } else if !frustum.sphere_visible(p, r[j]).1 {
+                mask[j] = true;
+            }
         }
     }
     invalid
@@ -708,6 +717,47 @@ mod tests {
         let few = random_lights(10, 8, false);
         let v2 = cull_lights(&camera, few.slices(), &mut vis);
         assert_eq!((vis.mask.len(), vis.indices.len()), (10, v2));
+    }
+
+    /// A valid light whose view-space sphere overflows f32 — a radius of `f32::MAX`, an
+    /// engine's "infinite range" — is kept, whatever its cone says, and not counted as invalid:
+    /// the assignment lists it (in f64). The first cut of the invalid count culled it uncounted
+    /// (review); before that count it was kept.
+    #[test]
+    fn valid_lights_whose_sphere_overflows_f32_are_kept_and_not_counted() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 100, 100, 0.1, 100.0);
+        let at = |z: f32, r: f32| LightRecord::point(Vec3::new(0.0, 0.0, z), r);
+        let lights: Lights = [
+            at(-10.0, f32::MAX),
+            at(-10.0, f32::MAX * 0.9999999),
+            at(10.0, f32::MAX),
+            at(-10.0, f32::MAX).with_spot(Vec3::Z, 0.3),
+            at(-10.0, f32::NAN),
+            at(-10.0, 1.0),
+            at(10.0, 1.0),
+        ]
+        .into_iter()
+        .collect();
+        let mut vis = Visibility::new();
+        cull_lights(&camera, lights.slices(), &mut vis);
+        assert_eq!(vis.mask, [true, true, true, true, false, true, false]);
+        assert_eq!(vis.invalid(), 1);
+        let frustum = Frustum::new(&camera);
+        assert!((0..lights.len()).all(|i| frustum.visible(&lights.slices(), i) == vis.mask[i]));
+        // In a parallel run too, among ordinary lights.
+        let n = PARALLEL_MIN + 5;
+        let random = random_lights(n, 43, true);
+        let many: Lights = (0..n)
+            .map(|i| match i % 97 {
+                5 => at(-10.0, f32::MAX),
+                6 => at(-10.0, f32::NAN),
+                _ => random.get(i),
+            })
+            .collect();
+        cull_lights(&camera, many.slices(), &mut vis);
+        assert_eq!(vis.invalid(), (0..n).filter(|i| i % 97 == 6).count());
+        assert!((0..n).filter(|i| i % 97 == 5).all(|i| vis.mask[i]));
+        assert!((0..n).all(|i| frustum.visible(&many.slices(), i) == vis.mask[i]));
     }
 
     #[test]
