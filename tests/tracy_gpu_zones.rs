@@ -53,8 +53,8 @@ fn each_timed_pass_of_a_read_frame_is_one_gpu_zone_once_the_client_runs() {
         "zones before the client"
     );
 
-    // SAFETY: nothing records after the session drops: the viewer (the renderer's GPU zones)
-    // is dropped first, and this binary's only test is this one.
+    // SAFETY: nothing records after the session drops: the viewers (the renderers' GPU zones)
+    // are dropped first, and this binary's only test is this one.
     let session = unsafe { myriad::profiling::start() };
     let mut zones = 0;
     for skips in [Skips::NONE, Skips::ALL, Skips::NONE] {
@@ -99,6 +99,43 @@ fn each_timed_pass_of_a_read_frame_is_one_gpu_zone_once_the_client_runs() {
     zones += timed(&read(&viewer));
     assert_eq!(viewer.renderer.gpu_zones_emitted(), zones);
     assert_eq!(viewer.renderer.gpu_clock_ties(), ties + 1);
-    drop(viewer);
+
+    // Tracy gives a process 255 GPU contexts. With every one taken, a new renderer's frames
+    // still draw and read their times, with no zones and no clock tie, and it says it was
+    // refused (and asks no more: each ask costs three blocking clock reads); the renderer that
+    // has its context keeps emitting. (Here, not in a test of its own: contexts are never given back,
+    // and a second test would share this process's client.)
+    let client = || myriad::profiling::__tracy::Client::running().expect("started above");
+    let mut taken = 0;
+    while client()
+        .new_gpu_context(
+            Some("taken"),
+            myriad::profiling::__tracy::GpuContextType::Invalid,
+            0,
+            1.0,
+        )
+        .is_ok()
+    {
+        taken += 1;
+        assert!(taken <= 255, "Tracy gave more than 255 GPU contexts");
+    }
+    assert!(taken < 255, "the viewer's own context is one of the 255");
+    let mut refused = Viewer::new(viewer.ctx.clone(), &scene).unwrap();
+    for _ in 0..3 {
+        refused
+            .frame(&scene, Shading::Clustered, Method::Refined, false)
+            .unwrap();
+        assert!(timed(&read(&refused)) >= 2, "the times are still read");
+        assert_eq!(refused.renderer.gpu_zones_emitted(), 0);
+        assert_eq!(refused.renderer.gpu_clock_ties(), 0);
+        assert!(refused.renderer.gpu_context_refused());
+    }
+    assert!(!viewer.renderer.gpu_context_refused());
+    viewer
+        .frame(&scene, Shading::Clustered, Method::Refined, false)
+        .unwrap();
+    zones += timed(&read(&viewer));
+    assert_eq!(viewer.renderer.gpu_zones_emitted(), zones);
+    drop((viewer, refused));
     drop(session);
 }

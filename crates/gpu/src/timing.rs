@@ -199,6 +199,12 @@ impl PassTimer {
         self.zones.lock().expect("zone state").zones.clock_ties()
     }
 
+    /// Whether Tracy refused a GPU context (`tracy` feature).
+    #[cfg(feature = "tracy")]
+    pub fn context_refused(&self) -> bool {
+        self.zones.lock().expect("zone state").zones.refused()
+    }
+
     /// Marks a new frame: no pass has run and nothing was uploaded yet, except the G-buffer
     /// pass when `keep_gbuffer` (a frame shading the G-buffer a prepass drew and timed).
     pub fn begin_frame(&mut self, keep_gbuffer: bool) {

@@ -73,6 +73,11 @@ impl GpuZones {
         self.ties
     }
 
+    /// Whether Tracy refused the context.
+    pub fn refused(&self) -> bool {
+        self.refused
+    }
+
     /// Emits `zones` (the upload's copies when `pass` is `None`) in order of their start, once a
     /// client runs; nothing otherwise.
     pub fn emit(&mut self, ctx: &GpuContext, zones: &mut [TimedZone]) -> Result<(), GpuError> {

@@ -470,6 +470,15 @@ impl Renderer {
         self.timer.clock_ties()
     }
 
+    /// Whether Tracy refused this renderer a GPU context (the `tracy` feature): it gives a
+    /// process 255, and a renderer made past them draws and times its frames with no GPU track
+    /// (the reason a capture's GPU track can be empty). Asked once, with the first zones; a
+    /// refusal is final.
+    #[cfg(feature = "tracy")]
+    pub fn gpu_context_refused(&self) -> bool {
+        self.timer.context_refused()
+    }
+
     /// Records, encodes and submits one frame into `target` (a single-sample view of mip 0 of a
     /// texture of the camera's size, in a format the renderer can draw into: its
     /// [`Renderer::output_format`] or another, see [`Renderer::new`]; a view may reinterpret its
