@@ -545,9 +545,17 @@ fn appearance_dirty(a: &Lights, b: &Lights) -> bool {
 
 /// Whether two columns differ bit for bit. Not `!=`: a NaN never equals itself, so one light
 /// with a NaN (an invalid light, skipped and counted) made every frame of an unchanged scene
-/// dirty, and none was ever reused (audit).
+/// dirty, and none was ever reused (audit). Compared 64 values at a time without an exit
+/// inside a run, so the compiler vectorises it: an unchanged column of 1M lights, which every
+/// reused frame compares whole (13 columns), took 1.19 ms with `!=`, 0.51 ms bit for bit with
+/// an exit per value, 0.26 ms this way (a standalone `rustc -O` timing, best of 50).
 fn differ(a: &[f32], b: &[f32]) -> bool {
-    a.len() != b.len() || a.iter().zip(b).any(|(x, y)| x.to_bits() != y.to_bits())
+    a.len() != b.len()
+        || a.chunks(64).zip(b.chunks(64)).any(|(x, y)| {
+            x.iter()
+                .zip(y)
+                .fold(false, |d, (p, q)| d | (p.to_bits() != q.to_bits()))
+        })
 }
 
 #[cfg(test)]
@@ -613,7 +621,9 @@ mod tests {
     /// two columns to change together shows.
     #[test]
     fn each_light_column_change_is_seen_as_geometry_or_appearance() {
-        let lights = myriad_scene::atrium().lights;
+        // The atrium's 12 lights (spots among them) a hundred times: runs of 64 to compare.
+        let atrium = myriad_scene::atrium().lights;
+        let lights: Lights = (0..100).flat_map(|_| atrium.iter()).collect();
         assert!(lights.has_spots(), "the spot columns are compared too");
         assert!(!geometry_dirty(&lights, &lights.clone()));
         assert!(!appearance_dirty(&lights, &lights.clone()));
@@ -640,20 +650,26 @@ mod tests {
             ("intensity", |l| &mut l.intensity),
             ("spot_inner_angle", |l| &mut l.spot_inner_angle),
         ];
-        let changed = |column: Column| {
-            let mut changed = lights.clone();
-            column(&mut changed)[3] += 0.25;
-            changed
-        };
-        for (name, column) in geometric {
-            let changed = changed(column);
-            assert!(geometry_dirty(&lights, &changed), "{name}");
-            assert!(!appearance_dirty(&lights, &changed), "{name}");
-        }
-        for (name, column) in appearance {
-            let changed = changed(column);
-            assert!(appearance_dirty(&lights, &changed), "{name}");
-            assert!(!geometry_dirty(&lights, &changed), "{name}");
+        // A value in the first run of 64 compared together, one in a middle run, and the last
+        // (in the short run at the end, the atrium's light count not being a multiple of 64).
+        let last = lights.len() - 1;
+        assert_ne!(lights.len() % 64, 0);
+        for at in [3, 64 * 5 + 17, last] {
+            let changed = |column: Column| {
+                let mut changed = lights.clone();
+                column(&mut changed)[at] += 0.25;
+                changed
+            };
+            for (name, column) in geometric {
+                let changed = changed(column);
+                assert!(geometry_dirty(&lights, &changed), "{name} at {at}");
+                assert!(!appearance_dirty(&lights, &changed), "{name} at {at}");
+            }
+            for (name, column) in appearance {
+                let changed = changed(column);
+                assert!(appearance_dirty(&lights, &changed), "{name} at {at}");
+                assert!(!geometry_dirty(&lights, &changed), "{name} at {at}");
+            }
         }
     }
 
