@@ -113,9 +113,10 @@ pub enum OutsideCalls {
     /// both workers of a 2-thread pool were held busy grew the process by 24 MB (audit).
     ///
     /// The caller runs tasks on its own stack, and a task of 2048 lights or more keeps blocks of
-    /// about 100 KB there: a 100,000-light frame overflowed (aborting the process) on threads
-    /// made with 64 and 128 KiB stacks and ran on 192 KiB. Call from threads with 256 KiB or more
-    /// (Rust's spawned threads have 2 MiB), or hand off.
+    /// about 150 KiB there (a smaller one about 60 KiB). Where the calling thread has less left,
+    /// the task runs on a 1 MiB stack mapped for it (`stacker`; `run_task` in `jobs.rs`), so
+    /// threads of small stacks work (tested down to 32 KiB), each task an `mmap` slower; Rust's
+    /// spawned threads (2 MiB) never need it.
     #[default]
     Join,
     /// The whole frame moves onto a pool worker in one hand-off and the calling thread sleeps

@@ -235,19 +235,60 @@ impl SpotView {
     };
 }
 
+/// Stack a task in blocks of [`LARGE_BLOCK`] must find free when it starts: its SoA columns sit on
+/// the running thread's stack. Such a task overflowed threads of 144 KiB and ran on 160 KiB (a
+/// 100,000-light frame of every method but `exact`, the thread's whole stack counted).
+const LARGE_TASK_STACK: usize = 256 << 10;
+
+/// Stack a task in blocks of [`BLOCK`] must find free when it starts (it overflowed threads of
+/// 48 KiB and ran on 64 KiB, measured as for [`LARGE_TASK_STACK`]).
+const SMALL_TASK_STACK: usize = 96 << 10;
+
+/// The stack a task runs on where the running thread's is shorter than it needs: mapped for the
+/// task and unmapped after it.
+const GROWN_TASK_STACK: usize = 1 << 20;
+
 /// Runs lights `begin..end` through all phases into `out` (cleared first).
 ///
 /// A task of at least [`LARGE_BLOCK_TASK`] lights walks them in blocks of [`LARGE_BLOCK`], a
 /// smaller one in blocks of [`BLOCK`]. Each width is a function of its own (both inlined into one
 /// function made a single 46 KB body, with each width's hot loops placed among the other's).
+///
+/// Its blocks live on the stack (heap columns kept between frames measured slower, see
+/// docs/measured.md), ~150 KiB of it for large blocks. An engine's job threads, fibers or a
+/// rayon pool built with a small `stack_size` may have less: where the running thread has less
+/// left than the task needs, the task runs on a stack of [`GROWN_TASK_STACK`] mapped for it
+/// (`stacker`), instead of overflowing and aborting the process. Threads with the usual stacks
+/// (2 MiB for Rust's spawned threads and rayon's workers, 8 MiB for a main thread) never grow:
+/// the check is a thread-local read and a compare. A stack `stacker` cannot locate counts as
+/// short (so a fiber's stack below its thread's grows too).
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
-    crate::profiling::profile_span!("assign task");
-    out.reset(ctx);
-    if end - begin >= LARGE_BLOCK_TASK {
-        run_large_blocks(ctx, begin, end, out);
+    let large = end - begin >= LARGE_BLOCK_TASK;
+    let need = if large {
+        LARGE_TASK_STACK
     } else {
-        run_small_blocks(ctx, begin, end, out);
-    }
+        SMALL_TASK_STACK
+    };
+    let task = || {
+        crate::profiling::profile_span!("assign task");
+        out.reset(ctx);
+        if large {
+            run_large_blocks(ctx, begin, end, out);
+        } else {
+            run_small_blocks(ctx, begin, end, out);
+        }
+    };
+    // Miri runs no foreign code, and `stacker` finds the stack pointer with some.
+    #[cfg(not(miri))]
+    stacker::maybe_grow(need, GROWN_TASK_STACK, task);
+    #[cfg(miri)]
+    run_on_this_stack(need, task);
+}
+
+/// Miri's stand-in for `stacker::maybe_grow`: the task on the thread's own stack.
+#[cfg(miri)]
+fn run_on_this_stack(_need: usize, task: impl FnOnce()) {
+    task();
 }
 
 /// [`run_blocks`] in blocks of [`BLOCK`] lights.
