@@ -113,7 +113,7 @@ pub enum OutsideCalls {
     /// both workers of a 2-thread pool were held busy grew the process by 24 MB (audit).
     ///
     /// The caller runs tasks on its own stack, and a task of 2048 lights or more keeps blocks of
-    /// about 150 KiB there (a smaller one about 60 KiB). Where the calling thread has less left,
+    /// about 150 KiB there (a smaller one about 60 KiB; twice that unoptimised). Where the calling thread has less left,
     /// the task runs on a 1 MiB stack mapped for it (`stacker`; `run_task` in `jobs.rs`), so
     /// threads of small stacks work (tested down to 32 KiB), each task an `mmap` slower; Rust's
     /// spawned threads (2 MiB) never need it.

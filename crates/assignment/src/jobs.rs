@@ -236,13 +236,23 @@ impl SpotView {
 }
 
 /// Stack a task in blocks of [`LARGE_BLOCK`] must find free when it starts: its SoA columns sit on
-/// the running thread's stack. Such a task overflowed threads of 144 KiB and ran on 160 KiB (a
-/// 100,000-light frame of every method but `exact`, the thread's whole stack counted).
-const LARGE_TASK_STACK: usize = 256 << 10;
+/// the running thread's stack. Frames of such tasks (every method, points and spots, the thread's
+/// whole stack counted) overflowed threads of 144 KiB and ran on 160 KiB in release builds;
+/// unoptimised, whose frames keep every temporary, they overflowed 256 KiB and ran on 320.
+const LARGE_TASK_STACK: usize = if cfg!(debug_assertions) {
+    512 << 10
+} else {
+    256 << 10
+};
 
-/// Stack a task in blocks of [`BLOCK`] must find free when it starts (it overflowed threads of
-/// 48 KiB and ran on 64 KiB, measured as for [`LARGE_TASK_STACK`]).
-const SMALL_TASK_STACK: usize = 96 << 10;
+/// Stack a task in blocks of [`BLOCK`] must find free when it starts: measured as for
+/// [`LARGE_TASK_STACK`], it overflowed 48 KiB and ran on 64 KiB (release), overflowed 96 KiB
+/// and ran on 128 KiB (unoptimised).
+const SMALL_TASK_STACK: usize = if cfg!(debug_assertions) {
+    192 << 10
+} else {
+    96 << 10
+};
 
 /// The stack a task runs on where the running thread's is shorter than it needs: mapped for the
 /// task and unmapped after it.
