@@ -103,7 +103,9 @@ pub enum OutsideCalls {
     /// with every worker busy on a long job of the engine's own, the frame runs wholly on the
     /// caller and returns. It costs small heap allocations: one per helper (rayon boxes a
     /// spawned job) and one per region with helpers (their shared control block), at most
-    /// 2 × threads per frame, fewer where a region has fewer items to share. The default: the faster (`paper` 1000 on 2 vCPUs, criterion
+    /// 2 × threads per frame, fewer where a region has fewer items to share, and rayon's
+    /// injection queue takes one block per 63 jobs spawned into it (one more allocation in the
+    /// frame that passes a multiple of 63). The default: the faster (`paper` 1000 on 2 vCPUs, criterion
     /// medians of the `targets` bench, three runs: `binary` 25.1–25.8 µs against 30.9–34.2 µs
     /// handed off, `refined` 38.7–39.8 against 44.2–50.1 µs; 21–23 and 36–44 µs on a worker).
     ///

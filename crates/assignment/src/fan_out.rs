@@ -25,7 +25,8 @@
 //! the caller, as a scope would.
 //!
 //! The price is small heap allocations: the control block once per region and one per helper
-//! (rayon boxes each spawned job), at most 2 × threads per frame called from outside the pool.
+//! (rayon boxes each spawned job), at most 2 × threads per frame called from outside the pool,
+//! plus a block of rayon's injection queue in a frame whose spawns pass a multiple of 63.
 //! A frame job on a worker allocates nothing, and [`crate::OutsideCalls::HandOff`] keeps outside
 //! calls allocation-free too, at the hand-off's cost. Measured on the 2-vCPU CI machine in the
 //! `targets` bench (`paper/*-from-outside`): see [`crate::OutsideCalls`].
