@@ -34,8 +34,9 @@
 //!    [`ImageLoading::Decode`] (decoding Sponza's 46 textures takes seconds in a debug build).
 //! 5. **Nodes**: the default scene (or scene 0; with no scenes, every node without a parent)
 //!    is walked iteratively, composing world transforms (`matrix`, or translation · rotation ·
-//!    scale). A node that is its own ancestor is an error; a node reached along several paths is
-//!    drawn once per path (instancing). Nodes with meshes become [`Instance`](crate::Instance)s,
+//!    scale). A node that is its own ancestor is an error; a node reached along several paths (two
+//!    parents, or a scene's root that is also a child or is listed twice, all of which the spec
+//!    forbids) is drawn once per path, with a warning. Nodes with meshes become [`Instance`](crate::Instance)s,
 //!    with cameras [`ModelCamera`](crate::ModelCamera)s, with `KHR_lights_punctual` lights rows of
 //!    [`Model::lights`].
 //!

@@ -142,6 +142,7 @@ impl Loader<'_> {
                 roots
             }
         };
+        self.warn_about_shared_nodes(&roots, scene);
         enum Step {
             Enter(usize, Mat4),
             Leave(usize),
@@ -211,6 +212,88 @@ impl Loader<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Warns about nodes the walk reaches along several paths, each drawn once per path: the spec
+    /// requires disjoint strict trees (a node has at most one parent, a scene's nodes are roots
+    /// and each listed once), but a file that shares nodes still means something drawable, so it
+    /// is drawn as written and said (a silent double was an audit's finding: one declared light
+    /// written twice by `myriad scene --model-lights`). One warning per kind, naming the first
+    /// few nodes.
+    fn warn_about_shared_nodes(&mut self, roots: &[usize], scene: Option<usize>) {
+        const NAMED: usize = 3;
+        let nodes = &self.root.nodes;
+        let mut parents: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+        for (p, node) in nodes.iter().enumerate() {
+            for child in node.children.iter().flatten() {
+                if let Some(list) = parents.get_mut(child.value()) {
+                    list.push(p);
+                }
+            }
+        }
+        let name = |n: usize| format!("nodes[{n}]{}", quoted(&nodes[n].name));
+        let list = |items: &[String], total: usize| {
+            let more = total - items.len();
+            let tail = if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            };
+            format!("{}{tail}", items.join("; "))
+        };
+        let shared: Vec<usize> = (0..nodes.len()).filter(|&n| parents[n].len() > 1).collect();
+        if !shared.is_empty() {
+            let named: Vec<String> = shared
+                .iter()
+                .take(NAMED)
+                .map(|&n| {
+                    let of: Vec<String> =
+                        parents[n].iter().map(|p| format!("nodes[{p}]")).collect();
+                    format!("{} is a child of {}", name(n), of.join(", "))
+                })
+                .collect();
+            self.model.warnings.push(format!(
+                "{} node(s) with more than one parent ({}); the spec allows one: each is drawn \
+                 once per path",
+                shared.len(),
+                list(&named, shared.len())
+            ));
+        }
+        let Some(s) = scene else { return };
+        let mut seen = vec![0u32; nodes.len()];
+        for &r in roots.iter().filter(|&&r| r < nodes.len()) {
+            seen[r] += 1;
+        }
+        let repeated: Vec<usize> = (0..nodes.len()).filter(|&n| seen[n] > 1).collect();
+        if !repeated.is_empty() {
+            let named: Vec<String> = repeated
+                .iter()
+                .take(NAMED)
+                .map(|&n| format!("{} {} times", name(n), seen[n]))
+                .collect();
+            self.model.warnings.push(format!(
+                "scenes[{s}] lists {} node(s) more than once ({}); the spec lists each once: \
+                 each is drawn once per listing",
+                repeated.len(),
+                list(&named, repeated.len())
+            ));
+        }
+        let parented: Vec<usize> = (0..nodes.len())
+            .filter(|&n| seen[n] > 0 && !parents[n].is_empty())
+            .collect();
+        if !parented.is_empty() {
+            let named: Vec<String> = parented
+                .iter()
+                .take(NAMED)
+                .map(|&n| format!("{} (a child of nodes[{}])", name(n), parents[n][0]))
+                .collect();
+            self.model.warnings.push(format!(
+                "scenes[{s}] lists {} node(s) that have a parent as roots ({}); the spec \
+                 allows only root nodes: each is drawn as a root and again wherever its parent is",
+                parented.len(),
+                list(&named, parented.len())
+            ));
+        }
     }
 
     fn camera(

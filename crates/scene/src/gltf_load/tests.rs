@@ -1119,3 +1119,52 @@ fn lights_at_the_edges_of_what_is_allowed_are_kept() {
         other => panic!("{other:?}"),
     }
 }
+
+/// Nodes reached along several paths (two parents, a listed root that has a parent, a root
+/// listed twice) break the spec's strict trees: drawn once per path, as before, and now said.
+#[test]
+fn shared_nodes_are_drawn_once_per_path_and_warned_about() {
+    let light = r#""extensions": {"KHR_lights_punctual": {"light": 0}}"#;
+    let lights = r#", "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "range": 2}]}}"#;
+    let cases = [
+        (
+            format!(
+                r#", "scenes": [{{"nodes": [0, 1]}}], "nodes": [{{"children": [2]}},
+                {{"children": [2], "translation": [5, 0, 0]}}, {{"mesh": 0, "name": "shared", {light}}}]{lights}"#
+            ),
+            "1 node(s) with more than one parent (nodes[2] \"shared\" is a child of nodes[0], \
+             nodes[1]); the spec allows one: each is drawn once per path",
+        ),
+        (
+            format!(
+                r#", "scenes": [{{"nodes": [0, 0]}}], "nodes": [{{"mesh": 0, {light}}}]{lights}"#
+            ),
+            "scenes[0] lists 1 node(s) more than once (nodes[0] 2 times); the spec lists each \
+             once: each is drawn once per listing",
+        ),
+        (
+            format!(
+                r#", "scenes": [{{"nodes": [0, 1]}}], "nodes": [{{"children": [1]}},
+                {{"mesh": 0, {light}}}]{lights}"#
+            ),
+            "scenes[0] lists 1 node(s) that have a parent as roots (nodes[1] (a child of \
+             nodes[0])); the spec allows only root nodes: each is drawn as a root and again \
+             wherever its parent is",
+        ),
+    ];
+    for (extra, warning) in cases {
+        let model = load_str(&triangle_gltf([0, 1, 2], &extra)).unwrap();
+        assert_eq!(model.instances.len(), 2, "{extra}");
+        assert_eq!(model.lights.len(), 2, "{extra}");
+        assert_eq!(model.warnings, [warning.to_string()], "{extra}");
+    }
+    // A tree gives no warning.
+    let tree = format!(
+        r#", "scenes": [{{"nodes": [0]}}], "nodes": [{{"children": [1, 2]}}, {{"mesh": 0}},
+        {{"mesh": 0, {light}}}]{lights}"#
+    );
+    let model = load_str(&triangle_gltf([0, 1, 2], &tree)).unwrap();
+    assert_eq!(model.instances.len(), 2);
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+}
