@@ -402,6 +402,15 @@ fn check_rejects_broken_dumps_naming_the_file() {
         &check(&beyond),
         &[&beyond.display().to_string(), "indices[0] = 999", "lights"],
     );
+    // The first index past the last light (a bound one loose let it through to a panic: audit).
+    let one_past = edited("one_past.json", &|v| v["indices"][0] = Value::from(4));
+    assert_mentions(
+        &check(&one_past),
+        &[
+            &one_past.display().to_string(),
+            "indices[0] = 4, but the scene has 4 lights",
+        ],
+    );
     let counts: Vec<u64> = serde_json::from_value(good["counts"].clone()).unwrap();
     let offsets: Vec<u64> = serde_json::from_value(good["offsets"].clone()).unwrap();
     let c = counts.iter().position(|&n| n >= 2).expect("a list of two");

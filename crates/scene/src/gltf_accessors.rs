@@ -592,6 +592,11 @@ mod tests {
                 r#"{"bufferView": 0, "byteOffset": 8, "componentType": 5126, "count": 1, "type": "VEC3"}"#,
                 "do not fit in bufferViews[0]",
             ),
+            // One byte past the end (a bound one byte loose read past the view: audit).
+            (
+                r#"{"bufferView": 0, "byteOffset": 5, "componentType": 5126, "count": 1, "type": "VEC3"}"#,
+                "1 elements of 12 bytes (stride 12) from byte 5 do not fit in bufferViews[0] (16 bytes)",
+            ),
             // Absurd count.
             (
                 r#"{"bufferView": 0, "componentType": 5126, "count": 18446744073709551615, "type": "VEC3"}"#,

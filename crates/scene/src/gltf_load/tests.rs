@@ -433,8 +433,15 @@ fn broken_documents_are_errors_naming_the_problem() {
         r#", "scenes": [{"nodes": [0]}], "nodes": [{"children": [1]}, {"children": [0]}]"#,
     );
     let out_of_range = triangle_gltf([0, 1, 7], r#", "nodes": [{"mesh": 0}]"#);
+    // One past the last vertex (a bound one loose panicked in the tangent step: audit).
+    let one_past = triangle_gltf([0, 3, 1], r#", "nodes": [{"mesh": 0}]"#);
     let cases = [
         (cycle, "nodes[0] is its own ancestor"),
+        (
+            one_past,
+            "meshes[0] \"tri\" primitives[0]: index 3 (element 1 of the indices) is out of range \
+             (POSITION has 3 vertices)",
+        ),
         (
             out_of_range,
             "meshes[0] \"tri\" primitives[0]: index 7 (element 2 of the indices) is out of range",
