@@ -50,11 +50,20 @@ fn samples(grid: &ClusterGrid, width: u32, height: u32, seed: u64) -> (Vec<[u32;
     }
     let mut pixels = Vec::new();
     let mut out_depths = Vec::new();
-    // Edge pixels × edge depths, pairing them cyclically to keep the count moderate.
+    // Edge pixels × edge depths, pairing them cyclically to keep the count moderate. Every depth
+    // goes out at least four times, each time with another pixel. (It was indexed `s * 7`, and
+    // the list holds a multiple of seven entries: only each edge's −3 ulps and 0.0 were ever
+    // sent, and three mutants of the slice search at exact edges survived: audit.)
     let n = xs.len().max(ys.len()).max(depths.len()) * 4;
     for s in 0..n {
         pixels.push([xs[s % xs.len()], ys[(s / 3) % ys.len()]]);
-        out_depths.push(depths[(s * 7) % depths.len()]);
+        out_depths.push(depths[s % depths.len()]);
+    }
+    for d in &depths {
+        assert!(
+            out_depths.iter().any(|o| o.to_bits() == d.to_bits()),
+            "depth {d} is never sampled"
+        );
     }
     // Random samples: a simple LCG (no dependency needed for test noise).
     let mut state = seed;
