@@ -101,7 +101,14 @@ fn random_lights_and_surfaces_shade_as_the_rust_twin() {
                 noise.range(0.0, 5.0),
                 noise.range(0.0, 5.0),
             );
+            // Every eighth a wide spot (86°–178° outer half angle) with an axis anywhere, so the
+            // point often lies behind its cone (spots past ~139°, squared chord above 3.5, went
+            // untested: a shader treating them as points passed: audit).
             let spot = (i % 4 == 0).then(|| {
+                if i % 8 == 4 {
+                    let outer = noise.range(1.5, 3.1);
+                    return (noise.direction(), outer, outer * noise.range(0.0, 0.99));
+                }
                 let axis = (-offset + noise.direction() * noise.range(0.0, 4.0)).normalize();
                 let outer = noise.range(0.02, 1.5);
                 (axis, outer, outer * noise.range(0.0, 0.99))
