@@ -113,6 +113,9 @@ fn a_pixel_shows_every_light_up_to_the_budget_and_no_more_are_drawn() {
     check_edge(&ctx, Shading::Clustered, 1);
     check_edge(&ctx, Shading::Clustered, 16);
     check_edge(&ctx, Shading::Clustered, 37);
+    // 16 inner slices, a power of two: a search started one slice lower (`lo = 0`) goes round
+    // once more here, where on 16 and 37 slices it does not, and loses the last light (audit).
+    check_edge(&ctx, Shading::Clustered, 18);
     check_edge(&ctx, Shading::BruteForce, 16);
 }
 
