@@ -3,12 +3,13 @@
 //! reused without uploading lights or lists, and changed colours or positions are picked up.
 
 use myriad::assignment::Method;
+use myriad::cluster_math::glam::UVec3;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, Renderer};
 use myriad::render::{
     FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer, max_channel_difference,
     run_frames,
 };
-use myriad::scene::{ClusterGrid, Lights, atrium};
+use myriad::scene::{ClusterGrid, DepthSlicing, Lights, atrium};
 
 fn singles() -> Vec<(&'static str, Skips)> {
     let none = Skips::NONE;
@@ -173,6 +174,34 @@ fn unchanged_frames_are_reused_and_changes_are_seen() {
     scene.lights.y[100] += 0.5;
     let (_, f4) = render(&mut viewer, &scene, Skips::ALL);
     assert!(!f4.reused && !f4.appearance_only && f4.stats.is_some());
+
+    // Another grid, then a turned camera, with the lights unchanged, each the only change from
+    // the frame before: each is a frame of its own (reusing the lists would shade with another
+    // grid's or view's clusters; neither was tested: audit), and each image equals a fresh
+    // render's.
+    let (_, f5) = render(&mut viewer, &scene, Skips::ALL);
+    assert!(f5.reused, "unchanged again");
+    let regridded = scene
+        .clone()
+        .with_grid(UVec3::new(16, 9, 24), DepthSlicing::Log);
+    let mut turned = regridded.clone();
+    turned.camera.target += myriad::cluster_math::glam::Vec3::new(0.5, 0.0, 0.0);
+    assert_ne!(regridded.grid, scene.grid);
+    for (what, changed) in [("another grid", &regridded), ("turned camera", &turned)] {
+        let (image, frame) = render(&mut viewer, changed, Skips::ALL);
+        assert!(
+            !frame.reused && !frame.appearance_only && frame.stats.is_some(),
+            "{what}: the lists were reused"
+        );
+        let mut fresh = Viewer::new(ctx.clone(), changed).unwrap();
+        let (expected, _) = render(&mut fresh, changed, Skips::NONE);
+        let worst = max_channel_difference(&image, &expected);
+        assert!(worst <= 1, "{what}: differs from a fresh render by {worst}");
+        assert!(
+            render(&mut viewer, changed, Skips::ALL).1.reused,
+            "{what}: then reused"
+        );
+    }
 }
 
 /// A refused frame drops the reuse cache: it had culled its own visible set into the state the
