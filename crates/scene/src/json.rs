@@ -462,6 +462,29 @@ mod tests {
         assert!(problems.iter().all(|p| p.light == Some(7)));
     }
 
+    /// An unknown key is the file's own text: a terminal escape or a line break in it is shown
+    /// escaped, so a message cannot clear the screen or forge a line of its own (docs/cli.md says
+    /// so; only glTF names were tested: audit).
+    #[test]
+    fn unknown_keys_are_shown_with_their_control_characters_escaped() {
+        let j = parse(r#"{"\u001b[2J\r\nerror: fake": 1}"#);
+        let mut problems = Vec::new();
+        let mut sink = Sink::new(&mut problems, Prefix::Section("camera"));
+        Object::new(&j, "", &["fov_y_deg"], &mut sink).unwrap();
+        let shown: Vec<String> = problems.iter().map(|p| p.to_string()).collect();
+        assert_eq!(shown.len(), 1, "{shown:?}");
+        assert!(
+            !shown[0].chars().any(char::is_control),
+            "raw control characters: {:?}",
+            shown[0]
+        );
+        assert!(
+            shown[0].starts_with("camera.\\u{1b}[2J\\r\\nerror: fake: unknown field"),
+            "{:?}",
+            shown[0]
+        );
+    }
+
     #[test]
     fn readers_report_type_length_and_range_problems() {
         let mut problems = Vec::new();
