@@ -641,15 +641,16 @@ impl Model {
         match self.camera(index, width, height) {
             Some(camera) => Some((camera, self.cameras[index].name.clone())),
             None => self.view_of_bounds(width, height).map(|camera| {
-                let why = if index < self.cameras.len() {
-                    "is orthographic"
+                // A model with no camera at all says so, rather than naming a camera 0 that
+                // nobody asked for (audit).
+                let why = if self.cameras.is_empty() {
+                    "the model has no camera".to_string()
+                } else if index < self.cameras.len() {
+                    format!("camera {index} is orthographic")
                 } else {
-                    "does not exist"
+                    format!("camera {index} does not exist")
                 };
-                (
-                    camera,
-                    format!("a view down the bounds' long axis (camera {index} {why})"),
-                )
+                (camera, format!("a view down the bounds' long axis ({why})"))
             }),
         }
     }
@@ -847,7 +848,7 @@ mod tests {
         let model = quads_at(&[wall(-7.5), wall(7.5)]);
         let b = model.bounds();
         let (c, name) = model.camera_or_view(0, 800, 400).unwrap();
-        assert!(name.contains("camera 0 does not exist"), "{name}");
+        assert!(name.ends_with("(the model has no camera)"), "{name}");
         assert!(b.contains(c.position));
         assert!(c.target.x > c.position.x + 20.0);
         assert!(c.far > b.size().length());

@@ -487,8 +487,15 @@ impl Loader<'_> {
         use json::extensions::scene::khr_lights_punctual::Type;
         let color = finite_vec3(light.color, "color")?;
         if color.min_element() < 0.0 || !(light.intensity >= 0.0 && light.intensity.is_finite()) {
+            // A number past f32's range in the file arrives here as infinity: say so, rather
+            // than show "inf" as if the file held it (audit).
+            let beyond = if light.intensity.is_infinite() {
+                " (the file's value is beyond f32's range)"
+            } else {
+                ""
+            };
             return Err(format!(
-                "color {color} and intensity {} must be finite and >= 0",
+                "color {color} and intensity {}{beyond} must be finite and >= 0",
                 light.intensity
             ));
         }

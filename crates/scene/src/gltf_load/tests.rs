@@ -138,7 +138,7 @@ fn invalid_lights_are_left_out_counted_and_reported() {
         ),
         (
             r#"{"type": "point", "intensity": 1e39, "range": 2}"#,
-            "intensity inf must be finite and >= 0",
+            "intensity inf (the file's value is beyond f32's range) must be finite and >= 0",
         ),
         (
             r#"{"type": "point", "color": [1, -1, 1], "range": 2, "name": "red"}"#,
