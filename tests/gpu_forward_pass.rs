@@ -90,6 +90,39 @@ fn ground_scene(half: f32, view: Vec3, seed: u64) -> RenderScene {
     }
 }
 
+/// An opaque surface whose base colour has alpha 0 is drawn: glTF ignores alpha for `OPAQUE`
+/// materials, which get a cutoff of 0, and only alpha *below* the cutoff is discarded. (A
+/// G-buffer pass discarding at `alpha <= cutoff` dropped such surfaces and passed every test:
+/// audit.) Alpha exactly at a mask's cutoff is kept for the same reason.
+#[test]
+fn alpha_at_the_cutoff_is_drawn_and_below_it_is_not() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let drawn_for = |alpha: f32, cutoff: f32| {
+        let mut scene = ground_scene(1e3, Vec3::new(0.0, -0.35, -1.0), 0);
+        let draw = scene.geometry.draws[0].material as usize;
+        let material = &mut scene.geometry.materials[draw];
+        material.blend = Blend::Opaque;
+        material.uniforms.base_color[3] = alpha;
+        material.uniforms.alpha_cutoff = cutoff;
+        scene.blended_bounds = blended_bounds(&scene.geometry);
+        let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+        viewer
+            .frame(&scene, Shading::BruteForce, Method::Refined, false)
+            .unwrap();
+        let depth = viewer.renderer.read_depth(&viewer.ctx).unwrap().unwrap();
+        depth.iter().filter(|&&d| d > 0.0).count()
+    };
+    let opaque = drawn_for(0.0, 0.0);
+    assert!(
+        opaque > 128 * 64 / 4,
+        "an opaque quad of alpha 0: {opaque} pixels drawn"
+    );
+    assert_eq!(drawn_for(0.5, 0.5), opaque, "alpha at a mask's cutoff");
+    assert_eq!(drawn_for(0.49, 0.5), 0, "alpha below a mask's cutoff");
+}
+
 #[test]
 fn a_huge_blended_quad_shades_with_lists_as_with_every_light() {
     let Some(ctx) = GpuContext::headless_for_tests() else {
