@@ -3,13 +3,14 @@
 //! reused without uploading lights or lists, and changed colours or positions are picked up.
 
 use myriad::assignment::Method;
-use myriad::cluster_math::glam::UVec3;
+use myriad::cluster_math::glam::{UVec3, Vec3};
+use myriad::gpu::layout::Vertex;
 use myriad::gpu::{GpuContext, HEADLESS_FORMAT, Renderer};
 use myriad::render::{
-    FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer, max_channel_difference,
-    run_frames,
+    FramePlan, RenderScene, Shading, Skips, TunerSettings, Viewer, blended_bounds,
+    max_channel_difference, run_frames,
 };
-use myriad::scene::{ClusterGrid, DepthSlicing, Lights, atrium};
+use myriad::scene::{Camera, ClusterGrid, DepthSlicing, LightRecord, Lights, atrium};
 
 fn singles() -> Vec<(&'static str, Skips)> {
     let none = Skips::NONE;
@@ -619,6 +620,96 @@ fn invalid_lights_are_counted_in_every_frame_path() {
                     "pipelined {pipelined}, cull {cull}"
                 );
             }
+        }
+    }
+}
+
+/// A wall facing the camera at view depth `depth` (the camera at the origin looking down −Z), with
+/// 300 lights that just reach it from in front and from behind, on a 16×8×24 log grid.
+fn wall_scene(depth: f32, grid: ClusterGrid) -> RenderScene {
+    let (w, h) = (128, 64);
+    let mut scene = RenderScene::default_scene(0, w, h).unwrap();
+    let half = depth * 2.0;
+    let geometry = &mut scene.geometry;
+    geometry.vertices = [(-half, -half), (half, -half), (half, half), (-half, half)]
+        .iter()
+        .map(|&(x, y)| Vertex {
+            position: [x, y, -depth],
+            normal: [0.0, 0.0, 1.0],
+            uv: [0.0, 0.0],
+        })
+        .collect();
+    geometry.indices = vec![0, 1, 2, 0, 2, 3];
+    geometry.draws.truncate(1);
+    geometry.draws[0].first_index = 0;
+    geometry.draws[0].index_count = 6;
+    let material = &mut geometry.materials[geometry.draws[0].material as usize];
+    material.base_color_texture = None;
+    material.uniforms.base_color = [0.8, 0.8, 0.8, 1.0];
+    material.blend = myriad::gpu::Blend::Opaque;
+    scene.blended_bounds = blended_bounds(&scene.geometry);
+    scene.camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, w, h, 0.1, 1000.0);
+    scene.grid = grid;
+    let mut lights = Lights::new();
+    let mut state = 12345u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f32 / (1u64 << 53) as f32
+    };
+    for i in 0..300 {
+        let (x, y) = ((next() - 0.5) * 1.6 * depth, (next() - 0.5) * 0.8 * depth);
+        let radius = depth * (0.02 + 0.2 * next());
+        let gap = radius * (0.9 + 0.1 * next());
+        let z = if i % 2 == 0 {
+            -depth + gap
+        } else {
+            -depth - gap
+        };
+        // Brighter with distance, as the falloff is over the light's distance, not its range.
+        let intensity = 2.0 * (1.0 + radius * radius);
+        lights.push(LightRecord::point(Vec3::new(x, y, z), radius).with_intensity(intensity));
+    }
+    scene.lights = lights;
+    scene
+}
+
+/// A wall exactly on a slice edge, or one f32 step either side of it, is every pixel's depth: the
+/// fitted depth range shrinks to that one value and the mask to the clusters around it, and the
+/// image must still be the brute-force one. (A cluster depth off by 1e-4 in the shading pass
+/// sent those pixels to clusters the mask had left empty, and no scene of the suite had one
+/// depth everywhere: audit.)
+#[test]
+fn a_wall_on_a_slice_edge_renders_with_every_saving_as_brute_force() {
+    let Some(ctx) = GpuContext::headless_for_tests() else {
+        return;
+    };
+    let grid = ClusterGrid::new(UVec3::new(16, 8, 24), DepthSlicing::Log, 0.1, 1000.0);
+    for k in [3, 10, 17] {
+        let edge = grid.slice_start_depth(k);
+        for depth in [edge.next_down(), edge, edge.next_up()] {
+            let scene = wall_scene(depth, grid);
+            let mut viewer = Viewer::new(ctx.clone(), &scene).unwrap();
+            viewer
+                .frame(&scene, Shading::BruteForce, Method::Refined, false)
+                .unwrap();
+            let brute = viewer.image().unwrap();
+            let lit = brute
+                .chunks(4)
+                .filter(|p| p[..3].iter().any(|&c| c > 60))
+                .count();
+            assert!(
+                lit > 128 * 64 / 20,
+                "wall at {depth}: only {lit} lit pixels"
+            );
+            let (image, frame) = render(&mut viewer, &scene, Skips::ALL);
+            assert!(frame.active_clusters.is_some(), "wall at {depth}: no mask");
+            let worst = max_channel_difference(&image, &brute);
+            assert!(
+                worst <= 1,
+                "wall at {depth} (slice edge {k}): every saving differs from brute force by {worst}"
+            );
         }
     }
 }
