@@ -612,6 +612,13 @@ mod tests {
                 r#"{"bufferView": 1, "componentType": 5126, "count": 1, "type": "VEC3"}"#,
                 "lie outside buffer 0",
             ),
+            // One sparse element more than the accessor has.
+            (
+                r#"{"componentType": 5126, "count": 1, "type": "VEC3",
+                    "sparse": {"count": 2, "indices": {"bufferView": 0, "componentType": 5125},
+                               "values": {"bufferView": 0}}}"#,
+                "sparse count 2 exceeds the accessor's count 1",
+            ),
             // Sparse index out of range.
             (
                 r#"{"componentType": 5126, "count": 1, "type": "VEC3",

@@ -633,6 +633,15 @@ fn spec_violations_are_refused_or_reported() {
                 20 + n
             ),
         ),
+        // One byte more than follows (a bound one loose left this to the crate's own wording:
+        // audit).
+        (
+            rebuilt(&[(n, json_chunk, json), (5, b"abcd", bin)]),
+            format!(
+                "the GLB's BIN chunk (at byte {}) declares 5 bytes, but only 4 follow its header",
+                20 + n
+            ),
+        ),
         (
             rebuilt(&[(n + 8, json_chunk, json)]),
             format!(
