@@ -493,6 +493,27 @@ fn check_rejects_broken_dumps_naming_the_file() {
     );
 }
 
+/// The documented defaults (docs/cli.md): a preset of 1000 lights, seed 1, timed 21 times. (Any
+/// of the three could change and every test passed: audit.)
+#[test]
+fn bench_defaults_are_the_documented_ones() {
+    let out = myriad_ok(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--json",
+        "--methods",
+        "binary",
+    ]);
+    let report: Value = serde_json::from_str(&stdout(&out)).expect("bench --json prints JSON");
+    assert_eq!(
+        report["scene"].as_str(),
+        Some("preset paper (1000 lights, seed 1)")
+    );
+    assert_eq!(report["lights"].as_u64(), Some(1000));
+    assert_eq!(report["methods"][0]["runs"].as_u64(), Some(21), "{report}");
+}
+
 #[test]
 fn bench_json_reports_every_method_without_misses() {
     let out = myriad_ok(&[
