@@ -34,6 +34,23 @@ fn unit_or_zero(v: Vec3) -> Vec3 {
     }
 }
 
+/// The first three of `nodes`, each described, joined with "; " and followed by "and N more"
+/// when there are more; `None` when `nodes` is empty.
+pub(super) fn first_few(nodes: &[usize], describe: impl Fn(usize) -> String) -> Option<String> {
+    const NAMED: usize = 3;
+    if nodes.is_empty() {
+        return None;
+    }
+    let named: Vec<String> = nodes.iter().take(NAMED).map(|&n| describe(n)).collect();
+    let more = nodes.len() - named.len();
+    let tail = if more > 0 {
+        format!(" and {more} more")
+    } else {
+        String::new()
+    };
+    Some(format!("{}{tail}", named.join("; ")))
+}
+
 impl Loader<'_> {
     /// A node's own transform, checked to be finite and, given as a `matrix`, affine.
     fn local_transform(node: &json::Node) -> Result<Mat4, String> {
@@ -221,7 +238,6 @@ impl Loader<'_> {
     /// written twice by `myriad scene --model-lights`). One warning per kind, naming the first
     /// few nodes.
     fn warn_about_shared_nodes(&mut self, roots: &[usize], scene: Option<usize>) {
-        const NAMED: usize = 3;
         let nodes = &self.root.nodes;
         let mut parents: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
         for (p, node) in nodes.iter().enumerate() {
@@ -232,68 +248,48 @@ impl Loader<'_> {
             }
         }
         let name = |n: usize| format!("nodes[{n}]{}", quoted(&nodes[n].name));
-        let list = |items: &[String], total: usize| {
-            let more = total - items.len();
-            let tail = if more > 0 {
-                format!(" and {more} more")
-            } else {
-                String::new()
-            };
-            format!("{}{tail}", items.join("; "))
-        };
+        let mut warnings = Vec::new();
         let shared: Vec<usize> = (0..nodes.len()).filter(|&n| parents[n].len() > 1).collect();
-        if !shared.is_empty() {
-            let named: Vec<String> = shared
-                .iter()
-                .take(NAMED)
-                .map(|&n| {
-                    let of: Vec<String> =
-                        parents[n].iter().map(|p| format!("nodes[{p}]")).collect();
-                    format!("{} is a child of {}", name(n), of.join(", "))
-                })
-                .collect();
-            self.model.warnings.push(format!(
-                "{} node(s) with more than one parent ({}); the spec allows one: each is drawn \
-                 once per path",
-                shared.len(),
-                list(&named, shared.len())
+        if let Some(named) = first_few(&shared, |n| {
+            let of: Vec<String> = parents[n].iter().map(|p| format!("nodes[{p}]")).collect();
+            format!("{} is a child of {}", name(n), of.join(", "))
+        }) {
+            warnings.push(format!(
+                "{} node(s) with more than one parent ({named}); the spec allows one: each is \
+                 drawn once per path",
+                shared.len()
             ));
         }
-        let Some(s) = scene else { return };
-        let mut seen = vec![0u32; nodes.len()];
-        for &r in roots.iter().filter(|&&r| r < nodes.len()) {
-            seen[r] += 1;
-        }
-        let repeated: Vec<usize> = (0..nodes.len()).filter(|&n| seen[n] > 1).collect();
-        if !repeated.is_empty() {
-            let named: Vec<String> = repeated
-                .iter()
-                .take(NAMED)
-                .map(|&n| format!("{} {} times", name(n), seen[n]))
+        if let Some(s) = scene {
+            let mut listed = vec![0u32; nodes.len()];
+            for &r in roots.iter().filter(|&&r| r < nodes.len()) {
+                listed[r] += 1;
+            }
+            let repeated: Vec<usize> = (0..nodes.len()).filter(|&n| listed[n] > 1).collect();
+            if let Some(named) =
+                first_few(&repeated, |n| format!("{} {} times", name(n), listed[n]))
+            {
+                warnings.push(format!(
+                    "scenes[{s}] lists {} node(s) more than once ({named}); the spec lists each \
+                     once: each is drawn once per listing",
+                    repeated.len()
+                ));
+            }
+            let parented: Vec<usize> = (0..nodes.len())
+                .filter(|&n| listed[n] > 0 && !parents[n].is_empty())
                 .collect();
-            self.model.warnings.push(format!(
-                "scenes[{s}] lists {} node(s) more than once ({}); the spec lists each once: \
-                 each is drawn once per listing",
-                repeated.len(),
-                list(&named, repeated.len())
-            ));
+            if let Some(named) = first_few(&parented, |n| {
+                format!("{} (a child of nodes[{}])", name(n), parents[n][0])
+            }) {
+                warnings.push(format!(
+                    "scenes[{s}] lists {} node(s) that have a parent as roots ({named}); the \
+                     spec allows only root nodes: each is drawn as a root and again wherever its \
+                     parent is",
+                    parented.len()
+                ));
+            }
         }
-        let parented: Vec<usize> = (0..nodes.len())
-            .filter(|&n| seen[n] > 0 && !parents[n].is_empty())
-            .collect();
-        if !parented.is_empty() {
-            let named: Vec<String> = parented
-                .iter()
-                .take(NAMED)
-                .map(|&n| format!("{} (a child of nodes[{}])", name(n), parents[n][0]))
-                .collect();
-            self.model.warnings.push(format!(
-                "scenes[{s}] lists {} node(s) that have a parent as roots ({}); the spec \
-                 allows only root nodes: each is drawn as a root and again wherever its parent is",
-                parented.len(),
-                list(&named, parented.len())
-            ));
-        }
+        self.model.warnings.extend(warnings);
     }
 
     fn camera(

@@ -1184,3 +1184,15 @@ fn shared_nodes_are_drawn_once_per_path_and_warned_about() {
     assert_eq!(model.instances.len(), 2);
     assert!(model.warnings.is_empty(), "{:?}", model.warnings);
 }
+
+#[test]
+fn warnings_name_the_first_three_nodes_and_count_the_rest() {
+    use super::nodes::first_few;
+    let say = |n: usize| format!("n{n}");
+    assert_eq!(first_few(&[], say), None);
+    assert_eq!(first_few(&[4, 7], say).as_deref(), Some("n4; n7"));
+    assert_eq!(
+        first_few(&[1, 2, 3, 4, 5], say).as_deref(),
+        Some("n1; n2; n3 and 2 more")
+    );
+}
