@@ -88,6 +88,16 @@ impl Loader<'_> {
     /// Step 5: the iterative walk of the node hierarchy.
     pub(super) fn walk_nodes(&mut self) -> Result<(), String> {
         let nodes = &self.root.nodes;
+        // Each node's parents, in the order the file names them (a child listed twice by one
+        // parent counts twice): the roots of a file without scenes, and the shared nodes.
+        let mut parents: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+        for (p, node) in nodes.iter().enumerate() {
+            for child in node.children.iter().flatten() {
+                if let Some(list) = parents.get_mut(child.value()) {
+                    list.push(p);
+                }
+            }
+        }
         let locals = nodes
             .iter()
             .enumerate()
@@ -143,13 +153,9 @@ impl Loader<'_> {
                 .map(|n| n.value())
                 .collect(),
             None => {
-                let mut has_parent = vec![false; nodes.len()];
-                for child in nodes.iter().flat_map(|n| n.children.iter().flatten()) {
-                    if let Some(flag) = has_parent.get_mut(child.value()) {
-                        *flag = true;
-                    }
-                }
-                let roots: Vec<usize> = (0..nodes.len()).filter(|&i| !has_parent[i]).collect();
+                let roots: Vec<usize> = (0..nodes.len())
+                    .filter(|&i| parents[i].is_empty())
+                    .collect();
                 if !nodes.is_empty() {
                     self.model.warnings.push(format!(
                         "no scene: drawing the {} node(s) without a parent",
@@ -159,7 +165,7 @@ impl Loader<'_> {
                 roots
             }
         };
-        self.warn_about_shared_nodes(&roots, scene);
+        self.warn_about_shared_nodes(&parents, &roots, scene);
         enum Step {
             Enter(usize, Mat4),
             Leave(usize),
@@ -237,16 +243,13 @@ impl Loader<'_> {
     /// is drawn as written and said (a silent double was an audit's finding: one declared light
     /// written twice by `myriad scene --model-lights`). One warning per kind, naming the first
     /// few nodes.
-    fn warn_about_shared_nodes(&mut self, roots: &[usize], scene: Option<usize>) {
+    fn warn_about_shared_nodes(
+        &mut self,
+        parents: &[Vec<usize>],
+        roots: &[usize],
+        scene: Option<usize>,
+    ) {
         let nodes = &self.root.nodes;
-        let mut parents: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
-        for (p, node) in nodes.iter().enumerate() {
-            for child in node.children.iter().flatten() {
-                if let Some(list) = parents.get_mut(child.value()) {
-                    list.push(p);
-                }
-            }
-        }
         let name = |n: usize| format!("nodes[{n}]{}", quoted(&nodes[n].name));
         let mut warnings = Vec::new();
         let shared: Vec<usize> = (0..nodes.len()).filter(|&n| parents[n].len() > 1).collect();
