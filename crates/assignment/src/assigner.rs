@@ -115,10 +115,11 @@ pub enum OutsideCalls {
     /// both workers of a 2-thread pool were held busy grew the process by 24 MB (audit).
     ///
     /// The caller runs tasks on its own stack, and a task of 2048 lights or more keeps blocks of
-    /// about 150 KiB there (a smaller one about 60 KiB; twice that unoptimised). Where the calling thread has less left,
-    /// the task runs on a 1 MiB stack mapped for it (`stacker`; `run_task` in `jobs.rs`), so
-    /// threads of small stacks work (tested down to 32 KiB), each task an `mmap` slower; Rust's
-    /// spawned threads (2 MiB) never need it.
+    /// about 150 KiB there (a smaller one about 60 KiB; twice that unoptimised). Where the calling
+    /// thread has less than a frame needs left, the frame runs on a 1 MiB stack mapped for it
+    /// (`stacker`; `jobs::with_stack`): one grow a frame, 65–100 µs measured (a pool worker
+    /// short of stack grows per task). Threads of small stacks work (tested down to 32 KiB);
+    /// Rust's spawned threads (2 MiB) never grow.
     #[default]
     Join,
     /// The whole frame moves onto a pool worker in one hand-off and the calling thread sleeps
@@ -223,6 +224,12 @@ pub const SERIAL_LIGHTS: usize = 512;
 /// Lights per task at least, so a task's fixed costs (its bucket set, a rayon job) stay small next
 /// to the lights' work.
 const LIGHTS_PER_TASK: usize = 256;
+
+/// Stack a frame's caller must find free before it works on the frame's tasks itself (serially,
+/// or beside its helpers from outside the pool): a large task's need and room for the frame's
+/// own calls above it. A thread with less runs the frame on a grown stack, once per frame rather
+/// than once per task (`jobs::with_stack`).
+const FRAME_STACK: usize = jobs::LARGE_TASK_STACK + (32 << 10);
 
 /// What makes a frame's input unusable: what [`Assigner::assign_active`] panics with and
 /// [`Assigner::try_assign_active`] returns.
@@ -484,7 +491,9 @@ impl Assigner {
                 // on the frame alongside helpers spawned on the pool (`fan_out.rs`)...
                 (OutsideCalls::Join, AppendStrategy::PartitionedByDepth) => {
                     let helpers = rayon::current_num_threads() - 1;
-                    self.assign_frame(frame, FanOut::WithCaller { helpers }, out)
+                    jobs::with_stack(FRAME_STACK, || {
+                        self.assign_frame(frame, FanOut::WithCaller { helpers }, out)
+                    })
                 }
                 // ...or move the whole frame onto a worker in one hand-off. Otherwise each
                 // parallel region would inject its jobs and park this thread until they finish
@@ -494,7 +503,9 @@ impl Assigner {
         } else if parallel {
             self.assign_frame(frame, FanOut::Pool, out)
         } else {
-            self.assign_frame(frame, FanOut::Serial, out)
+            jobs::with_stack(FRAME_STACK, || {
+                self.assign_frame(frame, FanOut::Serial, out)
+            })
         };
         let threads = if stats.parallel {
             (stats.tasks as usize).min(rayon::current_num_threads())

@@ -239,7 +239,9 @@ impl SpotView {
 /// the running thread's stack. Frames of such tasks (every method, points and spots, the thread's
 /// whole stack counted) overflowed threads of 144 KiB and ran on 160 KiB in release builds;
 /// unoptimised, whose frames keep every temporary, they overflowed 256 KiB and ran on 320.
-const LARGE_TASK_STACK: usize = if cfg!(debug_assertions) {
+/// (Keyed on `debug_assertions`, the usual stand-in for "unoptimised": a build optimised with
+/// debug assertions on asks for more than it needs; one unoptimised without them, for too little.)
+pub(crate) const LARGE_TASK_STACK: usize = if cfg!(debug_assertions) {
     512 << 10
 } else {
     256 << 10
@@ -254,9 +256,29 @@ const SMALL_TASK_STACK: usize = if cfg!(debug_assertions) {
     96 << 10
 };
 
-/// The stack a task runs on where the running thread's is shorter than it needs: mapped for the
-/// task and unmapped after it.
-const GROWN_TASK_STACK: usize = 1 << 20;
+/// The stack `f` runs on where the running thread's is shorter than it needs: mapped for it and
+/// unmapped after.
+const GROWN_STACK: usize = 1 << 20;
+
+/// Runs `f` on this thread's stack if at least `need` bytes of it are left, else on a stack of
+/// [`GROWN_STACK`] mapped for it (`stacker::grow`): an engine's job threads, or a rayon pool
+/// built with a small `stack_size`, would otherwise overflow and abort the process. A grow costs
+/// a map, the faults of the pages `f` touches and an unmap (65–100 µs measured for a large
+/// task, by an audit on a loaded 2-vCPU host), so the caller of a frame grows once for the
+/// whole frame (`Assigner::assign_active`) and only a pool worker short of stack grows per task.
+///
+/// Where `stacker` cannot tell how much is left (platforms whose thread bounds it does not read:
+/// Android, iOS, wasm) `f` runs in place, as it always did, rather than paying a grow for every
+/// task on every thread. The first call on a thread reads its stack bounds
+/// (`pthread_getattr_np` on Linux, which allocates through libc and, on the main thread, reads
+/// `/proc/self/maps`): once per thread. A fiber whose stack lies below its thread's counts as
+/// short and grows; one above it is not protected.
+pub(crate) fn with_stack<R>(need: usize, f: impl FnOnce() -> R) -> R {
+    match stacker::remaining_stack() {
+        Some(left) if left < need => stacker::grow(GROWN_STACK, f),
+        _ => f(),
+    }
+}
 
 /// Runs lights `begin..end` through all phases into `out` (cleared first).
 ///
@@ -265,13 +287,9 @@ const GROWN_TASK_STACK: usize = 1 << 20;
 /// function made a single 46 KB body, with each width's hot loops placed among the other's).
 ///
 /// Its blocks live on the stack (heap columns kept between frames measured slower, see
-/// docs/measured.md), ~150 KiB of it for large blocks. An engine's job threads, fibers or a
-/// rayon pool built with a small `stack_size` may have less: where the running thread has less
-/// left than the task needs, the task runs on a stack of [`GROWN_TASK_STACK`] mapped for it
-/// (`stacker`), instead of overflowing and aborting the process. Threads with the usual stacks
-/// (2 MiB for Rust's spawned threads and rayon's workers, 8 MiB for a main thread) never grow:
-/// the check is a thread-local read and a compare. A stack `stacker` cannot locate counts as
-/// short (so a fiber's stack below its thread's grows too).
+/// docs/measured.md), ~150 KiB of it for large blocks: it runs [`with_stack`] of what it needs.
+/// Threads with the usual stacks (2 MiB for Rust's spawned threads and rayon's workers, 8 MiB for
+/// a main thread) never grow: the check is a thread-local read and a compare.
 pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &mut TaskOutput) {
     let large = end - begin >= LARGE_BLOCK_TASK;
     let need = if large {
@@ -279,7 +297,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
     } else {
         SMALL_TASK_STACK
     };
-    let task = || {
+    with_stack(need, || {
         crate::profiling::profile_span!("assign task");
         out.reset(ctx);
         if large {
@@ -287,18 +305,7 @@ pub(crate) fn run_task(ctx: &FrameContext<'_>, begin: usize, end: usize, out: &m
         } else {
             run_small_blocks(ctx, begin, end, out);
         }
-    };
-    // Miri runs no foreign code, and `stacker` finds the stack pointer with some.
-    #[cfg(not(miri))]
-    stacker::maybe_grow(need, GROWN_TASK_STACK, task);
-    #[cfg(miri)]
-    run_on_this_stack(need, task);
-}
-
-/// Miri's stand-in for `stacker::maybe_grow`: the task on the thread's own stack.
-#[cfg(miri)]
-fn run_on_this_stack(_need: usize, task: impl FnOnce()) {
-    task();
+    });
 }
 
 /// [`run_blocks`] in blocks of [`BLOCK`] lights.
