@@ -88,14 +88,11 @@ impl Loader<'_> {
     /// Step 5: the iterative walk of the node hierarchy.
     pub(super) fn walk_nodes(&mut self) -> Result<(), String> {
         let nodes = &self.root.nodes;
-        // Each node's parents, in the order the file names them (a child listed twice by one
-        // parent counts twice): the roots of a file without scenes, and the shared nodes.
-        let mut parents: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
-        for (p, node) in nodes.iter().enumerate() {
-            for child in node.children.iter().flatten() {
-                if let Some(list) = parents.get_mut(child.value()) {
-                    list.push(p);
-                }
+        // Which nodes are some node's child: the roots of a file without scenes are the others.
+        let mut has_parent = vec![false; nodes.len()];
+        for child in nodes.iter().flat_map(|n| n.children.iter().flatten()) {
+            if let Some(flag) = has_parent.get_mut(child.value()) {
+                *flag = true;
             }
         }
         let locals = nodes
@@ -153,9 +150,7 @@ impl Loader<'_> {
                 .map(|n| n.value())
                 .collect(),
             None => {
-                let roots: Vec<usize> = (0..nodes.len())
-                    .filter(|&i| parents[i].is_empty())
-                    .collect();
+                let roots: Vec<usize> = (0..nodes.len()).filter(|&i| !has_parent[i]).collect();
                 if !nodes.is_empty() {
                     self.model.warnings.push(format!(
                         "no scene: drawing the {} node(s) without a parent",
@@ -165,7 +160,6 @@ impl Loader<'_> {
                 roots
             }
         };
-        self.warn_about_shared_nodes(&parents, &roots, scene);
         enum Step {
             Enter(usize, Mat4),
             Leave(usize),
@@ -177,6 +171,9 @@ impl Loader<'_> {
             .map(|&n| Step::Enter(n, Mat4::IDENTITY))
             .collect();
         let mut visits = 0usize;
+        // How many times the walk reaches each node: more than once breaks the spec's strict
+        // trees (two parents, a scene root that is also a child or is listed twice).
+        let mut reached = vec![0u32; nodes.len()];
         while let Some(step) = stack.pop() {
             let (n, parent) = match step {
                 Step::Leave(n) => {
@@ -195,6 +192,7 @@ impl Loader<'_> {
                 ));
             }
             visits += 1;
+            reached[n] += 1;
             if visits > MAX_NODE_VISITS {
                 return Err(format!(
                     "the node hierarchy expands to more than {MAX_NODE_VISITS} node instances"
@@ -234,65 +232,18 @@ impl Loader<'_> {
                 stack.push(Step::Enter(child.value(), world));
             }
         }
-        Ok(())
-    }
-
-    /// Warns about nodes the walk reaches along several paths, each drawn once per path: the spec
-    /// requires disjoint strict trees (a node has at most one parent, a scene's nodes are roots
-    /// and each listed once), but a file that shares nodes still means something drawable, so it
-    /// is drawn as written and said (a silent double was an audit's finding: one declared light
-    /// written twice by `myriad scene --model-lights`). One warning per kind, naming the first
-    /// few nodes.
-    fn warn_about_shared_nodes(
-        &mut self,
-        parents: &[Vec<usize>],
-        roots: &[usize],
-        scene: Option<usize>,
-    ) {
-        let nodes = &self.root.nodes;
-        let name = |n: usize| format!("nodes[{n}]{}", quoted(&nodes[n].name));
-        let mut warnings = Vec::new();
-        let shared: Vec<usize> = (0..nodes.len()).filter(|&n| parents[n].len() > 1).collect();
-        if let Some(named) = first_few(&shared, |n| {
-            let of: Vec<String> = parents[n].iter().map(|p| format!("nodes[{p}]")).collect();
-            format!("{} is a child of {}", name(n), of.join(", "))
+        let repeated: Vec<usize> = (0..nodes.len()).filter(|&n| reached[n] > 1).collect();
+        if let Some(named) = first_few(&repeated, |n| {
+            format!("nodes[{n}]{} {} times", quoted(&nodes[n].name), reached[n])
         }) {
-            warnings.push(format!(
-                "{} node(s) with more than one parent ({named}); the spec allows one: each is \
-                 drawn once per path",
-                shared.len()
+            self.model.warnings.push(format!(
+                "{} node(s) reached along more than one path ({named}); the spec requires strict \
+                 trees (a node has at most one parent; a scene lists only nodes without one, each \
+                 once): each is drawn once per path",
+                repeated.len()
             ));
         }
-        if let Some(s) = scene {
-            let mut listed = vec![0u32; nodes.len()];
-            for &r in roots.iter().filter(|&&r| r < nodes.len()) {
-                listed[r] += 1;
-            }
-            let repeated: Vec<usize> = (0..nodes.len()).filter(|&n| listed[n] > 1).collect();
-            if let Some(named) =
-                first_few(&repeated, |n| format!("{} {} times", name(n), listed[n]))
-            {
-                warnings.push(format!(
-                    "scenes[{s}] lists {} node(s) more than once ({named}); the spec lists each \
-                     once: each is drawn once per listing",
-                    repeated.len()
-                ));
-            }
-            let parented: Vec<usize> = (0..nodes.len())
-                .filter(|&n| listed[n] > 0 && !parents[n].is_empty())
-                .collect();
-            if let Some(named) = first_few(&parented, |n| {
-                format!("{} (a child of nodes[{}])", name(n), parents[n][0])
-            }) {
-                warnings.push(format!(
-                    "scenes[{s}] lists {} node(s) that have a parent as roots ({named}); the \
-                     spec allows only root nodes: each is drawn as a root and again wherever its \
-                     parent is",
-                    parented.len()
-                ));
-            }
-        }
-        self.model.warnings.extend(warnings);
+        Ok(())
     }
 
     fn camera(
