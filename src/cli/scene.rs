@@ -176,28 +176,48 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
             let surfaces = if args.all_faces {
                 SurfaceSampler::new(&model)
             } else {
-                let (kept, which) =
+                let (kept, left_out) =
                     SurfaceSampler::for_view_counted(&model, camera.position, offset);
-                match which {
+                let (mut said, mut lack_of_any) = (Vec::new(), String::new());
+                if left_out.pressed > 0 || left_out.touching > 0 {
+                    said.push(format!(
+                        "{} pressed flat against others, like a wall's foot on a floor, with \
+                         lights that would lie inside the solid (and the parts of {} more where \
+                         they touch one)",
+                        left_out.pressed, left_out.touching
+                    ));
+                }
+                match left_out.view {
                     ViewFaces::SeenFromInside { left_out } if left_out > 0 => {
-                        faces_left_out = format!(
-                            " ({left_out} of {} faces left out: turned away from the camera, \
-                             which is inside the model's bounds, with lights that would lie \
-                             outside them; --all-faces keeps them)",
-                            kept.triangle_count() + left_out
-                        );
+                        said.push(format!(
+                            "{left_out} turned away from the camera, which is inside the \
+                             model's bounds, with lights that would lie outside them"
+                        ));
                     }
                     // Said, or the lights may all lie outside while the summary reads as if the
                     // faces had been chosen (hostile-input hunt, session 38).
                     ViewFaces::EveryForLackOfAny => {
-                        faces_left_out = format!(
-                            " (on every face: at --offset {offset} none is turned towards the \
+                        let every = if left_out.pressed > 0 {
+                            "every other"
+                        } else {
+                            "every"
+                        };
+                        lack_of_any = format!(
+                            " (on {every} face: at --offset {offset} none is turned towards the \
                              camera or keeps its lights inside the model's bounds, where the \
                              camera is)"
                         );
                     }
                     _ => {}
                 }
+                if !said.is_empty() {
+                    let faces = SurfaceSampler::new(&model).triangle_count();
+                    faces_left_out = format!(
+                        " (of {faces} faces left out: {}; --all-faces keeps every face)",
+                        said.join("; ")
+                    );
+                }
+                faces_left_out += &lack_of_any;
                 kept
             };
             Placement::Surfaces { surfaces, offset }

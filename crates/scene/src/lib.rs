@@ -132,6 +132,7 @@ mod light_fields;
 mod lights;
 mod model;
 mod presets;
+mod pressed_faces;
 mod printable;
 mod profiling;
 mod read;
@@ -148,8 +149,8 @@ pub use error::{Error, Problem, Result};
 pub use glb_write::glb_container;
 pub use gltf_load::{DEFAULT_LIGHT_CUTOFF, ImageLoading, LoadOptions};
 pub use light_fields::{
-    ColorRule, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler, ViewFaces,
-    radius_from_intensity,
+    ColorRule, FacesLeftOut, LightField, Placement, RadiusRule, SpotRule, SurfaceSampler,
+    ViewFaces, radius_from_intensity,
 };
 pub use lights::{DEFAULT_SPOT_INNER_FRACTION, LightRecord, Lights, default_spot_inner_angle};
 pub use model::{

@@ -10,8 +10,9 @@
 //!
 //! ## Reproducibility
 //! A field, a count and a seed always give the same lights, bit for bit, on any machine: one
-//! PCG-64 stream, consumed light by light in a fixed order — position, then (only where a range
-//! is non-empty) radius, hue, intensity, then the spot draws. A constant (a range with
+//! PCG-64 stream, consumed light by light in a fixed order — position (on a surface, drawn again
+//! while it lands where faces touch), then (only where a range is non-empty) radius, hue,
+//! intensity, then the spot draws. A constant (a range with
 //! `min == max`) draws nothing, so adding a constant parameter never shifts the stream.
 //!
 //! ## Radii
@@ -25,13 +26,15 @@
 //! area table: a triangle is picked with probability proportional to its area (binary search),
 //! a point uniformly inside it (square-root barycentrics), and the light is lifted off the
 //! surface along the triangle's geometric normal (the counter-clockwise front side) by an offset.
-//! Spot lights on surfaces point along that normal. [`SurfaceSampler::for_view`] drops, for a camera
+//! Spot lights on surfaces point along that normal. [`SurfaceSampler::for_view`] leaves out where
+//! faces touch (a wall's foot on the floor: [`SurfaceSampler::without_pressed`]) and, for a camera
 //! inside the model's bounds, the faces turned away from it whose lights would lie outside
 //! them (the outside of the outer walls); the command line and the renderer's default scene
 //! use it.
 
 use crate::lights::{LightRecord, Lights};
 use crate::model::{Aabb, Model};
+use crate::pressed_faces::{Contacts, Rest};
 use glam::Vec3;
 use myriad_cluster_math::Camera;
 use rand::{Rng, SeedableRng};
@@ -52,9 +55,30 @@ pub struct SurfaceSampler {
     /// `cumulative[t]` = total area of triangles `0..=t` (f64 so a million small triangles do
     /// not lose the last ones to rounding).
     cumulative: Vec<f64>,
+    /// The faces each triangle rests on, whose parts of it take no light
+    /// ([`SurfaceSampler::without_pressed`]); empty for every triangle until then.
+    rests: Vec<Vec<Rest>>,
 }
 
-/// Which faces [`SurfaceSampler::for_view_counted`] kept.
+/// Draws [`SurfaceSampler::sample`] makes before it keeps a point on a part of a face that rests
+/// on another (where the faces left hold almost no free area).
+const MAX_DRAWS: usize = 64;
+
+/// Which faces [`SurfaceSampler::for_view_counted`] left out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FacesLeftOut {
+    /// Faces pressed flat against another face (a wall's foot on the floor): hidden from every
+    /// eye, with lights that would lie inside the solid they rest on
+    /// ([`SurfaceSampler::without_pressed`]).
+    pub pressed: usize,
+    /// Faces kept that touch others on part of their area, which takes no lights.
+    pub touching: usize,
+    /// What the view's rule did with the rest.
+    pub view: ViewFaces,
+}
+
+/// Which of the faces left after the pressed ones [`SurfaceSampler::for_view_counted`] kept for
+/// its eye.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ViewFaces {
     /// Every face: the eye is not inside the model's bounds (or they are flat).
@@ -80,24 +104,48 @@ impl SurfaceSampler {
             corners: Vec::new(),
             normals: Vec::new(),
             cumulative: Vec::new(),
+            rests: Vec::new(),
         };
         let mut total = 0.0f64;
         for t in triangles {
-            let cross = (t[1] - t[0]).cross(t[2] - t[0]);
-            let area = 0.5 * cross.as_dvec3().length();
+            let area = triangle_area(&t);
             if !(area > 0.0 && area.is_finite()) {
                 continue;
             }
             total += area;
             s.corners.push(t);
-            s.normals.push(cross.normalize_or(Vec3::Y));
+            s.normals
+                .push((t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3::Y));
             s.cumulative.push(total);
+            s.rests.push(Vec::new());
+        }
+        s
+    }
+
+    /// The triangles `keep` says yes to (by index), with what each rests on.
+    fn retain(&self, mut keep: impl FnMut(usize) -> bool) -> Self {
+        let mut s = Self {
+            corners: Vec::new(),
+            normals: Vec::new(),
+            cumulative: Vec::new(),
+            rests: Vec::new(),
+        };
+        let mut total = 0.0f64;
+        for t in 0..self.corners.len() {
+            if keep(t) {
+                total += triangle_area(&self.corners[t]);
+                s.corners.push(self.corners[t]);
+                s.normals.push(self.normals[t]);
+                s.cumulative.push(total);
+                s.rests.push(self.rests[t].clone());
+            }
         }
         s
     }
 
     /// The surfaces a view from `eye` wants lights on, lifted by `offset`
-    /// ([`SurfaceSampler::for_view_counted`] also says which were kept). With the eye inside the
+    /// ([`SurfaceSampler::for_view_counted`] also says which were left out). Never a face
+    /// pressed flat against another ([`SurfaceSampler::without_pressed`]). With the eye inside the
     /// model's bounds ([`SurfaceSampler::seen_from_inside`]), a face is dropped when it faces
     /// away from the eye and its lights would lie outside the bounds
     /// ([`SurfaceSampler::seen_from`]): an outer wall's exterior face, a floor slab's underside,
@@ -112,9 +160,43 @@ impl SurfaceSampler {
         Self::for_view_counted(model, eye, offset).0
     }
 
-    /// [`SurfaceSampler::for_view`], and which faces it kept.
-    pub fn for_view_counted(model: &Model, eye: Vec3, offset: f32) -> (Self, ViewFaces) {
-        Self::new(model).viewed_from(model.bounds(), eye, offset)
+    /// [`SurfaceSampler::for_view`], and which faces it left out.
+    pub fn for_view_counted(model: &Model, eye: Vec3, offset: f32) -> (Self, FacesLeftOut) {
+        let (unpressed, pressed) = Self::new(model).without_pressed();
+        let (kept, view) = unpressed.viewed_from(model.bounds(), eye, offset);
+        let touching = kept.rests.iter().filter(|r| !r.is_empty()).count();
+        (
+            kept,
+            FacesLeftOut {
+                pressed,
+                touching,
+                view,
+            },
+        )
+    }
+
+    /// These triangles without the ones pressed flat against others, and how many those were:
+    /// faces covered all over by faces coplanar with them and turned the other way — two solids
+    /// touching, like a wall's foot on a floor. No eye sees such a face, and a light lifted off
+    /// it lies inside the solid it rests on. A face covered in part (a column's foot wider than
+    /// the beam it stands on, a roof slab over a beam) is kept, and [`SurfaceSampler::sample`]
+    /// places no light on the covered part. In the default atrium, 4714 of 11,048 faces are
+    /// pressed; before, 13 % of a surface field's lights lay inside its floor slab, beams,
+    /// spandrels and column plinths. The exact mirror of a face (its three corners, wound the
+    /// other way: a two-sided sheet) does not count as what it rests on. When every face is
+    /// pressed, every face is kept.
+    pub fn without_pressed(self) -> (Self, usize) {
+        let Contacts { pressed, mut rests } =
+            crate::pressed_faces::contacts(&self.corners, &self.normals);
+        let count = pressed.iter().filter(|&&p| p).count();
+        if count == pressed.len() {
+            return (self, 0);
+        }
+        let resting = Self {
+            rests: std::mem::take(&mut rests),
+            ..self
+        };
+        (resting.retain(|t| !pressed[t]), count)
     }
 
     /// Whether `eye` looks at a model with bounds `bounds` from inside, where
@@ -143,20 +225,15 @@ impl SurfaceSampler {
     /// so every light on such a triangle does too, up to f32 rounding). A triangle turned away
     /// with a corner lifted out is dropped whole.
     pub fn seen_from(&self, bounds: Aabb, eye: Vec3, offset: f32) -> Self {
-        Self::from_triangles(
-            self.corners
-                .iter()
-                .zip(&self.normals)
-                .filter(|&(corners, &normal)| {
-                    // One corner decides the side: the triangle is planar.
-                    let towards = normal.dot(eye - corners[0]) > 0.0;
-                    towards
-                        || corners
-                            .iter()
-                            .all(|&p| bounds.contains(p + offset * normal))
-                })
-                .map(|(&corners, _)| corners),
-        )
+        self.retain(|t| {
+            let (corners, normal) = (&self.corners[t], self.normals[t]);
+            // One corner decides the side: the triangle is planar.
+            let towards = normal.dot(eye - corners[0]) > 0.0;
+            towards
+                || corners
+                    .iter()
+                    .all(|&p| bounds.contains(p + offset * normal))
+        })
     }
 
     /// Number of (non-degenerate) triangles.
@@ -170,22 +247,39 @@ impl SurfaceSampler {
     }
 
     /// A point uniform over the surface and the unit normal there, or `None` without triangles.
+    /// A point on a part of a face that rests on another ([`SurfaceSampler::without_pressed`])
+    /// is drawn again, up to 64 draws in all (the last is kept: only a surface almost
+    /// all pressed gets there).
     pub fn sample(&self, rng: &mut impl Rng) -> Option<(Vec3, Vec3)> {
         let total = self.total_area();
         if self.corners.is_empty() {
             return None;
         }
-        let u = rng.random_range(0.0..total);
-        let t = self
-            .cumulative
-            .partition_point(|&c| c <= u)
-            .min(self.corners.len() - 1);
-        let [a, b, c] = self.corners[t];
-        let r1 = rng.random_range(0.0f32..1.0).sqrt();
-        let r2 = rng.random_range(0.0f32..1.0);
-        let p = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+        let mut draw = || {
+            let u = rng.random_range(0.0..total);
+            let t = self
+                .cumulative
+                .partition_point(|&c| c <= u)
+                .min(self.corners.len() - 1);
+            let [a, b, c] = self.corners[t];
+            let r1 = rng.random_range(0.0f32..1.0).sqrt();
+            let r2 = rng.random_range(0.0f32..1.0);
+            (t, a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2))
+        };
+        let (mut t, mut p) = draw();
+        for _ in 1..MAX_DRAWS {
+            if !self.rests[t].iter().any(|rest| rest.holds(p)) {
+                break;
+            }
+            (t, p) = draw();
+        }
         Some((p, self.normals[t]))
     }
+}
+
+/// A triangle's area, in f64 from its f32 cross product.
+fn triangle_area(t: &[Vec3; 3]) -> f64 {
+    0.5 * (t[1] - t[0]).cross(t[2] - t[0]).as_dvec3().length()
 }
 
 /// Where a light field's lights go.
@@ -1008,14 +1102,97 @@ mod tests {
         // Every face: lights on the outer walls' exterior, under the floor and on the roof.
         assert!(outside(SurfaceSampler::new(&model)) > 400);
         assert_eq!(outside(SurfaceSampler::for_view(&model, eye, 0.2)), 0);
-        let (_, kept) = SurfaceSampler::for_view_counted(&model, eye, 0.2);
-        assert_eq!(kept, ViewFaces::SeenFromInside { left_out: 34 });
-        // From above the roof, every face again.
+        let (_, left_out) = SurfaceSampler::for_view_counted(&model, eye, 0.2);
+        assert_eq!(
+            left_out,
+            FacesLeftOut {
+                pressed: 4714,
+                touching: 322,
+                view: ViewFaces::SeenFromInside { left_out: 34 }
+            }
+        );
+        // From above the roof, every face again but the pressed ones.
         let above = SurfaceSampler::for_view(&model, Vec3::new(0.0, 40.0, 0.0), 0.2);
         assert_eq!(
             above.triangle_count(),
-            SurfaceSampler::new(&model).triangle_count()
+            SurfaceSampler::new(&model).triangle_count() - 4714
         );
+    }
+
+    #[test]
+    fn no_light_lands_where_a_foot_half_over_an_opening_touches_the_floor() {
+        // A floor over x < 0 (facing up) and a foot over x ∈ ±1 (facing down) at y = 0: the
+        // foot is not covered all over, so both stay, and they touch over x ∈ [−1, 0].
+        let up = |x0: f32, x1: f32, z: f32| {
+            let (a, b, c, d) = (
+                Vec3::new(x0, 0.0, -z),
+                Vec3::new(x1, 0.0, -z),
+                Vec3::new(x1, 0.0, z),
+                Vec3::new(x0, 0.0, z),
+            );
+            [[a, d, c], [a, c, b]]
+        };
+        let flip = |t: [Vec3; 3]| [t[0], t[2], t[1]];
+        let floor = up(-4.0, 0.0, 2.0);
+        let foot = up(-1.0, 1.0, 1.0).map(flip);
+        let all = SurfaceSampler::from_triangles(floor.into_iter().chain(foot));
+        let in_contact = |s: &SurfaceSampler| {
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+            (0..4000)
+                .filter_map(|_| s.sample(&mut rng))
+                .filter(|(p, _)| p.x > -1.0 && p.x < 0.0 && p.z.abs() < 1.0)
+                .count()
+        };
+        assert!(in_contact(&all) > 400, "{}", in_contact(&all));
+        let (resting, pressed) = all.without_pressed();
+        assert_eq!((resting.triangle_count(), pressed), (4, 0));
+        assert_eq!(in_contact(&resting), 0);
+        // The free parts still get their share: the foot's half over the opening too.
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let free_foot = (0..4000)
+            .filter_map(|_| resting.sample(&mut rng))
+            .filter(|(p, n)| p.x > 0.0 && n.y < 0.0)
+            .count();
+        assert!(free_foot > 200, "{free_foot}");
+    }
+
+    #[test]
+    fn no_surface_light_of_the_atrium_lies_inside_its_floor_slab_or_beams() {
+        let model = crate::atrium::atrium();
+        let eye = model.camera(0, 1536, 768).unwrap().position;
+        // Solids the atrium's module docs place (with a millimetre's margin inwards): the floor
+        // slab, and each storey's beam over both arcades (local x ∈ ±14.7, z ∈ ±0.3 about
+        // z = ±3.5), on which spandrels and piers stand and under which a gallery slab ends.
+        let inner = |min: Vec3, max: Vec3| Aabb::new(min + 1e-3, max - 1e-3);
+        let mut solids = vec![inner(
+            Vec3::new(-15.0, -0.2, -7.5),
+            Vec3::new(15.0, 0.0, 7.5),
+        )];
+        for z in [-3.5, 3.5] {
+            for (y0, y1) in [(5.5, 6.0), (10.5, 11.0)] {
+                solids.push(inner(
+                    Vec3::new(-14.7, y0, z - 0.3),
+                    Vec3::new(14.7, y1, z + 0.3),
+                ));
+            }
+        }
+        let buried = |surfaces: SurfaceSampler| {
+            LightField::new(Placement::Surfaces {
+                surfaces,
+                offset: 0.2,
+            })
+            .generate(20_000, 7)
+            .iter()
+            .filter(|l| solids.iter().any(|s| s.contains(l.position)))
+            .count()
+        };
+        // Lifted off a wall's foot into the floor, off a spandrel's top into the beam, off the
+        // beam's underside into the spandrels' tops...
+        let all = SurfaceSampler::new(&model);
+        assert!(buried(all.clone()) > 300, "{}", buried(all));
+        // ...and none once the faces pressed against others are left out.
+        assert_eq!(buried(SurfaceSampler::for_view(&model, eye, 0.2)), 0);
+        assert_eq!(buried(SurfaceSampler::new(&model).without_pressed().0), 0);
     }
 
     #[test]
