@@ -7,7 +7,7 @@
 //!   instead of comparing (the test says so on stderr); look at them before committing. Last
 //!   blessed when the surface lights left the atrium's solids (2026-12-01, session 43): none is
 //!   placed where faces touch (a wall's foot on the floor, a beam on its spandrels:
-//!   `SurfaceSampler::without_pressed`), where 13 % of them had lain inside the floor slab,
+//!   `SurfaceSampler::without_pressed`), where 23 % of them had lain inside the floor slab,
 //!   beams, spandrels and plinths. Before that, when the surface lights stayed inside the
 //!   atrium (2026-11-30, session 38): a view
 //!   from inside the model's bounds puts no lights on faces turned away from it whose lights

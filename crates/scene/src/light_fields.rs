@@ -181,8 +181,8 @@ impl SurfaceSampler {
     /// it lies inside the solid it rests on. A face covered in part (a column's foot wider than
     /// the beam it stands on, a roof slab over a beam) is kept, and [`SurfaceSampler::sample`]
     /// places no light on the covered part. In the default atrium, 4714 of 11,048 faces are
-    /// pressed; before, 13 % of a surface field's lights lay inside its floor slab, beams,
-    /// spandrels and column plinths. The exact mirror of a face (its three corners, wound the
+    /// pressed; before, 23 % of a surface field's lights (seen from `Main`: 100,000 draws) were
+    /// placed where faces touch, lifted into its floor slab, beams, spandrels and plinths. The exact mirror of a face (its three corners, wound the
     /// other way: a two-sided sheet) does not count as what it rests on. When every face is
     /// pressed, every face is kept.
     pub fn without_pressed(self) -> (Self, usize) {
