@@ -127,13 +127,20 @@ impl Bucket {
             return;
         }
         let pairs = match active {
+            // `len ≥ 1`, so no test of the pairs: callgrind, instructions a frame, `refined`
+            // (a push per refined row) `paper` 1000 1.413 → 1.397 M, `uniform` 100k 33.2 →
+            // 32.8 M; `binary` 0.908 → 0.907 M.
             None => len,
-            Some(a) => a.count(first, len),
+            Some(a) => {
+                let pairs = a.count(first, len);
+                if pairs == 0 {
+                    return;
+                }
+                pairs
+            }
         };
-        if pairs > 0 {
-            self.pairs += pairs as u64;
-            self.spans.push(Span::new(light, first, len, 1));
-        }
+        self.pairs += pairs as u64;
+        self.spans.push(Span::new(light, first, len, 1));
     }
 
     /// [`Self::push`] of a row longer than a span holds, in pieces.

@@ -735,13 +735,14 @@ fn emit(
         }
         // `refine` holds only for `refined`.
         Method::Binary | Method::Refined | Method::Cone => {
-            for k in bx.z.k0..=bx.z.k1 {
+            let mut refiner = geometry::BoxRefiner::new(bx, &ctx.planes, gaps);
+            let z = &ctx.planes.sets.z_depths[bx.z.k0 as usize..=bx.z.k1 as usize + 1];
+            for (k, edges) in (bx.z.k0..).zip(z.windows(2)) {
                 let bucket = &mut buckets[(k >> ctx.slice_shift) as usize];
                 let slice_first = grid.cluster_id(0, 0, k);
-                let whole =
-                    geometry::refine_slice(cx, cy, dc, r, bx, k, &ctx.planes, gaps, |j, i0, i1| {
-                        push_row(bucket, slice_first + j * width + i0, i1 - i0 + 1)
-                    });
+                let whole = refiner.slice(cx, cy, dc, r, (edges[0], edges[1]), |j, i0, i1| {
+                    push_row(bucket, slice_first + j * width + i0, i1 - i0 + 1)
+                });
                 // A slice kept whole goes out as the unrefined box's does: one span of rows, but
                 // only from three rows up (a span's rows loop mispredicts where boxes are one or
                 // two rows tall). `myriad bench --threads 1`, interleaved builds: `paper` 1000
