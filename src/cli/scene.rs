@@ -179,13 +179,26 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
                 let (kept, left_out) =
                     SurfaceSampler::for_view_counted(&model, camera.position, offset);
                 let (mut said, mut lack_of_any) = (Vec::new(), String::new());
-                if left_out.pressed > 0 || left_out.touching > 0 {
+                if left_out.pressed > 0 {
                     said.push(format!(
                         "{} pressed flat against others, like a wall's foot on a floor, with \
-                         lights that would lie inside the solid (and the parts of {} more where \
-                         they touch one)",
-                        left_out.pressed, left_out.touching
+                         lights that would lie inside the solid",
+                        left_out.pressed
                     ));
+                }
+                if left_out.touching > 0 {
+                    said.push(format!(
+                        "the parts of {} more where they touch another",
+                        left_out.touching
+                    ));
+                }
+                if left_out.unchecked > 0 {
+                    lack_of_any += &format!(
+                        " ({} faces not searched for where they touch others: too many faces \
+                         crowd their planes from both sides; their lights may lie inside what \
+                         they rest on)",
+                        left_out.unchecked
+                    );
                 }
                 match left_out.view {
                     ViewFaces::SeenFromInside { left_out } if left_out > 0 => {
@@ -202,7 +215,7 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
                         } else {
                             "every"
                         };
-                        lack_of_any = format!(
+                        lack_of_any += &format!(
                             " (on {every} face: at --offset {offset} none is turned towards the \
                              camera or keeps its lights inside the model's bounds, where the \
                              camera is)"

@@ -122,6 +122,7 @@ impl Bucket {
     /// active clusters count, and a piece without any is dropped here: no later pass visits it.
     #[inline]
     pub fn push(&mut self, light: u32, first: u32, len: u32, active: Option<&ActiveView<'_>>) {
+        debug_assert!(len >= 1, "an empty row of light {light} at cluster {first}");
         if len > SPAN_MAX {
             self.push_long(light, first, len, active);
             return;

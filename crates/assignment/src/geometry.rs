@@ -271,8 +271,7 @@ pub(crate) struct BoxRefiner<'a> {
 }
 
 impl<'a> BoxRefiner<'a> {
-    /// The box `b` (at least two columns wide), with `scratch` of at least
-    /// [`refine_scratch_len`].
+    /// The box `b`, with `scratch` of at least [`refine_scratch_len`].
     #[inline(always)]
     pub(crate) fn new(b: &ClusterBox, planes: &FramePlanes<'a>, scratch: &'a mut [f32]) -> Self {
         let sets = planes.sets;

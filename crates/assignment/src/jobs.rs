@@ -176,7 +176,7 @@ pub(crate) struct TaskOutput {
     /// One per part, each on cache lines of its own: every span pushed writes its bucket's
     /// length and pair count, and two tasks' buckets must not share a line (see `assigner.rs`).
     pub buckets: Vec<CachePadded<Bucket>>,
-    /// Scratch of the refinement: two squared gaps per tile column, a room per tile row.
+    /// Scratch of the refinement: a squared gap per tile column, a room per tile row.
     gaps: Vec<f32>,
     /// Scratch of the `cone` method: one row of the box, column by column.
     cone_columns: Vec<ConeColumn>,

@@ -8,9 +8,16 @@
 //! solids touching along it. All of it, not its centre or its corners: a column standing half
 //! over an opening keeps its foot, whose exposed half an eye below sees, and a floor keeps its
 //! top though walls stand on its corners. A face covered in part keeps the rest: its
-//! [`Rest`]s tell the sampler where no light goes. The exact mirror of a face — the same three
-//! corners, wound the other way — never counts as what it rests on: that is how a model draws a
-//! two-sided sheet (a banner, a leaf), both sides visible.
+//! [`Rest`]s tell the sampler where no light goes. Faces whose covering faces overlap one
+//! another (their areas would count twice), or that rest on more than [`MOST_COVERING`], are
+//! not proven covered: they stay, and their rests keep the lights off the covered parts.
+//!
+//! The exact mirror of a face — the same three corners, wound the other way — never counts as
+//! what it rests on: that is how a model draws a two-sided sheet (a banner, a leaf), both sides
+//! visible. The test is only that: a sheet whose back is triangulated otherwise is taken for two
+//! solids touching and loses both sides, and two solids touching along faces of the same three
+//! corners are taken for a sheet and keep theirs. Telling them apart needs the solids (is there
+//! volume behind each face?), which a triangle soup does not give.
 //!
 //! Candidates are found through a hash of each face's plane, coarsely keyed ([`PlaneKey`]), so a
 //! model of 262k faces (Sponza) takes one pass; an offset that falls on a bin's edge is also
@@ -21,17 +28,29 @@
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
-/// How far (metres, times the model's scale, at least 1) a corner may lie off another face's
-/// plane and still rest on it: far above f32 rounding of world coordinates (1.2e-7 relative),
-/// far below any modelled gap.
-const PLANE_TOLERANCE: f64 = 1e-5;
+/// How far a corner may lie off another face's plane and still rest on it, relative to the
+/// face's largest coordinate (at least 1 m): about 16 f32 steps there, room for the rounding of
+/// instance transforms, far below any modelled gap — a 4 cm panel 4 km from the origin keeps
+/// its two faces apart (8 mm).
+const PLANE_TOLERANCE: f64 = 2e-6;
 
 /// Two normals at least this opposite (`n₁ · n₂ ≤ −this`) face each other: about 0.8°.
 const OPPOSITE: f64 = 0.9999;
 
-/// How close two components of a normal must be for either to count as the one it points most
-/// along: normals that pass the [`OPPOSITE`] test differ by under 0.015 in each component.
+/// How close another component of a normal must come to its largest for a lookup to try that
+/// axis too: the normals that pass the [`OPPOSITE`] test differ by under 0.0142 in each
+/// component, so the axis the other face is filed under (its largest component) is within
+/// 2 × 0.0142 of this one's largest.
 const AXIS_TIE: f64 = 0.03;
+
+/// Candidate tests (a face against one in the bin it looks up) in all: a model whose faces
+/// crowd one plane from both sides (a ground of 100k triangles exported twice, once each way)
+/// would take their square. Past it, faces are kept whole, as before the rule
+/// ([`Contacts::unchecked`]).
+const CANDIDATE_TESTS: usize = 1 << 26;
+
+/// The most faces a face may rest on for [`covered`] to test their overlaps pairwise.
+const MOST_COVERING: usize = 128;
 
 /// A face's plane, coarsely: the axis its normal points most along, with its sign (0–5), and its
 /// offset from the origin in bins. A coarse key keeps lookups few (a finer one on all three
@@ -39,14 +58,32 @@ const AXIS_TIE: f64 = 0.03;
 /// candidates it gives.
 type PlaneKey = (u8, i64);
 
-/// The axes (with sign, 0–5) a normal points most along: the largest component's, and any other
-/// within [`AXIS_TIE`] of it.
-fn main_axes(n: DVec3) -> impl Iterator<Item = u8> {
+/// An axis with a sign, 0–5.
+fn signed_axis(n: DVec3, i: usize) -> u8 {
+    2 * i as u8 + u8::from(n[i] < 0.0)
+}
+
+/// The axis (with sign) a normal points most along: what it is filed under.
+fn main_axis(n: DVec3) -> u8 {
+    let a = n.abs();
+    let i = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    signed_axis(n, i)
+}
+
+/// The axes (with sign) a lookup for a face turned like `n` tries: the largest component's, and
+/// any other within [`AXIS_TIE`] of it.
+fn near_main_axes(n: DVec3) -> impl Iterator<Item = u8> {
     let a = n.abs();
     let top = a.max_element();
     (0..3)
         .filter(move |&i| a[i] >= top - AXIS_TIE)
-        .map(move |i| 2 * i as u8 + u8::from(n[i] < 0.0))
+        .map(move |i| signed_axis(n, i))
 }
 
 /// A face another one rests on, with what it takes to test a point against it.
@@ -71,20 +108,35 @@ impl Rest {
 pub(crate) struct Contacts {
     pub pressed: Vec<bool>,
     pub rests: Vec<Vec<Rest>>,
+    /// The last faces, kept whole without a search once [`CANDIDATE_TESTS`] ran out.
+    pub unchecked: usize,
 }
 
 /// The contacts of these triangles. `normals` are their unit normals on their counter-clockwise
 /// front side.
 pub(crate) fn contacts(corners: &[[Vec3; 3]], normals: &[Vec3]) -> Contacts {
+    contacts_within(corners, normals, CANDIDATE_TESTS)
+}
+
+/// [`contacts`] with a budget of `tests` candidate tests.
+fn contacts_within(corners: &[[Vec3; 3]], normals: &[Vec3], tests: usize) -> Contacts {
     debug_assert_eq!(corners.len(), normals.len());
-    let scale = corners
+    // How far a point may lie off a plane and still be on it, near a face: relative to the
+    // face's own coordinates (f32 spacing grows with them), at least [`PLANE_TOLERANCE`] metres.
+    let tolerance_at = |t: &[Vec3; 3]| {
+        let size = t
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(1.0f32, f32::max);
+        PLANE_TOLERANCE * f64::from(size)
+    };
+    let largest = corners
         .iter()
-        .flatten()
-        .map(|p| f64::from(p.abs().max_element()))
-        .fold(1.0f64, f64::max);
-    let tolerance = PLANE_TOLERANCE * scale;
-    // Offsets are binned four tolerances wide, so a match sits in its bin or the next one.
-    let bin = 4.0 * tolerance;
+        .map(tolerance_at)
+        .fold(PLANE_TOLERANCE, f64::max);
+    // Offsets are binned four of the largest tolerances wide, so a match sits in its bin or the
+    // next one.
+    let bin = 4.0 * largest;
     let planes: Vec<(DVec3, f64)> = corners
         .iter()
         .zip(normals)
@@ -96,35 +148,48 @@ pub(crate) fn contacts(corners: &[[Vec3; 3]], normals: &[Vec3]) -> Contacts {
     let offset_bin = |d: f64| (d / bin).round() as i64;
     let mut by_plane: HashMap<PlaneKey, Vec<u32>> = HashMap::new();
     for (t, &(n, d)) in planes.iter().enumerate() {
-        // Filed under one axis; a lookup tries every axis a normal nearly ties on.
-        let axis = main_axes(n).next().unwrap_or(0);
         by_plane
-            .entry((axis, offset_bin(d)))
+            .entry((main_axis(n), offset_bin(d)))
             .or_default()
             .push(t as u32);
     }
     let mut candidates = Vec::new();
     let mut contacts = Contacts::default();
+    let mut tests_left = tests;
     for f in 0..corners.len() {
         let (n, d) = planes[f];
+        let tolerance = tolerance_at(&corners[f]);
         // The faces it could rest on: turned the other way, in the same plane.
         let kd = offset_bin(-d);
         candidates.clear();
-        for axis in main_axes(-n) {
+        for axis in near_main_axes(-n) {
             for dd in -1..=1 {
-                if let Some(faces) = by_plane.get(&(axis, kd + dd)) {
-                    candidates.extend(faces.iter().map(|&g| g as usize).filter(|&g| {
-                        // In its plane where this face lies, not only at the origin (normals
-                        // may differ by a little).
-                        let (m, e) = planes[g];
-                        n.dot(m) <= -OPPOSITE
-                            && corners[f]
-                                .iter()
-                                .all(|p| (m.dot(p.as_dvec3()) - e).abs() <= tolerance)
-                            && !mirrors(&corners[f], &corners[g])
-                    }));
+                let Some(faces) = by_plane.get(&(axis, kd + dd)) else {
+                    continue;
+                };
+                if faces.len() > tests_left {
+                    tests_left = 0;
+                    continue;
                 }
+                tests_left -= faces.len();
+                candidates.extend(faces.iter().map(|&g| g as usize).filter(|&g| {
+                    // In its plane where this face lies, not only at the origin (normals may
+                    // differ by a little).
+                    let (m, e) = planes[g];
+                    n.dot(m) <= -OPPOSITE
+                        && corners[f]
+                            .iter()
+                            .all(|p| (m.dot(p.as_dvec3()) - e).abs() <= tolerance)
+                        && !mirrors(&corners[f], &corners[g])
+                }));
             }
+        }
+        if tests_left == 0 {
+            // Out of budget: this face and the rest are kept whole, as before the rule.
+            contacts.unchecked = corners.len() - f;
+            contacts.pressed.resize(corners.len(), false);
+            contacts.rests.resize(corners.len(), Vec::new());
+            break;
         }
         // Only faces with a part of this one's area on them: one that merely shares an
         // edge or a corner holds no light back.
@@ -150,10 +215,12 @@ pub(crate) fn contacts(corners: &[[Vec3; 3]], normals: &[Vec3]) -> Contacts {
     contacts
 }
 
-/// Whether the faces `on` (coplanar with `t`, turned the other way) cover triangle `t`: the
-/// parts of `t` inside each add up to all of its area, and its corners, edge midpoints and
-/// centre each lie on one of them. The area alone would take two overlapping faces for one
-/// that covers; the points alone would take a floor for covered where feet stand on its corners.
+/// Whether the faces `on` (coplanar with `t`, turned the other way, each holding part of it)
+/// cover triangle `t`: the parts of `t` on each, which must not overlap one another, add up to
+/// all of its area, and its corners, edge midpoints and centre each lie on one of them.
+/// Overlapping faces would count an area twice, so a face resting on such is not proven
+/// covered (it keeps its uncovered parts through its rests either way); neither is one resting
+/// on more than [`MOST_COVERING`] faces (the pairwise test grows with their square).
 fn covered(
     t: &[Vec3; 3],
     on: &[usize],
@@ -161,12 +228,25 @@ fn covered(
     planes: &[(DVec3, f64)],
     tolerance: f64,
 ) -> bool {
+    if on.len() > MOST_COVERING {
+        return false;
+    }
     let [a, b, c] = t.map(|v| v.as_dvec3());
     let area = polygon_area(&[a, b, c]);
-    let inside: f64 = on
+    let parts: Vec<Vec<DVec3>> = on
         .iter()
-        .map(|&g| polygon_area(&clip(&[a, b, c], &corners[g], planes[g].0)))
-        .sum();
+        .map(|&g| clip(&[a, b, c], &corners[g], planes[g].0))
+        .collect();
+    let overlap = |i: usize, j: usize| {
+        !parts[i].is_empty() && {
+            let both = clip(&parts[i], &corners[on[j]], planes[on[j]].0);
+            polygon_area(&both) > area * 1e-9
+        }
+    };
+    if (0..on.len()).any(|i| (i + 1..on.len()).any(|j| overlap(i, j))) {
+        return false;
+    }
+    let inside: f64 = parts.iter().map(|p| polygon_area(p)).sum();
     let points = [
         a,
         b,
@@ -296,7 +376,7 @@ mod tests {
 
     #[test]
     fn a_foot_a_hair_above_the_floor_is_pressed_and_one_a_millimetre_above_is_not() {
-        for (lift, expected) in [(1e-5f32, true), (1e-3, false)] {
+        for (lift, expected) in [(1e-6f32, true), (1e-3, false)] {
             let mut faces = rect(-15.0, -7.5, 15.0, 7.5, 0.0, true);
             faces.extend(rect(-1.0, -1.0, 1.0, 1.0, lift, false));
             assert_eq!(
@@ -316,13 +396,13 @@ mod tests {
 
     #[test]
     fn a_sliver_on_the_floor_presses_only_when_its_normal_is_within_the_opposite_test() {
-        // A sliver 1 mm deep, tilted about x: its corners stay within the plane tolerance, so
-        // the normals decide (0.5°: opposite enough; 1°: not, though in a neighbouring bin).
+        // A sliver 0.1 mm deep, tilted about x: its corners stay within the plane tolerance, so
+        // the normals decide (0.5°: opposite enough; 1°: not).
         for (degrees, expected) in [(0.5f32, true), (1.0, false)] {
             let (s, c) = degrees.to_radians().sin_cos();
             let p = |x: f32, z: f32| Vec3::new(x, z * s, z * c);
             let mut faces = rect(-15.0, -7.5, 15.0, 7.5, 0.0, true);
-            faces.push([p(-1.0, 0.0), p(1.0, 1e-3), p(-1.0, 1e-3)]);
+            faces.push([p(-1.0, 0.0), p(1.0, 1e-4), p(-1.0, 1e-4)]);
             assert_eq!(pressed(&faces), [false, false, expected], "{degrees}°");
         }
     }
@@ -340,6 +420,68 @@ mod tests {
             .collect();
         let faces: Vec<[Vec3; 3]> = foot.into_iter().chain(floor).collect();
         assert_eq!(pressed(&faces), [false; 4]);
+    }
+
+    #[test]
+    fn a_foot_on_two_overlapping_floors_is_not_proven_covered_but_rests_on_both() {
+        // Two floors overlapping over x ∈ [−1, 1]: their parts of the foot add up to more than
+        // its area, which proves nothing; the foot stays, resting on both.
+        let mut faces = rect(-15.0, -7.5, 1.0, 7.5, 0.0, true);
+        faces.extend(rect(-1.0, -7.5, 15.0, 7.5, 0.0, true));
+        faces.extend(rect(-2.0, -1.0, 2.0, 1.0, 0.0, false));
+        let normals: Vec<Vec3> = faces
+            .iter()
+            .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize())
+            .collect();
+        let found = contacts(&faces, &normals);
+        assert_eq!(found.pressed, [false; 6]);
+        assert!(found.rests[4].len() >= 2 && found.rests[5].len() >= 2);
+        assert!(
+            found.rests[4]
+                .iter()
+                .any(|r| r.holds(Vec3::new(-1.5, 0.0, 0.0)))
+        );
+        assert!(
+            found.rests[4]
+                .iter()
+                .any(|r| r.holds(Vec3::new(1.5, 0.0, 0.0)))
+        );
+    }
+
+    #[test]
+    fn past_the_budget_the_remaining_faces_are_kept_unsearched() {
+        // A ground of 16 triangles exported once each way, triangulated differently (so no face
+        // is another's mirror): each side covers the other.
+        let mut faces = Vec::new();
+        for k in 0..8 {
+            let x = k as f32;
+            faces.extend(rect(x, 0.0, x + 1.0, 1.0, 0.0, true));
+        }
+        for k in 0..8 {
+            let x = k as f32;
+            let corner = |dx: f32, dz: f32| Vec3::new(x + dx, 0.0, dz);
+            let (a, b, c, d) = (
+                corner(0.0, 0.0),
+                corner(1.0, 0.0),
+                corner(1.0, 1.0),
+                corner(0.0, 1.0),
+            );
+            // Facing down, split along the other diagonal.
+            faces.extend([[a, b, d], [b, c, d]]);
+        }
+        let normals: Vec<Vec3> = faces
+            .iter()
+            .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize())
+            .collect();
+        let all = contacts_within(&faces, &normals, usize::MAX);
+        assert_eq!(all.unchecked, 0);
+        assert!(all.pressed.iter().all(|&p| p));
+        // Each face tests the 16 of the other side: 4 faces' worth, then the budget is out.
+        let some = contacts_within(&faces, &normals, 4 * 16 + 8);
+        assert_eq!(some.unchecked, 28);
+        assert_eq!(some.pressed[..4], [true; 4]);
+        assert!(some.pressed[4..].iter().all(|&p| !p));
+        assert!(some.rests[4..].iter().all(|r| r.is_empty()));
     }
 
     #[test]
