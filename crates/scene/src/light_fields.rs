@@ -97,6 +97,16 @@ pub enum ViewFaces {
 }
 
 impl SurfaceSampler {
+    /// No triangles (yet).
+    fn empty() -> Self {
+        Self {
+            corners: Vec::new(),
+            normals: Vec::new(),
+            cumulative: Vec::new(),
+            rests: Vec::new(),
+        }
+    }
+
     /// The drawn triangles of `model` (every instance), leaving out degenerate ones.
     pub fn new(model: &Model) -> Self {
         Self::from_triangles(model.world_triangles().map(|(t, _)| t))
@@ -104,12 +114,7 @@ impl SurfaceSampler {
 
     /// From triangles given directly (world space), leaving out degenerate ones.
     pub fn from_triangles(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> Self {
-        let mut s = Self {
-            corners: Vec::new(),
-            normals: Vec::new(),
-            cumulative: Vec::new(),
-            rests: Vec::new(),
-        };
+        let mut s = Self::empty();
         let mut total = 0.0f64;
         for t in triangles {
             let area = triangle_area(&t);
@@ -128,12 +133,7 @@ impl SurfaceSampler {
 
     /// The triangles `keep` says yes to (by index), with what each rests on.
     fn retain(&self, mut keep: impl FnMut(usize) -> bool) -> Self {
-        let mut s = Self {
-            corners: Vec::new(),
-            normals: Vec::new(),
-            cumulative: Vec::new(),
-            rests: Vec::new(),
-        };
+        let mut s = Self::empty();
         let mut total = 0.0f64;
         for t in 0..self.corners.len() {
             if keep(t) {

@@ -345,12 +345,16 @@ mod tests {
         }
     }
 
-    fn pressed(faces: &[[Vec3; 3]]) -> Vec<bool> {
-        let normals: Vec<Vec3> = faces
+    /// The faces' counter-clockwise unit normals.
+    fn normals_of(faces: &[[Vec3; 3]]) -> Vec<Vec3> {
+        faces
             .iter()
             .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize())
-            .collect();
-        contacts(faces, &normals).pressed
+            .collect()
+    }
+
+    fn pressed(faces: &[[Vec3; 3]]) -> Vec<bool> {
+        contacts(faces, &normals_of(faces)).pressed
     }
 
     #[test]
@@ -429,10 +433,7 @@ mod tests {
         let mut faces = rect(-15.0, -7.5, 1.0, 7.5, 0.0, true);
         faces.extend(rect(-1.0, -7.5, 15.0, 7.5, 0.0, true));
         faces.extend(rect(-2.0, -1.0, 2.0, 1.0, 0.0, false));
-        let normals: Vec<Vec3> = faces
-            .iter()
-            .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize())
-            .collect();
+        let normals = normals_of(&faces);
         let found = contacts(&faces, &normals);
         assert_eq!(found.pressed, [false; 6]);
         assert!(found.rests[4].len() >= 2 && found.rests[5].len() >= 2);
@@ -469,10 +470,7 @@ mod tests {
             // Facing down, split along the other diagonal.
             faces.extend([[a, b, d], [b, c, d]]);
         }
-        let normals: Vec<Vec3> = faces
-            .iter()
-            .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize())
-            .collect();
+        let normals = normals_of(&faces);
         let all = contacts_within(&faces, &normals, usize::MAX);
         assert_eq!(all.unchecked, 0);
         assert!(all.pressed.iter().all(|&p| p));
