@@ -224,7 +224,11 @@ fn gltf_scene(args: &Args, path: &Path) -> Result<(Scene, String)> {
                     _ => {}
                 }
                 if !said.is_empty() {
-                    let faces = SurfaceSampler::new(&model).triangle_count();
+                    let turned_away = match left_out.view {
+                        ViewFaces::SeenFromInside { left_out } => left_out,
+                        _ => 0,
+                    };
+                    let faces = kept.triangle_count() + left_out.pressed + turned_away;
                     faces_left_out = format!(
                         " (of {faces} faces left out: {}; --all-faces keeps every face)",
                         said.join("; ")
