@@ -32,13 +32,7 @@ fn check_with(assigner: &mut Assigner, scene: &Scene, spots: bool, context: &str
     let mut lists = LightLists::new();
     let mut all_pooled = true;
     for method in Method::ALL {
-        let stats = assigner.assign(
-            method,
-            &scene.lights.input(spots),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
+        let stats = scene.assign(assigner, method, spots, &mut lists);
         let (_, extra) = assert_conservative(method.name(), &lists, &truth, context);
         assert_eq!(stats.pairs as usize, lists.indices.len());
         if method == Method::Exact {
@@ -318,13 +312,7 @@ fn invalid_lights_are_rejected_and_counted() {
     );
     let mut lists = LightLists::new();
     for method in Method::ALL {
-        let stats = Assigner::new().assign(
-            method,
-            &scene.lights.input(false),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
+        let stats = scene.assign(&mut Assigner::new(), method, false, &mut lists);
         assert_eq!(stats.rejected, 6, "{method}");
         assert_eq!(stats.culled, 1, "{method}");
         assert_eq!(stats.visible(), 1, "{method}");

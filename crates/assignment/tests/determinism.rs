@@ -29,15 +29,8 @@ fn identical_lists_for_1_2_3_and_8_threads() {
                     .build()
                     .unwrap();
                 let mut lists = LightLists::new();
-                let stats = pool.install(|| {
-                    Assigner::new().assign(
-                        method,
-                        &scene.lights.input(spots),
-                        &scene.camera,
-                        &scene.grid,
-                        &mut lists,
-                    )
-                });
+                let stats =
+                    pool.install(|| scene.assign(&mut Assigner::new(), method, spots, &mut lists));
                 assert!(
                     stats.tasks > 1,
                     "{threads} threads should split 20k lights into tasks"
@@ -76,13 +69,7 @@ fn parallel_tasks_agree_with_a_single_serial_task() {
     for method in [Method::Binary, Method::Refined, Method::Cone] {
         let mut small = LightLists::new();
         let mut large = LightLists::new();
-        let s = Assigner::new().assign(
-            method,
-            &scene.lights.input(false),
-            &scene.camera,
-            &scene.grid,
-            &mut small,
-        );
+        let s = scene.assign(&mut Assigner::new(), method, false, &mut small);
         let b = Assigner::new().assign(
             method,
             &big.input(false),
@@ -128,22 +115,13 @@ fn both_append_strategies_give_identical_lists() {
             let mut a = LightLists::new();
             let mut b = LightLists::new();
             pool.install(|| {
-                Assigner::new().assign(
+                scene.assign(&mut Assigner::new(), method, true, &mut a);
+                scene.assign(
+                    &mut Assigner::new().with_append_strategy(AppendStrategy::AtomicCounters),
                     method,
-                    &scene.lights.input(true),
-                    &scene.camera,
-                    &scene.grid,
-                    &mut a,
+                    true,
+                    &mut b,
                 );
-                Assigner::new()
-                    .with_append_strategy(AppendStrategy::AtomicCounters)
-                    .assign(
-                        method,
-                        &scene.lights.input(true),
-                        &scene.camera,
-                        &scene.grid,
-                        &mut b,
-                    );
             });
             assert!(a.pair_count() > 0);
             assert!(a == b, "{method}, {threads} threads: strategies differ");

@@ -75,13 +75,7 @@ fn reference(scene: &Scene) -> Vec<LightLists> {
     let mut out = Vec::new();
     for (method, spots) in cases() {
         let mut lists = LightLists::new();
-        Assigner::new().assign(
-            method,
-            &scene.lights.input(spots),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
+        scene.assign(&mut Assigner::new(), method, spots, &mut lists);
         out.push(lists);
     }
     out
@@ -113,13 +107,8 @@ fn frames_from_threads_with_small_stacks_list_what_a_roomy_thread_lists() {
                             let mut lists = LightLists::new();
                             for ((method, spots), expected) in cases().zip(&reference) {
                                 for frame in 0..2 {
-                                    let stats = assigner.assign(
-                                        method,
-                                        &scene.lights.input(spots),
-                                        &scene.camera,
-                                        &scene.grid,
-                                        &mut lists,
-                                    );
+                                    let stats =
+                                        scene.assign(&mut assigner, method, spots, &mut lists);
                                     assert!(stats.pairs > 0, "{what}: {method} listed nothing");
                                     assert_task_size(&stats, lights, &what);
                                     assert!(
@@ -162,13 +151,7 @@ fn frames_on_a_pool_with_small_worker_stacks_list_what_a_roomy_thread_lists() {
                 let mut assigner = Assigner::new().with_parallelism(Parallelism::Always);
                 let mut lists = LightLists::new();
                 for ((method, spots), expected) in cases().zip(&reference) {
-                    let stats = assigner.assign(
-                        method,
-                        &scene.lights.input(spots),
-                        &scene.camera,
-                        &scene.grid,
-                        &mut lists,
-                    );
+                    let stats = scene.assign(&mut assigner, method, spots, &mut lists);
                     assert!(
                         stats.parallel && stats.tasks > 1,
                         "{what}: {method} ran serially"

@@ -65,13 +65,7 @@ fn check(scene: &Scene, spots: bool, context: &str) -> usize {
     let mut lists = LightLists::new();
     let mut exact_pairs = 0;
     for method in Method::ALL {
-        let stats = assigner.assign(
-            method,
-            &scene.lights.input(spots),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
+        let stats = scene.assign(&mut assigner, method, spots, &mut lists);
         lists.assert_well_formed(scene.lights.len());
         assert_eq!(lists.cluster_count(), scene.grid.cluster_count());
         let (exact, extra) = assert_conservative(method.name(), &lists, &truth, context);

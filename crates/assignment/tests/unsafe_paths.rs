@@ -37,17 +37,15 @@ fn frame(
     calls: OutsideCalls,
 ) -> LightLists {
     let mut lists = LightLists::new();
-    let stats = Assigner::new()
-        .with_append_strategy(strategy)
-        .with_outside_calls(calls)
-        .with_parallelism(Parallelism::Always)
-        .assign(
-            method,
-            &scene.lights.input(true),
-            &scene.camera,
-            &scene.grid,
-            &mut lists,
-        );
+    let stats = scene.assign(
+        &mut Assigner::new()
+            .with_append_strategy(strategy)
+            .with_outside_calls(calls)
+            .with_parallelism(Parallelism::Always),
+        method,
+        true,
+        &mut lists,
+    );
     assert!(
         stats.parallel && stats.tasks > 1 && stats.pairs > 0,
         "{method}, {strategy:?}, {calls:?}: the frame must split: {stats:?}"
@@ -89,13 +87,7 @@ fn split_frames_through_the_unsafe_blocks_list_what_one_thread_lists() {
     for method in [Method::Binary, Method::Refined] {
         let reference = one.install(|| {
             let mut lists = LightLists::new();
-            Assigner::new().assign(
-                method,
-                &scene.lights.input(true),
-                &scene.camera,
-                &scene.grid,
-                &mut lists,
-            );
+            scene.assign(&mut Assigner::new(), method, true, &mut lists);
             lists
         });
         let runs = [

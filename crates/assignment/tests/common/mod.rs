@@ -2,7 +2,7 @@
 #![allow(dead_code)] // Each test binary uses a different part of this module.
 
 use glam::{UVec3, Vec3};
-use myriad_assignment::{LightInput, LightLists, SpotInput};
+use myriad_assignment::{AssignStats, Assigner, LightInput, LightLists, Method, SpotInput};
 use myriad_cluster_math::oracle::{Cell, OracleView};
 use myriad_cluster_math::{Camera, ClusterGrid, DepthSlicing};
 use rand::{Rng, SeedableRng};
@@ -137,6 +137,26 @@ pub struct Scene {
     pub camera: Camera,
     pub grid: ClusterGrid,
     pub lights: Columns,
+}
+
+impl Scene {
+    /// One frame of this scene by `assigner` into `lists`, spot cones included when `spots`:
+    /// the call most tests make.
+    pub fn assign(
+        &self,
+        assigner: &mut Assigner,
+        method: Method,
+        spots: bool,
+        lists: &mut LightLists,
+    ) -> AssignStats {
+        assigner.assign(
+            method,
+            &self.lights.input(spots),
+            &self.camera,
+            &self.grid,
+            lists,
+        )
+    }
 }
 
 /// A scene of point lights `(position, radius)` seen by `camera` through a `dims` grid.
