@@ -63,7 +63,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if let Some(warning) = budget.coarsening_warning(&name, &stats, &scene.grid, "the dump") {
         eprintln!("{warning}");
     }
-    AssignmentDump::new(&grid, &lists, &scene.lights.source_index).save(&args.out)?;
+    AssignmentDump::new(&grid, &lists, &scene.lights.source_index)
+        .stamped(&scene)
+        .save(&args.out)?;
     // The lights skipped on load are not among the assigned ones: said apart, so the counts add
     // up (they read "3 lights (3 visible, 0 culled, 1 rejected)" for four).
     let skipped = match scene.skipped.len() {

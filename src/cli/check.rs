@@ -10,9 +10,11 @@
 //! loading); 2 is a dump that cannot be checked against this scene at all — another grid or
 //! depth range, a light index past the scene's lights, or a cluster listing a light twice. The
 //! last is malformed rather than wrong: the dump format's lists are sets (docs/cli.md), and a
-//! list with a repeat cannot be counted in pairs the way the verdict's numbers are. The format
-//! records no camera or lights, so a dump of another view or other lights on the same grid and
-//! depth range is judged as this scene's (docs/cli.md says so).
+//! list with a repeat cannot be counted in pairs the way the verdict's numbers are. A dump
+//! `myriad assign` wrote records its scene (camera, light count, the lights' checksum:
+//! [`myriad::dump::SceneStamp`]), so a dump of another view or other lights is also a 2, named;
+//! a dump of the bare format records none, and one of another view or other lights on the same
+//! grid and depth range is then judged as this scene's.
 
 use super::oracle_check::{self, CheckReport, OracleLights, check_all, check_clusters};
 use super::source::SceneSource;
@@ -82,7 +84,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Indices refer to the scene file's lights, skipped invalid ones included.
     let file_lights = scene.lights.len() + scene.skipped.len();
     let grid = grid_of_dump(&scene.grid, dump.grid);
+    // The grid first, then the recorded scene: it names a mix-up of files (another seed, a
+    // moved camera) that the grid's planes do not show and the oracle would report as misses.
     dump.check_against(&grid, file_lights)
+        .and_then(|()| dump.check_scene(&scene))
         .with_context(|| format!("{} does not match {name}", args.dump.display()))?;
     // The checks work on the loaded lights' columns. A skipped (invalid) light maps to no
     // column: an assignment never lists one (its NaN or negative radius touches nothing), so a

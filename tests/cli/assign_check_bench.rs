@@ -247,17 +247,42 @@ fn invalid_lights_are_skipped_and_indices_stay_file_indices() {
         // No pair budget, so no coarser grid, and no warning that says there was one.
         let warned = stderr(&out);
         assert!(!warned.contains("budget"), "{method}: {warned}");
-        assert_eq!(dump, read_json(&culled_dump), "{method}");
+        // The same lists; the scenes they record differ (light 2 is loaded in one only).
+        let mut culled = read_json(&culled_dump);
+        let lists = |d: &Value| {
+            let mut d = d.clone();
+            let scene = d.as_object_mut().unwrap().remove("scene");
+            (d, scene)
+        };
+        let ((bad_lists, bad_scene), (culled_lists, culled_scene)) = (lists(&dump), lists(&culled));
+        assert_eq!(bad_lists, culled_lists, "{method}");
+        assert_eq!(bad_scene.as_ref().unwrap()["lights"], 4, "{method}");
+        assert_ne!(bad_scene, culled_scene, "{method}");
 
-        // check compares in file indices too, with either scene.
-        for scene in [&with_bad, &with_culled] {
-            let cmp = check_json(scene, &bad_dump);
+        // check compares in file indices too, with either scene: each dump against its own, and
+        // one without its scene record (the bare format) against the other. With the record,
+        // the other scene is refused as other lights.
+        let bare = write(&dir, "bare.json", &bad_lists.to_string());
+        for (scene, dump) in [(&with_bad, &bad_dump), (&with_culled, &bare)] {
+            let cmp = check_json(scene, dump);
             assert_eq!(u64_field(&cmp, "misses"), 0, "{method}: {cmp}");
             assert!(u64_field(&cmp, "exact_pairs") > 0);
             if method == "exact" {
                 assert_eq!(u64_field(&cmp, "false_positives"), 0, "{cmp}");
             }
         }
+        culled["scene"] = bad_scene.unwrap();
+        let swapped = write(&dir, "swapped.json", &culled.to_string());
+        assert_mentions(
+            &myriad_fails(&[
+                "check".as_ref(),
+                "--scene".as_ref(),
+                with_culled.as_os_str(),
+                "--dump".as_ref(),
+                swapped.as_os_str(),
+            ]),
+            &["swapped.json does not match", "assigned from other lights"],
+        );
     }
 
     // Negative control: renumbering light 3 as 2 (what a dump in kept-light order would say)
@@ -491,6 +516,82 @@ fn check_rejects_broken_dumps_naming_the_file() {
         &check(&missing),
         &[&missing.display().to_string(), "cannot read dump"],
     );
+}
+
+/// A dump checked against the wrong scene file — the same preset with another seed, or the
+/// same scene with its camera moved — has the very grid and planes of the right one: without
+/// the scene record `assign` writes, `check` judged it and reported hundreds of misses. Now it
+/// is an error (exit 2) naming the difference; the record's scene itself still passes, and a
+/// dump without the record (the bare format) is judged as before.
+#[test]
+fn check_names_a_dump_of_other_lights_or_another_view() {
+    let dir = work_dir("other_scene_dump");
+    let scene_of = |name: &str, seed: &str| {
+        let path = dir.join(name);
+        myriad_ok(&[
+            "scene".as_ref(),
+            "--preset".as_ref(),
+            "paper".as_ref(),
+            "--lights".as_ref(),
+            "300".as_ref(),
+            "--seed".as_ref(),
+            seed.as_ref(),
+            "--out".as_ref(),
+            path.as_os_str(),
+        ]);
+        path
+    };
+    let scene = scene_of("seed1.json", "1");
+    let reseeded = scene_of("seed2.json", "2");
+    let dump = dir.join("seed1.dump.json");
+    let cmp = assign_and_check(&scene, "refined", &dump);
+    assert_eq!(u64_field(&cmp, "misses"), 0, "{cmp}");
+    let d = read_json(&dump);
+    assert_eq!(d["scene"]["lights"], 300, "{}", d["scene"]);
+    assert_eq!(d["scene"]["camera"]["width"], 1536, "{}", d["scene"]);
+    let check = |scene: &Path, dump: &Path| {
+        myriad_fails(&[
+            "check".as_ref(),
+            "--scene".as_ref(),
+            scene.as_os_str(),
+            "--dump".as_ref(),
+            dump.as_os_str(),
+        ])
+    };
+    assert_mentions(
+        &check(&reseeded, &dump),
+        &[
+            &format!("{} does not match", dump.display()),
+            "assigned from other lights",
+        ],
+    );
+    let mut moved = read_json(&scene);
+    moved["camera"]["position"][0] = Value::from(0.25);
+    let moved = write(&dir, "moved.json", &moved.to_string());
+    assert_mentions(
+        &check(&moved, &dump),
+        &[
+            &format!("{} does not match", dump.display()),
+            "another view: its camera has position",
+        ],
+    );
+    // The bare format names no scene: the other seed's lights are then judged by the oracle,
+    // which finds misses (exit 1) — what the record is there to prevent.
+    let mut bare = d.clone();
+    bare.as_object_mut().unwrap().remove("scene");
+    let bare = write(&dir, "bare.dump.json", &bare.to_string());
+    assert_eq!(u64_field(&check_json(&scene, &bare), "misses"), 0);
+    let out = myriad(&[
+        "check".as_ref(),
+        "--scene".as_ref(),
+        reseeded.as_os_str(),
+        "--dump".as_ref(),
+        bare.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", all_output(&out));
+    let verdict: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert!(u64_field(&verdict, "misses") > 100, "{verdict}");
 }
 
 /// The documented defaults (docs/cli.md): a preset of 1000 lights, seed 1, timed 21 times. (Any

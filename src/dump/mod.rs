@@ -4,7 +4,11 @@
 //! The reader is strict where the format's description is silent, by decision: an unknown key is an error (a
 //! misspelt `offests` would otherwise leave the lists unchecked behind a default), and counts and
 //! indices must be JSON integers (`4.0` is refused: a fractional index has no meaning, and
-//! accepting some floats invites `4.5`). Key order is free, as in any JSON object.
+//! accepting some floats invites `4.5`). Key order is free, as in any JSON object. One key is
+//! ours beyond DESIGN.md's format and optional: `scene`, the scene the lists were assigned from
+//! ([`SceneStamp`], written by [`AssignmentDump::stamped`], compared by
+//! [`AssignmentDump::check_scene`]), so that a dump checked against the wrong scene file is
+//! named as such rather than judged.
 //!
 //! ## Index spaces
 //! A dump names lights by their index in the scene file's `lights` array, not by column of the
@@ -52,6 +56,10 @@ use myriad_cluster_math::glam::UVec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+mod stamp;
+
+pub use stamp::{SceneStamp, StampCamera};
+
 /// A grid's edges and its CSR light lists; light indices refer to the scene file's `lights` array.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -70,6 +78,10 @@ pub struct AssignmentDump {
     pub counts: Vec<u32>,
     /// Light indices into the scene file.
     pub indices: Vec<u32>,
+    /// The scene the lists were assigned from ([`Self::stamped`]); absent from a dump of the
+    /// bare format, which names no scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<SceneStamp>,
 }
 
 impl AssignmentDump {
@@ -91,7 +103,24 @@ impl AssignmentDump {
                 .iter()
                 .map(|&l| source_index[l as usize])
                 .collect(),
+            scene: None,
         }
+    }
+
+    /// The dump with a record of the scene it was assigned from ([`SceneStamp`]), which
+    /// [`Self::check_scene`] compares; unchanged where the camera has a number JSON cannot hold
+    /// (an infinite far plane).
+    pub fn stamped(mut self, scene: &myriad_scene::Scene) -> Self {
+        self.scene = SceneStamp::of(scene);
+        self
+    }
+
+    /// Checks that the dump was assigned from `scene`, where it records its scene: the light
+    /// count, the camera, then the lights' checksum; the error names the first difference. A
+    /// dump that records none passes (only [`Self::check_against`]'s grid and indices speak
+    /// for it).
+    pub fn check_scene(&self, scene: &myriad_scene::Scene) -> Result<()> {
+        self.scene.as_ref().map_or(Ok(()), |s| s.check(scene))
     }
 
     /// Reads and checks a dump file.
