@@ -1,4 +1,5 @@
-//! `myriad assign --scene S --method M [--threads T] --out D`: the assignment dump of a scene.
+//! `myriad assign --scene S --method M [--threads T] [--bare] --out D`: the assignment dump of a
+//! scene.
 
 use super::pair_budget::{ASSIGN_BYTES_PER_PAIR, PairBudget};
 use super::source::{SceneSource, thread_pool};
@@ -26,6 +27,10 @@ pub struct Args {
     /// hold, or fewer where the memory this process may take holds fewer (24 bytes a pair).
     #[arg(long)]
     pair_budget: Option<u64>,
+    /// Write DESIGN.md's seven keys only, without the `scene` record that lets `myriad check`
+    /// name a dump of another scene (for readers that know only those keys).
+    #[arg(long)]
+    bare: bool,
 }
 
 /// Parses a method name with a helpful error.
@@ -63,9 +68,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if let Some(warning) = budget.coarsening_warning(&name, &stats, &scene.grid, "the dump") {
         eprintln!("{warning}");
     }
-    AssignmentDump::new(&grid, &lists, &scene.lights.source_index)
-        .stamped(&scene)
-        .save(&args.out)?;
+    let dump = AssignmentDump::new(&grid, &lists, &scene.lights.source_index);
+    let dump = if args.bare {
+        dump
+    } else {
+        dump.stamped(&scene)
+    };
+    dump.save(&args.out)?;
     // The lights skipped on load are not among the assigned ones: said apart, so the counts add
     // up (they read "3 lights (3 visible, 0 culled, 1 rejected)" for four).
     let skipped = match scene.skipped.len() {

@@ -84,10 +84,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Indices refer to the scene file's lights, skipped invalid ones included.
     let file_lights = scene.lights.len() + scene.skipped.len();
     let grid = grid_of_dump(&scene.grid, dump.grid);
-    // The grid first, then the recorded scene: it names a mix-up of files (another seed, a
-    // moved camera) that the grid's planes do not show and the oracle would report as misses.
-    dump.check_against(&grid, file_lights)
-        .and_then(|()| dump.check_scene(&scene))
+    // The recorded scene first: it names a mix-up of files (another seed, a moved camera,
+    // another light count) that the grid's planes do not show — the oracle would report it as
+    // misses, the index check as an index past the lights. Then the grid and the indices.
+    dump.check_scene(&scene)
+        .and_then(|()| dump.check_against(&grid, file_lights))
         .with_context(|| format!("{} does not match {name}", args.dump.display()))?;
     // The checks work on the loaded lights' columns. A skipped (invalid) light maps to no
     // column: an assignment never lists one (its NaN or negative radius touches nothing), so a

@@ -8,7 +8,10 @@
 //! ours beyond DESIGN.md's format and optional: `scene`, the scene the lists were assigned from
 //! ([`SceneStamp`], written by [`AssignmentDump::stamped`], compared by
 //! [`AssignmentDump::check_scene`]), so that a dump checked against the wrong scene file is
-//! named as such rather than judged.
+//! named as such rather than judged. Dumps without it (those of `myriad assign` before it was
+//! added, of `myriad assign --bare`, of other tools) are read and checked as before; a reader
+//! as strict as this one but older, or one that knows only DESIGN.md's seven keys, refuses a
+//! dump that carries it, which is what `--bare` is for.
 //!
 //! ## Index spaces
 //! A dump names lights by their index in the scene file's `lights` array, not by column of the

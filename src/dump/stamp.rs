@@ -6,20 +6,22 @@
 //! kept its field of view and depth range, has the very same planes: checked against the wrong
 //! scene it reported thousands of "misses", a verdict on the assignment that was really a
 //! mix-up of files. `myriad assign` therefore writes an optional `scene` record — the camera as
-//! loaded and the lights' count and checksum — and `check` compares it first, naming what
-//! differs. A dump without the record (one written to the bare format by another tool) is
-//! checked as before.
+//! loaded and the lights' count and checksum — and `check` compares it first, before the grid,
+//! naming what differs. A dump without the record (`myriad assign --bare`, an earlier
+//! `myriad assign`, another tool) is checked as before.
 //!
-//! The checksum covers what the assignment reads: each loaded light's file index, position,
-//! range and, where the scene has spots, cone. Colours and intensities are left out on purpose
-//! (recolouring a scene does not change its lists), and so are the invalid lights skipped on
-//! loading, beyond their share of the count (nothing lists them). CRC-32 (`crc32fast`) because
-//! the record must read the same in every build that checks it: it guards against mix-ups, not
-//! against forgery.
+//! The checksum covers what the assignment reads, as it reads it: each loaded light's file
+//! index, position and range, and a spot's cone. Colours, intensities and inner angles are left
+//! out on purpose (they change no list), and so are the invalid lights skipped on loading,
+//! beyond their share of the count (nothing lists them). Values that mean the same light hash
+//! the same: `-0` as `0`, and a cone of angle `π` or with a zero axis — a point light, in the
+//! assignment and the renderer alike — as no cone, so a scene whose spots are all such is a
+//! point-light scene. CRC-32 (`crc32fast`) because the record must read the same in every build
+//! that checks it: it guards against mix-ups, not against forgery. It is written as 8 hex digits
+//! and read in either case; anything else makes the dump invalid on loading.
 
 use anyhow::{Result, bail, ensure};
 use myriad_cluster_math::Camera;
-use myriad_cluster_math::glam::Vec3;
 use myriad_scene::{Lights, Scene};
 use serde::{Deserialize, Serialize};
 
@@ -32,8 +34,10 @@ pub struct SceneStamp {
     /// The scene file's lights, the invalid ones skipped on loading included: the range of the
     /// dump's indices.
     pub lights: u64,
-    /// CRC-32 of the loaded lights' geometry (module docs), as 8 lower-case hex digits.
-    pub lights_crc32: String,
+    /// CRC-32 of the loaded lights' geometry (module docs); in JSON 8 hex digits, written
+    /// lower-case.
+    #[serde(with = "hex_u32")]
+    pub lights_crc32: u32,
 }
 
 /// A camera as the dump records it: the scene file's record, with the field of view in the
@@ -109,7 +113,7 @@ impl SceneStamp {
         Some(Self {
             camera: StampCamera::of(&scene.camera)?,
             lights: (scene.lights.len() + scene.skipped.len()) as u64,
-            lights_crc32: format!("{:08x}", lights_crc32(&scene.lights)),
+            lights_crc32: lights_crc32(&scene.lights),
         })
     }
 
@@ -128,30 +132,35 @@ impl SceneStamp {
         if let Some(difference) = self.camera.first_difference(&camera) {
             bail!("the dump was assigned from another view: its camera has {difference}");
         }
-        let crc = format!("{:08x}", lights_crc32(&scene.lights));
+        let crc = lights_crc32(&scene.lights);
         ensure!(
             self.lights_crc32 == crc,
-            "the dump was assigned from other lights: their checksum is {}, this scene's {crc} \
-             (the same count of lights in other places or sizes: another seed, or an edited file?)",
+            "the dump was assigned from other lights: their checksum is {:08x}, this scene's \
+             {crc:08x} (the same count of lights in other places, sizes, cones or order: another \
+             seed, or an edited file?)",
             self.lights_crc32
         );
         Ok(())
     }
 }
 
-/// CRC-32 of what the assignment reads of `lights` (module docs), little-endian words in column
-/// order.
+/// CRC-32 of what the assignment reads of `lights` (module docs): per light its file index,
+/// position and radius, then for a spot a marker word and its axis and angle, as little-endian
+/// words.
 fn lights_crc32(lights: &Lights) -> u32 {
+    // Not a float's bits: no cone's words can be read as the next light's index.
+    const SPOT: u32 = u32::MAX;
+    // `+ 0.0` turns `-0` into `0`, which the assignment cannot tell apart.
+    let bits = |v: f32| (v + 0.0).to_bits();
     let mut crc = crc32fast::Hasher::new();
-    let spots = lights.has_spots();
-    let mut words = Vec::with_capacity(9);
+    let mut words = Vec::with_capacity(10);
     for l in 0..lights.len() {
         words.clear();
         words.push(lights.source_index[l]);
-        let position = Vec3::new(lights.x[l], lights.y[l], lights.z[l]);
-        words.extend(position.to_array().map(f32::to_bits));
-        words.push(lights.radius[l].to_bits());
-        if spots {
+        words.extend([lights.x[l], lights.y[l], lights.z[l], lights.radius[l]].map(bits));
+        // A cone bounds the light only below `π` and with an axis (`Lights::is_spot`).
+        if lights.is_spot(l) && lights.spot_angle[l] < std::f32::consts::PI {
+            words.push(SPOT);
             words.extend(
                 [
                     lights.spot_dir_x[l],
@@ -159,7 +168,7 @@ fn lights_crc32(lights: &Lights) -> u32 {
                     lights.spot_dir_z[l],
                     lights.spot_angle[l],
                 ]
-                .map(f32::to_bits),
+                .map(bits),
             );
         }
         for w in &words {
@@ -169,9 +178,27 @@ fn lights_crc32(lights: &Lights) -> u32 {
     crc.finalize()
 }
 
+/// The checksum's JSON form: exactly 8 hex digits, written lower-case, read in either case.
+mod hex_u32 {
+    use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+    pub fn serialize<S: Serializer>(value: &u32, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&format!("{value:08x}"))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+        let text = String::deserialize(d)?;
+        let hex = text.len() == 8 && text.bytes().all(|b| b.is_ascii_hexdigit());
+        hex.then(|| u32::from_str_radix(&text, 16).ok())
+            .flatten()
+            .ok_or_else(|| D::Error::custom(format!("{text:?} is not 8 hex digits")))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use myriad_cluster_math::glam::Vec3;
     use myriad_scene::{LightPolicy, LightRecord, SpotCone};
 
     const SCENE: &str = r#"{
@@ -214,10 +241,27 @@ mod tests {
         wider.camera.width = 640;
         let e = stamp.check(&wider).unwrap_err().to_string();
         assert!(e.ends_with("size 320x180, the scene's 640x180"), "{e}");
-        let mut narrower = scene();
-        narrower.camera.fov_y *= 0.5;
-        let e = stamp.check(&narrower).unwrap_err().to_string();
-        assert!(e.contains("fov_y_rad"), "{e}");
+        // Every field is compared: a turned camera keeps the grid's planes, so for `target`
+        // and `up` this record is the only guard (review: dropping either passed every test).
+        let edits: [(&str, fn(&mut Camera)); 6] = [
+            ("target", |c| c.target.y = 1.5),
+            ("up", |c| c.up = Vec3::new(0.1, 1.0, 0.0)),
+            ("fov_y_rad", |c| c.fov_y *= 0.5),
+            ("near", |c| c.near = 0.2),
+            ("far", |c| c.far = 60.0),
+            ("size", |c| c.height = 200),
+        ];
+        for (field, edit) in edits {
+            let mut other = scene();
+            edit(&mut other.camera);
+            let e = stamp.check(&other).unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!(
+                    "the dump was assigned from another view: its camera has {field} "
+                )),
+                "{field}: {e}"
+            );
+        }
     }
 
     #[test]
@@ -225,6 +269,8 @@ mod tests {
         let stamp = SceneStamp::of(&scene()).unwrap();
         for edit in [
             (|l: &mut Lights| l.x[1] += 1e-6) as fn(&mut Lights),
+            |l| l.y[0] = 0.5,
+            |l| l.z[1] = -8.5,
             |l| l.radius[0] = 1.5,
             |l| l.source_index.swap(0, 1),
         ] {
@@ -240,33 +286,86 @@ mod tests {
         recoloured.lights.g[1] = 0.25;
         recoloured.lights.intensity[0] = 7.0;
         stamp.check(&recoloured).unwrap();
-        // A cone is part of the geometry.
-        let mut spot = scene();
-        let mut with_spot = scene();
-        let record = LightRecord {
-            spot: Some(SpotCone {
-                direction: Vec3::NEG_Z,
-                angle: 0.5,
-            }),
-            ..spot.lights.get(0)
+        // A cone is part of the geometry: its angle and each of its axis' components.
+        let with_cone = |direction: Vec3, angle: f32| {
+            let mut s = scene();
+            let record = s.lights.get(0);
+            s.lights.push(LightRecord {
+                spot: Some(SpotCone { direction, angle }),
+                ..record
+            });
+            s
         };
-        with_spot.lights.push(record);
-        spot.lights.push(LightRecord {
-            spot: Some(SpotCone {
+        let stamp = SceneStamp::of(&with_cone(Vec3::NEG_Z, 0.5)).unwrap();
+        for (direction, angle) in [
+            (Vec3::NEG_Z, 0.6),
+            (Vec3::new(0.1, 0.0, -1.0), 0.5),
+            (Vec3::new(0.0, 0.1, -1.0), 0.5),
+            (Vec3::new(0.0, 0.0, -2.0), 0.5),
+        ] {
+            let e = stamp
+                .check(&with_cone(direction, angle))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("the dump was assigned from other lights"),
+                "{direction} {angle}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_same_lights_written_otherwise_pass() {
+        // `-0` is `0` to the assignment.
+        let stamp = SceneStamp::of(&scene()).unwrap();
+        let mut signed = scene();
+        signed.lights.x[0] = -0.0;
+        signed.lights.y[1] = -0.0;
+        stamp.check(&signed).unwrap();
+        // A cone of `π`, or with no axis, is a point light: the scene is a point-light scene.
+        let mut points = scene();
+        let record = points.lights.get(0);
+        points.lights.push(record);
+        let stamp = SceneStamp::of(&points).unwrap();
+        for spot in [
+            SpotCone {
                 direction: Vec3::NEG_Z,
-                angle: 0.6,
-            }),
-            ..record
-        });
-        let e = SceneStamp::of(&with_spot)
-            .unwrap()
-            .check(&spot)
-            .unwrap_err()
-            .to_string();
+                angle: std::f32::consts::PI,
+            },
+            SpotCone {
+                direction: Vec3::ZERO,
+                angle: 0.5,
+            },
+        ] {
+            let mut coned = scene();
+            coned.lights.push(LightRecord {
+                spot: Some(spot),
+                ..record
+            });
+            assert!(coned.lights.has_spots());
+            stamp.check(&coned).unwrap();
+        }
+    }
+
+    #[test]
+    fn the_checksum_reads_in_either_case_and_nothing_else() {
+        let stamp = SceneStamp::of(&scene()).unwrap();
+        let text = serde_json::to_string(&stamp).unwrap();
+        let lower = format!("{:08x}", stamp.lights_crc32);
         assert!(
-            e.starts_with("the dump was assigned from other lights"),
-            "{e}"
+            text.contains(&format!("\"lights_crc32\":\"{lower}\"")),
+            "{text}"
         );
+        let upper = text.replace(&lower, &lower.to_uppercase());
+        let back: SceneStamp = serde_json::from_str(&upper).unwrap();
+        back.check(&scene()).unwrap();
+        for bad in ["zz", "1234567", "123456789", "+1234567", ""] {
+            let broken = text.replace(&lower, bad);
+            let e = serde_json::from_str::<SceneStamp>(&broken)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("is not 8 hex digits"), "{bad}: {e}");
+        }
     }
 
     #[test]

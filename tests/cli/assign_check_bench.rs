@@ -111,12 +111,11 @@ fn a_coarsened_grid_is_recorded_in_the_dump_and_checked() {
     assert_eq!(cmp["grid"], cmp["scene_grid"], "{cmp}");
     assert_eq!(cmp["coarsened"], false, "{cmp}");
     // A grid no coarsening of the scene's reaches is still refused: 20x12x16 halves to
-    // 10x6x8, 5x3x4, 2x1x2, 1x1x1, never 6x3x4.
-    let other = write(
-        &dir,
-        "other.json",
-        &GOOD_SCENE.replace(r#""x": 24"#, r#""x": 20"#),
-    );
+    // 10x6x8, 5x3x4, 2x1x2, 1x1x1, never 6x3x4. (The same lights and camera: the dump's scene
+    // record matches, and the grid is what differs.)
+    let mut other = read_json(&scene);
+    other["grid"]["x"] = Value::from(20);
+    let other = write(&dir, "other.json", &other.to_string());
     let dump = dir.join("binary.dump.json");
     let err = myriad_fails(&[
         "check".as_ref(),
@@ -565,21 +564,46 @@ fn check_names_a_dump_of_other_lights_or_another_view() {
             "assigned from other lights",
         ],
     );
-    let mut moved = read_json(&scene);
-    moved["camera"]["position"][0] = Value::from(0.25);
-    let moved = write(&dir, "moved.json", &moved.to_string());
+    // Moved, or only turned: a turned camera keeps the grid's planes, so only the record tells
+    // (review: a check that skipped `target` passed every test, and judged such dumps).
+    for (field, value, said) in [
+        ("position", 0.25, "another view: its camera has position"),
+        ("target", 4.5, "another view: its camera has target"),
+    ] {
+        let mut moved = read_json(&scene);
+        moved["camera"][field][1] = Value::from(value);
+        let moved = write(&dir, &format!("moved_{field}.json"), &moved.to_string());
+        assert_mentions(
+            &check(&moved, &dump),
+            &[&format!("{} does not match", dump.display()), said],
+        );
+    }
+    // Fewer lights: said as such, before the indices past them are.
+    let mut fewer = read_json(&scene);
+    fewer["lights"].as_array_mut().unwrap().truncate(250);
+    let fewer = write(&dir, "fewer.json", &fewer.to_string());
     assert_mentions(
-        &check(&moved, &dump),
-        &[
-            &format!("{} does not match", dump.display()),
-            "another view: its camera has position",
-        ],
+        &check(&fewer, &dump),
+        &["assigned from a scene of 300 lights, this one has 250"],
     );
-    // The bare format names no scene: the other seed's lights are then judged by the oracle,
-    // which finds misses (exit 1) — what the record is there to prevent.
-    let mut bare = d.clone();
-    bare.as_object_mut().unwrap().remove("scene");
-    let bare = write(&dir, "bare.dump.json", &bare.to_string());
+    // `--bare` writes DESIGN.md's keys only; such a dump names no scene, so the other seed's
+    // lights are judged by the oracle, which finds misses (exit 1) — what the record prevents.
+    let bare = dir.join("bare.dump.json");
+    myriad_ok(&[
+        "assign".as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--bare".as_ref(),
+        "--out".as_ref(),
+        bare.as_os_str(),
+    ]);
+    let mut stamped = d.clone();
+    stamped.as_object_mut().unwrap().remove("scene");
+    assert_eq!(
+        read_json(&bare),
+        stamped,
+        "--bare: the same dump without `scene`"
+    );
     assert_eq!(u64_field(&check_json(&scene, &bare), "misses"), 0);
     let out = myriad(&[
         "check".as_ref(),
