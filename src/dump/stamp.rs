@@ -243,7 +243,8 @@ mod tests {
         assert!(e.ends_with("size 320x180, the scene's 640x180"), "{e}");
         // Every field is compared: a turned camera keeps the grid's planes, so for `target`
         // and `up` this record is the only guard (review: dropping either passed every test).
-        let edits: [(&str, fn(&mut Camera)); 6] = [
+        type Edit = (&'static str, fn(&mut Camera));
+        let edits: [Edit; 6] = [
             ("target", |c| c.target.y = 1.5),
             ("up", |c| c.up = Vec3::new(0.1, 1.0, 0.0)),
             ("fov_y_rad", |c| c.fov_y *= 0.5),
