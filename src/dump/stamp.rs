@@ -148,7 +148,8 @@ impl SceneStamp {
 /// position and radius, then for a spot a marker word and its axis and angle, as little-endian
 /// words.
 fn lights_crc32(lights: &Lights) -> u32 {
-    // Not a float's bits: no cone's words can be read as the next light's index.
+    // No file index (there are fewer than `u32::MAX` lights) and no loaded value (its bits are
+    // a NaN's): a cone's words cannot be read as the next light's.
     const SPOT: u32 = u32::MAX;
     // `+ 0.0` turns `-0` into `0`, which the assignment cannot tell apart.
     let bits = |v: f32| (v + 0.0).to_bits();
